@@ -1,0 +1,34 @@
+#include "envs/core/registry.hpp"
+
+#include "common/error.hpp"
+#include "envs/rigid/cartpole_env.hpp"
+#include "envs/synthetic/synthetic.hpp"
+
+namespace dsb {
+
+const std::vector<EnvFamily>& env_families() {
+  static const std::vector<EnvFamily> families = [] {
+    std::vector<EnvFamily> f;
+    // one registration line per env family
+    f.push_back(cartpole_family(1));
+    f.push_back(cartpole_family(3));
+    for (auto& s : synthetic_families()) f.push_back(std::move(s));
+    return f;
+  }();
+  return families;
+}
+
+std::unique_ptr<Env> make_env(const std::string& name) {
+  for (const auto& family : env_families())
+    if (auto env = family.try_make(name)) return env;
+  throw UsageError("unknown env '" + name + "' (see `harness list`)");
+}
+
+std::vector<std::string> grid_env_names() {
+  std::vector<std::string> names;
+  for (const auto& family : env_families())
+    names.insert(names.end(), family.grid_names.begin(), family.grid_names.end());
+  return names;
+}
+
+}  // namespace dsb

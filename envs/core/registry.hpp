@@ -1,0 +1,31 @@
+#pragma once
+// Envs by name. A family owns a name pattern (e.g. "sphere-D" for any D) and a factory; the
+// registry lists families in envs/core/registry.cpp, one registration line each.
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "envs/core/env.hpp"
+
+namespace dsb {
+
+struct EnvFamily {
+  std::string pattern;                    // shown by `harness list`, e.g. "rosenbrock-D"
+  std::string description;
+  std::vector<std::string> grid_names;    // the members `--all` runs
+  // returns an env when the name belongs to this family; throws UsageError for a member name
+  // with a bad parameter (e.g. "sphere-0")
+  std::function<std::unique_ptr<Env>(const std::string& name)> try_make;
+};
+
+const std::vector<EnvFamily>& env_families();
+
+// Throws UsageError "unknown env 'NAME'" when no family knows the name.
+std::unique_ptr<Env> make_env(const std::string& name);
+
+// Every env of the `--all` grid, in registration order.
+std::vector<std::string> grid_env_names();
+
+}  // namespace dsb

@@ -1,0 +1,335 @@
+#include "envs/synthetic/synthetic.hpp"
+
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <span>
+#include <stdexcept>
+#include <string_view>
+#include <utility>
+
+#include "common/error.hpp"
+
+namespace dsb {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// f(z) and, when g is not empty, df/dz into g (size of z). Physical units throughout.
+using Function = double (*)(std::span<const double> z, std::span<double> g);
+
+// sphere: f = sum z_i^2. Minimum 0 at z = 0.
+double sphere(std::span<const double> z, std::span<double> g) {
+  double f = 0.0;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    f += z[i] * z[i];
+    if (!g.empty()) g[i] = 2.0 * z[i];
+  }
+  return f;
+}
+
+// rosenbrock: f = sum_{i < D-1} 100 (z_{i+1} - z_i^2)^2 + (1 - z_i)^2. Minimum 0 at z = 1.
+double rosenbrock(std::span<const double> z, std::span<double> g) {
+  if (!g.empty())
+    for (double& gi : g) gi = 0.0;
+  double f = 0.0;
+  for (std::size_t i = 0; i + 1 < z.size(); ++i) {
+    const double t = z[i + 1] - z[i] * z[i];
+    const double u = 1.0 - z[i];
+    f += 100.0 * t * t + u * u;
+    if (!g.empty()) {
+      g[i] += -400.0 * z[i] * t - 2.0 * u;
+      g[i + 1] += 200.0 * t;
+    }
+  }
+  return f;
+}
+
+// rastrigin: f = 10 D + sum (z_i^2 - 10 cos(2 pi z_i)). Minimum 0 at z = 0.
+double rastrigin(std::span<const double> z, std::span<double> g) {
+  double f = 10.0 * static_cast<double>(z.size());
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    f += z[i] * z[i] - 10.0 * std::cos(2.0 * kPi * z[i]);
+    if (!g.empty()) g[i] = 2.0 * z[i] + 20.0 * kPi * std::sin(2.0 * kPi * z[i]);
+  }
+  return f;
+}
+
+// ackley: f = -20 exp(-0.2 r) - exp(sum cos(2 pi z_i) / D) + 20 + e, r = sqrt(sum z_i^2 / D),
+// evaluated as 20 (1 - exp(-0.2 r)) + (e - exp(...)) so that f(0) is exactly 0. Minimum 0 at
+// z = 0. The first term is a cone in r, so the gradient is undefined at exactly z = 0; there it
+// is returned as 0 (the second term's gradient vanishes at 0 too).
+double ackley(std::span<const double> z, std::span<double> g) {
+  const double d = static_cast<double>(z.size());
+  double sum_sq = 0.0, sum_cos = 0.0;
+  for (double zi : z) {
+    sum_sq += zi * zi;
+    sum_cos += std::cos(2.0 * kPi * zi);
+  }
+  const double r = std::sqrt(sum_sq / d);
+  const double e_r = std::exp(-0.2 * r);
+  const double e_cos = std::exp(sum_cos / d);
+  if (!g.empty()) {
+    // d/dz_i of the first term: 4 exp(-0.2 r) z_i / (D r); of the second: (2 pi / D) e_cos sin
+    const double radial = r > 0.0 ? 4.0 * e_r / (d * r) : 0.0;
+    for (std::size_t i = 0; i < z.size(); ++i)
+      g[i] = radial * z[i] + 2.0 * kPi / d * e_cos * std::sin(2.0 * kPi * z[i]);
+  }
+  return 20.0 * (1.0 - e_r) + (std::numbers::e - e_cos);
+}
+
+// Styblinski-Tang: f = 0.5 sum (z_i^4 - 16 z_i^2 + 5 z_i). Minimum -39.16616570377142 D at
+// z_i = -2.903534027771178, the lower real root of the 1-D stationarity 4 z^3 - 32 z + 5 = 0.
+constexpr double kStyblinskiArgmin = -2.903534027771178;
+constexpr double kStyblinskiMinPerDim = -39.16616570377142;
+
+double styblinski(std::span<const double> z, std::span<double> g) {
+  double f = 0.0;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    const double zi = z[i], z2 = zi * zi;
+    f += 0.5 * (z2 * z2 - 16.0 * z2 + 5.0 * zi);
+    if (!g.empty()) g[i] = 0.5 * (4.0 * z2 * zi - 32.0 * zi + 5.0);
+  }
+  return f;
+}
+
+// branin: f = a (z2 - b z1^2 + c z1 - r)^2 + s (1 - t) cos z1 + s with a = 1,
+// b = 5.1 / (4 pi^2), c = 5 / pi, r = 6, s = 10, t = 1 / (8 pi). Minimum s t = 5 / (4 pi)
+// = 0.397887357729738 at (-pi, 12.275), (pi, 2.275) and (3 pi, 2.475) (where the square is 0
+// and cos z1 = -1).
+double branin(std::span<const double> z, std::span<double> g) {
+  const double a = 1.0, b = 5.1 / (4.0 * kPi * kPi), c = 5.0 / kPi, r = 6.0, s = 10.0,
+               t = 1.0 / (8.0 * kPi);
+  const double u = z[1] - b * z[0] * z[0] + c * z[0] - r;
+  if (!g.empty()) {
+    g[0] = 2.0 * a * u * (c - 2.0 * b * z[0]) - s * (1.0 - t) * std::sin(z[0]);
+    g[1] = 2.0 * a * u;
+  }
+  return a * u * u + s * (1.0 - t) * std::cos(z[0]) + s;
+}
+
+// hartmann6: f = -sum_{i=1..4} alpha_i exp(-sum_j A_ij (z_j - P_ij)^2) with the standard
+// constants below (P_ij = table / 10000). Minimum -3.32236801141551 at
+// (0.20168952, 0.15001069, 0.47687398, 0.27533243, 0.31165162, 0.65730054) (rounded).
+constexpr double kHartmannAlpha[4] = {1.0, 1.2, 3.0, 3.2};
+constexpr double kHartmannA[4][6] = {{10.0, 3.0, 17.0, 3.5, 1.7, 8.0},
+                                     {0.05, 10.0, 17.0, 0.1, 8.0, 14.0},
+                                     {3.0, 3.5, 1.7, 10.0, 17.0, 8.0},
+                                     {17.0, 8.0, 0.05, 10.0, 0.1, 14.0}};
+constexpr int kHartmannP[4][6] = {{1312, 1696, 5569, 124, 8283, 5886},
+                                  {2329, 4135, 8307, 3736, 1004, 9991},
+                                  {2348, 1451, 3522, 2883, 3047, 6650},
+                                  {4047, 8828, 8732, 5743, 1091, 381}};
+
+double hartmann6(std::span<const double> z, std::span<double> g) {
+  if (!g.empty())
+    for (double& gi : g) gi = 0.0;
+  double f = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    double dz[6], q = 0.0;
+    for (int j = 0; j < 6; ++j) {
+      dz[j] = z[j] - kHartmannP[i][j] / 10000.0;
+      q += kHartmannA[i][j] * dz[j] * dz[j];
+    }
+    const double term = kHartmannAlpha[i] * std::exp(-q);
+    f -= term;
+    if (!g.empty())
+      for (int j = 0; j < 6; ++j) g[j] += term * 2.0 * kHartmannA[i][j] * dz[j];
+  }
+  return f;
+}
+
+// One synthetic family. Scalable ones ("key-D") live on [-5, 5]^D; fixed ones ("key") have
+// their own dimension and box.
+struct Spec {
+  std::string_view key;
+  std::string_view description;
+  Function function;
+  int min_dim;                // scalable: smallest D
+  int fixed_dim;              // 0 for scalable families
+  std::vector<double> lower;  // fixed families: the box
+  std::vector<double> upper;
+};
+
+const std::vector<Spec>& specs() {
+  static const std::vector<Spec> all = {
+      {"sphere", "sum z_i^2 on [-5,5]^D; min 0 at z = 0", sphere, 1, 0, {}, {}},
+      {"rosenbrock", "Rosenbrock valley on [-5,5]^D, D >= 2; min 0 at z = 1", rosenbrock, 2, 0,
+       {}, {}},
+      {"rastrigin", "Rastrigin (many local minima) on [-5,5]^D; min 0 at z = 0", rastrigin, 1, 0,
+       {}, {}},
+      {"ackley", "Ackley on [-5,5]^D; min 0 at z = 0", ackley, 1, 0, {}, {}},
+      {"styblinski", "Styblinski-Tang on [-5,5]^D; min -39.16616570377142 D at z_i = -2.9035",
+       styblinski, 1, 0, {}, {}},
+      {"branin", "Branin on [-5,10]x[0,15]; min 0.397887357729738 at three points", branin, 2, 2,
+       {-5.0, 0.0}, {10.0, 15.0}},
+      {"hartmann6", "Hartmann 6-D on [0,1]^6; min -3.32236801141551", hartmann6, 6, 6,
+       std::vector<double>(6, 0.0), std::vector<double>(6, 1.0)},
+  };
+  return all;
+}
+
+const Spec* find_spec(std::string_view key) {
+  for (const auto& spec : specs())
+    if (spec.key == key) return &spec;
+  return nullptr;
+}
+
+SyntheticConfig standard_config(const Spec& spec, int dim) {
+  SyntheticConfig config;
+  config.function = std::string(spec.key);
+  config.dim = dim;
+  if (spec.fixed_dim > 0) {
+    config.lower = spec.lower;
+    config.upper = spec.upper;
+  } else {
+    config.lower.assign(dim, -5.0);
+    config.upper.assign(dim, 5.0);
+  }
+  return config;
+}
+
+// The config when `name` belongs to this family, nullopt when not; UsageError when malformed.
+std::optional<SyntheticConfig> parse_name(const Spec& spec, const std::string& name) {
+  if (spec.fixed_dim > 0) {
+    if (name != spec.key) return std::nullopt;
+    return standard_config(spec, spec.fixed_dim);
+  }
+  const std::string prefix = std::string(spec.key) + "-";
+  if (name.compare(0, prefix.size(), prefix) != 0) return std::nullopt;
+  const std::string digits = name.substr(prefix.size());
+  // canonical decimal only: no sign, no leading zero, at most 5 digits (the cap is 10000)
+  bool ok = !digits.empty() && digits.size() <= 5 && digits[0] != '0';
+  for (char ch : digits) ok = ok && ch >= '0' && ch <= '9';
+  const int dim = ok ? std::stoi(digits) : 0;
+  if (!ok || dim < spec.min_dim || dim > kSyntheticMaxDim)
+    throw UsageError("env '" + name + "': D must be an integer from " +
+                     std::to_string(spec.min_dim) + " to " + std::to_string(kSyntheticMaxDim) +
+                     ", got '" + digits + "'");
+  return standard_config(spec, dim);
+}
+
+class SyntheticEnv final : public Env {
+ public:
+  SyntheticEnv(std::string name, SyntheticConfig config, Function function)
+      : name_(std::move(name)), config_(std::move(config)), function_(function) {
+    config_.validate();
+    for (int i = 0; i < config_.dim; ++i) {
+      centre_.push_back(0.5 * (config_.lower[i] + config_.upper[i]));
+      halfwidth_.push_back(0.5 * (config_.upper[i] - config_.lower[i]));
+    }
+  }
+
+  const std::string& name() const override { return name_; }
+  int dim() const override { return config_.dim; }
+  bool differentiable() const override { return true; }
+  double loss(std::span<const double> x) const override { return evaluate(x, {}); }
+  double loss_and_grad(std::span<const double> x, std::span<double> grad) const override {
+    if (static_cast<int>(grad.size()) != config_.dim)
+      throw std::invalid_argument("env '" + name_ + "': gradient has size " +
+                                  std::to_string(grad.size()) + ", expected " +
+                                  std::to_string(config_.dim));
+    return evaluate(x, grad);
+  }
+  nlohmann::json config() const override { return config_.to_json(); }
+
+ private:
+  // f at z = centre + halfwidth * x; df/dx = df/dz * halfwidth into grad unless it is empty
+  double evaluate(std::span<const double> x, std::span<double> grad) const {
+    if (static_cast<int>(x.size()) != config_.dim)
+      throw std::invalid_argument("env '" + name_ + "': x has size " + std::to_string(x.size()) +
+                                  ", expected " + std::to_string(config_.dim));
+    std::vector<double> z(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) z[i] = centre_[i] + halfwidth_[i] * x[i];
+    const double f = function_(z, grad);
+    for (std::size_t i = 0; i < grad.size(); ++i) grad[i] *= halfwidth_[i];
+    return f;
+  }
+
+  std::string name_;
+  SyntheticConfig config_;
+  Function function_;
+  std::vector<double> centre_, halfwidth_;
+};
+
+KnownOptimum known_optimum(const SyntheticConfig& config) {
+  const int d = config.dim;
+  const std::string& f = config.function;
+  if (f == "sphere" || f == "rastrigin" || f == "ackley")
+    return {0.0, std::vector<double>(d, 0.0), {}};
+  if (f == "rosenbrock") return {0.0, std::vector<double>(d, 1.0), {}};
+  if (f == "styblinski")
+    return {kStyblinskiMinPerDim * d, std::vector<double>(d, kStyblinskiArgmin), {}};
+  if (f == "branin")
+    return {5.0 / (4.0 * kPi), {-kPi, 12.275}, {{kPi, 2.275}, {3.0 * kPi, 2.475}}};
+  // hartmann6
+  return {-3.32236801141551,
+          {0.20168952, 0.15001069, 0.47687398, 0.27533243, 0.31165162, 0.65730054},
+          {}};
+}
+
+}  // namespace
+
+void SyntheticConfig::validate() const {
+  const Spec* spec = find_spec(function);
+  if (spec == nullptr) throw ConfigError("synthetic", "function", "unknown: '" + function + "'");
+  const int lo = spec->fixed_dim > 0 ? spec->fixed_dim : spec->min_dim;
+  const int hi = spec->fixed_dim > 0 ? spec->fixed_dim : kSyntheticMaxDim;
+  if (dim < lo || dim > hi)
+    throw ConfigError("synthetic", "dim",
+                      "must be from " + std::to_string(lo) + " to " + std::to_string(hi) +
+                          " for " + function + ", got " + std::to_string(dim));
+  if (static_cast<int>(lower.size()) != dim)
+    throw ConfigError("synthetic", "lower",
+                      "has size " + std::to_string(lower.size()) + ", expected " +
+                          std::to_string(dim));
+  if (static_cast<int>(upper.size()) != dim)
+    throw ConfigError("synthetic", "upper",
+                      "has size " + std::to_string(upper.size()) + ", expected " +
+                          std::to_string(dim));
+  for (int i = 0; i < dim; ++i) {
+    if (!std::isfinite(lower[i]))
+      throw ConfigError("synthetic", "lower", "is not finite at index " + std::to_string(i));
+    if (!std::isfinite(upper[i]))
+      throw ConfigError("synthetic", "upper", "is not finite at index " + std::to_string(i));
+    if (!(lower[i] < upper[i]))
+      throw ConfigError("synthetic", "upper",
+                        "must exceed lower at index " + std::to_string(i));
+  }
+}
+
+nlohmann::json SyntheticConfig::to_json() const {
+  return {{"function", function}, {"dim", dim}, {"lower", lower}, {"upper", upper}};
+}
+
+std::optional<SyntheticConfig> synthetic_config_from_name(const std::string& name) {
+  for (const auto& spec : specs())
+    if (auto config = parse_name(spec, name)) return config;
+  return std::nullopt;
+}
+
+std::optional<KnownOptimum> synthetic_known_optimum(const std::string& name) {
+  if (auto config = synthetic_config_from_name(name)) return known_optimum(*config);
+  return std::nullopt;
+}
+
+std::vector<EnvFamily> synthetic_families() {
+  std::vector<EnvFamily> families;
+  for (const auto& spec : specs()) {
+    const bool scalable = spec.fixed_dim == 0;
+    const std::string key(spec.key);
+    EnvFamily family;
+    family.pattern = scalable ? key + "-D" : key;
+    family.description = std::string(spec.description);
+    family.grid_names = {scalable ? key + "-10" : key};
+    family.try_make = [&spec](const std::string& name) -> std::unique_ptr<Env> {
+      auto config = parse_name(spec, name);
+      if (!config) return nullptr;
+      return std::make_unique<SyntheticEnv>(name, std::move(*config), spec.function);
+    };
+    families.push_back(std::move(family));
+  }
+  return families;
+}
+
+}  // namespace dsb

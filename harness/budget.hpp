@@ -1,0 +1,48 @@
+#pragma once
+// The budget wrapper: the only way an optimizer reaches an env. It checks every point (size, in
+// the box, finite), counts and records every episode, keeps the best, turns a blown-up
+// simulation into a failed episode, and throws BudgetExhausted once the budget is spent.
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <vector>
+
+#include "envs/core/env.hpp"
+#include "harness/run_spec.hpp"
+#include "optimizers/core/objective.hpp"
+
+namespace dsb {
+
+class BudgetedObjective : public Objective {
+ public:
+  // episode_counter (may be null) is incremented after every episode, for progress lines
+  BudgetedObjective(const Env& env, std::int64_t budget,
+                    std::atomic<std::int64_t>* episode_counter = nullptr);
+
+  int dim() const override { return env_.dim(); }
+  bool has_gradient() const override { return env_.differentiable(); }
+  std::int64_t budget() const override { return budget_; }
+  std::int64_t used() const override { return static_cast<std::int64_t>(evals_.size()); }
+  double value(std::span<const double> x) override;
+  double value_and_grad(std::span<const double> x, std::span<double> grad) override;
+
+  const std::vector<EvalRecord>& evals() const { return evals_; }
+  double best_loss() const { return best_; }  // NaN while no episode succeeded
+  const std::vector<double>& best_x() const { return best_x_; }
+  std::int64_t failed_episodes() const { return failed_; }
+
+ private:
+  void check_point(std::span<const double> x) const;
+  double record(std::span<const double> x, double loss, bool used_grad,
+                std::chrono::steady_clock::time_point start);
+
+  const Env& env_;
+  std::int64_t budget_;
+  std::atomic<std::int64_t>* counter_;
+  std::vector<EvalRecord> evals_;
+  double best_;
+  std::vector<double> best_x_;
+  std::int64_t failed_ = 0;
+};
+
+}  // namespace dsb

@@ -1,0 +1,151 @@
+#include "harness/cli.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "common/error.hpp"
+#include "harness/commands.hpp"
+#include "harness/grid.hpp"
+#include "harness/runner.hpp"
+#include "harness/store.hpp"
+
+namespace dsb {
+namespace {
+
+const char* kVersion = DSB_VERSION;
+
+struct RunArgs {
+  bool all = false;
+  std::vector<std::string> envs, optimizers;
+  int seeds = 1;
+  std::int64_t budget = 1000;
+  std::string db = "results.sqlite";
+  int jobs = 0;  // 0 = all cores
+  std::string shard;
+  bool quiet = false;
+};
+
+void add_run_options(CLI::App& app, RunArgs& a) {
+  app.add_flag("--all", a.all, "every registered env x every applicable optimizer");
+  app.add_option("--env", a.envs, "env names, comma-separated (see `harness list`)")->delimiter(',');
+  app.add_option("--optimizer", a.optimizers, "optimizer names, comma-separated")->delimiter(',');
+  app.add_option("--seeds", a.seeds, "number of seeds per (env, optimizer), seed indices 0..N-1");
+  app.add_option("--budget", a.budget, "episodes per run (default 1000)");
+  app.add_option("--db", a.db, "SQLite results file (default ./results.sqlite); resumes");
+  app.add_option("--jobs", a.jobs, "worker threads (default: all cores)");
+  app.add_option("--shard", a.shard, "run only shard I of N (I/N, 0-based): deterministic slices");
+  app.add_flag("--quiet", a.quiet, "no progress lines");
+}
+
+std::string host_name() {
+  char buf[256] = {0};
+  if (gethostname(buf, sizeof buf - 1) != 0) return "unknown";
+  return buf;
+}
+
+int command_run(const RunArgs& a) {
+  GridRequest req;
+  req.all = a.all;
+  req.envs = a.envs;
+  req.optimizers = a.optimizers;
+  req.seeds = a.seeds;
+  req.budget = a.budget;
+  if (!a.shard.empty()) {
+    int i = -1, n = -1;
+    char tail = 0;
+    if (std::sscanf(a.shard.c_str(), "%d/%d%c", &i, &n, &tail) != 2)
+      throw UsageError("--shard must look like I/N, got '" + a.shard + "'");
+    req.shard_index = i;
+    req.shard_count = n;
+  }
+  if (a.jobs < 0) throw UsageError("--jobs must be >= 1, got " + std::to_string(a.jobs));
+  const int jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
+  // every name and number is checked before the database is opened
+  const auto grid = expand_grid(req);
+
+  std::unique_ptr<Store> store;
+  try {
+    store = std::make_unique<Store>(a.db, Provenance{kVersion, DSB_GIT_SHA, host_name()});
+  } catch (const StoreError& e) {
+    throw UsageError(std::string("--db: ") + e.what());
+  }
+  std::FILE* progress = a.quiet ? nullptr : stderr;
+  const auto s = run_grid(grid, *store, jobs, progress);
+  std::fprintf(stderr, "harness: %zu runs in the grid: %lld already done, %lld done now, %lld failed; database %s\n",
+               grid.size(), static_cast<long long>(s.skipped), static_cast<long long>(s.done),
+               static_cast<long long>(s.failed), a.db.c_str());
+  return 0;
+}
+
+std::string one_line(std::string s) {
+  for (auto& c : s)
+    if (c == '\n' || c == '\r') c = ' ';
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s;
+}
+
+}  // namespace
+
+int harness_main(int argc, char** argv) {
+  CLI::App app{"diffsim-bench harness: optimizers x differentiable simulators, every episode in SQLite"};
+  app.set_version_flag("--version", fmt::format("harness {} (git {}, {} build)", kVersion, DSB_GIT_SHA,
+                                                DSB_BUILD_TYPE));
+  RunArgs main_args, run_args;
+  add_run_options(app, main_args);
+  app.require_subcommand(0, 1);
+
+  auto* run = app.add_subcommand("run", "run a grid (also implied by bare flags: harness --all --seeds 5)");
+  add_run_options(*run, run_args);
+
+  auto* list = app.add_subcommand("list", "envs (dim, differentiable, rl) and optimizers");
+
+  std::string eval_env, eval_x;
+  bool eval_grad = false;
+  auto* eval = app.add_subcommand("eval", "one rollout at x, JSON on stdout");
+  eval->add_option("--env", eval_env, "env name")->required();
+  eval->add_option("--x", eval_x, "comma-separated parameters in [-1, 1]")->required();
+  eval->add_flag("--grad", eval_grad, "also print dLoss/dx (normalized units)");
+
+  std::string gc_env;
+  int gc_points = 3;
+  std::uint64_t gc_seed = 0;
+  double gc_amplitude = 0.5, gc_step = 1e-6, gc_tol = 1e-4;
+  auto* gradcheck = app.add_subcommand("gradcheck", "analytic gradient vs central differences");
+  gradcheck->add_option("--env", gc_env, "env name")->required();
+  gradcheck->add_option("--points", gc_points, "number of seeded random points (default 3)");
+  gradcheck->add_option("--seed", gc_seed, "seed of the points (default 0)");
+  gradcheck->add_option("--amplitude", gc_amplitude, "points uniform in [-a, a]^d (default 0.5)");
+  gradcheck->add_option("--step", gc_step, "central-difference step (default 1e-6)");
+  gradcheck->add_option("--tol", gc_tol, "largest accepted relative error (default 1e-4)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {  // --help, --version
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "harness: error: %s\n", one_line(e.what()).c_str());
+    return 2;
+  }
+
+  try {
+    if (list->parsed()) return command_list();
+    if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
+    if (gradcheck->parsed())
+      return command_gradcheck(gc_env, gc_points, gc_seed, gc_amplitude, gc_step, gc_tol);
+    return command_run(run->parsed() ? run_args : main_args);
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "harness: error: %s\n", one_line(e.what()).c_str());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "harness: failed: %s\n", one_line(e.what()).c_str());
+    return 1;
+  }
+}
+
+}  // namespace dsb

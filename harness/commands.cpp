@@ -1,0 +1,151 @@
+#include "harness/commands.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <iostream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "common/error.hpp"
+#include "common/rng.hpp"
+#include "envs/core/registry.hpp"
+#include "optimizers/core/registry.hpp"
+
+namespace dsb {
+
+std::vector<double> parse_number_list(const std::string& option, const std::string& text) {
+  std::vector<double> values;
+  std::size_t pos = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', pos);
+    std::string token = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    // trim spaces
+    const auto first = token.find_first_not_of(" \t");
+    const auto last = token.find_last_not_of(" \t");
+    token = first == std::string::npos ? "" : token.substr(first, last - first + 1);
+    double v = 0.0;
+    const char* begin = token.data();
+    const char* end = token.data() + token.size();
+    if (!token.empty() && *begin == '+') ++begin;
+    const auto [ptr, ec] = std::from_chars(begin, end, v);
+    if (token.empty() || ec != std::errc() || ptr != end || !std::isfinite(v))
+      throw UsageError(option + ": '" + token + "' is not a finite number");
+    values.push_back(v);
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return values;
+}
+
+int command_list() {
+  std::cout << fmt::format("{:<16} {:>5} {:>14} {:>3}  {}\n", "env", "dim", "differentiable", "rl",
+                           "description");
+  for (const auto& family : env_families()) {
+    for (const auto& name : family.grid_names) {
+      const auto env = make_env(name);
+      std::cout << fmt::format("{:<16} {:>5} {:>14} {:>3}  {}\n", name, env->dim(),
+                               env->differentiable() ? "yes" : "no", env->supports_rl() ? "yes" : "no",
+                               family.pattern == name ? family.description
+                                                      : family.pattern + ": " + family.description);
+    }
+  }
+  std::cout << "\n" << fmt::format("{:<16} {:>14}  {}\n", "optimizer", "needs gradient", "description");
+  for (const auto& e : optimizer_entries())
+    std::cout << fmt::format("{:<16} {:>14}  {}\n", e.name, e.needs_gradient ? "yes" : "no",
+                             e.description);
+  return 0;
+}
+
+namespace {
+
+std::vector<double> checked_point(const Env& env, const std::string& x_text) {
+  const auto x = parse_number_list("--x", x_text);
+  if (static_cast<int>(x.size()) != env.dim())
+    throw UsageError(fmt::format("--x has {} values, env '{}' needs {}", x.size(), env.name(), env.dim()));
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (x[i] < -1.0 || x[i] > 1.0)
+      throw UsageError(fmt::format("--x: value {} at position {} is outside [-1, 1]", x[i], i));
+  return x;
+}
+
+// JSON number, or null for NaN/Inf (JSON has neither)
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+}  // namespace
+
+int command_eval(const std::string& env_name, const std::string& x_text, bool with_grad) {
+  const auto env = make_env(env_name);
+  const auto x = checked_point(*env, x_text);
+  if (with_grad && !env->differentiable())
+    throw UsageError("--grad: env '" + env_name + "' is not differentiable");
+  nlohmann::json out = {{"env", env_name}, {"x", x}};
+  if (with_grad) {
+    std::vector<double> grad(env->dim());
+    out["loss"] = number(env->loss_and_grad(x, grad));
+    nlohmann::json g = nlohmann::json::array();
+    for (double v : grad) g.push_back(number(v));
+    out["grad"] = g;
+  } else {
+    out["loss"] = number(env->loss(x));
+  }
+  std::cout << out.dump() << "\n";
+  return 0;
+}
+
+int command_gradcheck(const std::string& env_name, int points, std::uint64_t seed, double amplitude,
+                      double step, double tolerance) {
+  const auto env = make_env(env_name);
+  if (!env->differentiable()) throw UsageError("env '" + env_name + "' is not differentiable");
+  if (points < 1) throw UsageError("--points must be >= 1, got " + std::to_string(points));
+  if (!(amplitude > 0.0 && amplitude <= 1.0))
+    throw UsageError(fmt::format("--amplitude must be in (0, 1], got {}", amplitude));
+  if (!(step > 0.0 && step < 0.1)) throw UsageError(fmt::format("--step must be in (0, 0.1), got {}", step));
+  const int n = env->dim();
+  Rng rng(seed);
+  double worst = 0.0;
+  std::cout << fmt::format("gradcheck {} (dim {}): central differences with step {}, points uniform in "
+                           "[-{}, {}]^{}, seed {}\n",
+                           env_name, n, step, amplitude, amplitude, n, seed);
+  std::cout << fmt::format("{:>5} {:>14} {:>12} {:>12} {:>12} {:>6}\n", "point", "loss", "max|fd|",
+                           "max abs err", "max rel err", "coord");
+  for (int p = 0; p < points; ++p) {
+    std::vector<double> x(n), grad(n), fd(n);
+    for (auto& xi : x) xi = amplitude * rng.uniform(-1.0, 1.0);
+    const double loss = env->loss_and_grad(x, grad);
+    double scale = 0.0;
+    for (int i = 0; i < n; ++i) {
+      // central difference, clipped at the box edge to a one-sided window of the same width
+      const double xi = x[i];
+      const double hi = std::min(1.0, xi + step), lo = std::max(-1.0, xi - step);
+      x[i] = hi;
+      const double fp = env->loss(x);
+      x[i] = lo;
+      const double fm = env->loss(x);
+      x[i] = xi;
+      fd[i] = (fp - fm) / (hi - lo);
+      scale = std::max(scale, std::abs(fd[i]));
+    }
+    double max_abs = 0.0, max_rel = 0.0;
+    int worst_i = 0;
+    for (int i = 0; i < n; ++i) {
+      const double err = std::abs(grad[i] - fd[i]);
+      // relative to the component, with a floor of 1e-3 of the largest component
+      const double rel = err / (std::abs(fd[i]) + 1e-3 * scale + 1e-300);
+      max_abs = std::max(max_abs, err);
+      if (!(rel <= max_rel)) {
+        max_rel = rel;
+        worst_i = i;
+      }
+    }
+    worst = std::max(worst, std::isnan(max_rel) ? HUGE_VAL : max_rel);
+    std::cout << fmt::format("{:>5} {:>14.6e} {:>12.4e} {:>12.4e} {:>12.4e} {:>6}\n", p, loss, scale,
+                             max_abs, max_rel, worst_i);
+  }
+  const bool pass = worst <= tolerance;
+  std::cout << fmt::format("gradcheck {}: {} points, worst relative error {:.3e} (tolerance {:.1e}): {}\n",
+                           env_name, points, worst, tolerance, pass ? "PASS" : "FAIL");
+  return pass ? 0 : 1;
+}
+
+}  // namespace dsb

@@ -1,0 +1,69 @@
+#include "harness/grid.hpp"
+
+#include <set>
+
+#include "common/error.hpp"
+#include "common/rng.hpp"
+#include "envs/core/registry.hpp"
+#include "optimizers/core/registry.hpp"
+
+namespace dsb {
+
+std::uint64_t per_run_seed(const std::string& env, const std::string& optimizer, int seed) {
+  std::string key = env;
+  key.push_back('\0');
+  key += optimizer;
+  key.push_back('\0');
+  key += std::to_string(seed);
+  std::uint64_t h = fnv1a64(key);
+  return splitmix64(h);
+}
+
+std::vector<RunSpec> expand_grid(const GridRequest& req) {
+  if (req.seeds < 1) throw UsageError("--seeds must be >= 1, got " + std::to_string(req.seeds));
+  if (req.budget < 1) throw UsageError("--budget must be >= 1, got " + std::to_string(req.budget));
+  if (req.shard_count < 1 || req.shard_index < 0 || req.shard_index >= req.shard_count)
+    throw UsageError("--shard must be I/N with 0 <= I < N, got " + std::to_string(req.shard_index) +
+                     "/" + std::to_string(req.shard_count));
+
+  std::vector<std::string> envs = req.envs;
+  std::vector<std::string> optimizers = req.optimizers;
+  const bool envs_explicit = !envs.empty(), opts_explicit = !optimizers.empty();
+  if (!req.all && (!envs_explicit || !opts_explicit))
+    throw UsageError("nothing to run: give --all, or both --env and --optimizer");
+  if (!envs_explicit) envs = grid_env_names();
+  if (!opts_explicit)
+    for (const auto& e : optimizer_entries()) optimizers.push_back(e.name);
+
+  // validate every name before anything runs; duplicates are a user error too
+  std::set<std::string> seen;
+  std::vector<bool> differentiable;
+  for (const auto& name : envs) {
+    if (!seen.insert("env:" + name).second) throw UsageError("env '" + name + "' given twice");
+    differentiable.push_back(make_env(name)->differentiable());
+  }
+  for (const auto& name : optimizers) {
+    if (!seen.insert("opt:" + name).second) throw UsageError("optimizer '" + name + "' given twice");
+    optimizer_entry(name);
+  }
+
+  std::vector<RunSpec> grid;
+  std::size_t index = 0;
+  for (std::size_t e = 0; e < envs.size(); ++e) {
+    for (const auto& opt : optimizers) {
+      if (optimizer_entry(opt).needs_gradient && !differentiable[e]) {
+        if (envs_explicit && opts_explicit)
+          throw UsageError("optimizer '" + opt + "' needs gradients; env '" + envs[e] +
+                           "' is not differentiable");
+        continue;
+      }
+      for (int s = 0; s < req.seeds; ++s, ++index) {
+        if (static_cast<int>(index % req.shard_count) != req.shard_index) continue;
+        grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s)});
+      }
+    }
+  }
+  return grid;
+}
+
+}  // namespace dsb

@@ -1,0 +1,39 @@
+#pragma once
+// One cell of the grid and what a finished run produced.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace dsb {
+
+struct RunSpec {
+  std::string env;
+  std::string optimizer;
+  int seed = 0;              // seed index 0..seeds-1
+  std::int64_t budget = 0;   // episodes
+  std::uint64_t rng_seed = 0;  // per-run seed = hash(seed index, env, optimizer)
+};
+
+// per-run seed: FNV-1a over "env\0optimizer\0seed", mixed once more by splitmix64
+std::uint64_t per_run_seed(const std::string& env, const std::string& optimizer, int seed);
+
+struct EvalRecord {
+  std::int64_t episode = 0;  // 0-based
+  double loss = 0.0;         // NaN for a failed episode (stored as NULL)
+  double best_loss = 0.0;    // best finite loss so far (NaN while none)
+  bool used_grad = false;
+  double wall_s = 0.0;
+};
+
+struct RunResult {
+  std::string status;  // "done" or "failed"
+  std::int64_t episodes = 0;
+  std::int64_t failed_episodes = 0;
+  double best_loss = 0.0;  // NaN when no episode succeeded
+  std::vector<double> best_x;
+  double wall_s = 0.0;
+  std::string error;
+  std::vector<EvalRecord> evals;
+};
+
+}  // namespace dsb

@@ -1,0 +1,26 @@
+#pragma once
+// Runs a grid: skips runs already done in the store, executes the rest on `jobs` worker threads
+// (each run with its own env, optimizer and RNG, so results do not depend on jobs or order), and
+// commits each run with its evals when it ends.
+#include <cstdio>
+#include <vector>
+
+#include "envs/core/env.hpp"
+#include "harness/run_spec.hpp"
+#include "harness/store.hpp"
+#include "optimizers/core/optimizer.hpp"
+
+namespace dsb {
+
+// One run of an optimizer on an env under the budget wrapper. Never throws for optimizer or
+// simulation failures: they become status "failed" with the error text.
+RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
+                      std::atomic<std::int64_t>* episode_counter = nullptr);
+
+struct GridSummary {
+  std::int64_t skipped = 0, done = 0, failed = 0;
+};
+
+GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs, std::FILE* progress_out);
+
+}  // namespace dsb

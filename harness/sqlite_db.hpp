@@ -1,0 +1,72 @@
+#pragma once
+// Thin RAII layer over the SQLite C API: a connection, prepared statements, transactions.
+// Every failure throws StoreError carrying SQLite's message.
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+struct sqlite3;
+struct sqlite3_stmt;
+
+namespace dsb {
+
+struct StoreError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class Statement {
+ public:
+  Statement(sqlite3* db, const std::string& sql);
+  ~Statement();
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+
+  Statement& bind(int index, std::int64_t v);
+  Statement& bind(int index, double v);  // NaN binds as NULL (SQLite has no NaN)
+  Statement& bind(int index, const std::string& v);
+  Statement& bind_null(int index);
+  bool step();  // true while a row is available
+  void run();   // step to completion
+  void reset();
+  std::int64_t column_int(int col) const;
+  double column_double(int col) const;  // NULL reads as NaN
+  std::string column_text(int col) const;
+  bool column_is_null(int col) const;
+
+ private:
+  sqlite3* db_;
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+class Database {
+ public:
+  // Opens (creating if needed) a database file for writing; throws StoreError naming the path
+  // when it cannot be opened for writing.
+  explicit Database(const std::string& path, bool create = true);
+  ~Database();
+  Database(const Database&) = delete;
+  Database& operator=(const Database&) = delete;
+
+  void exec(const std::string& sql);
+  sqlite3* handle() const { return db_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  sqlite3* db_ = nullptr;
+  std::string path_;
+};
+
+// BEGIN IMMEDIATE ... COMMIT, rolled back when destroyed without commit()
+class Transaction {
+ public:
+  explicit Transaction(Database& db);
+  ~Transaction();
+  void commit();
+
+ private:
+  Database& db_;
+  bool done_ = false;
+};
+
+}  // namespace dsb

@@ -1,0 +1,29 @@
+#pragma once
+// What an optimizer sees: a budgeted objective on the normalized box [-1, 1]^dim. The harness
+// owns the implementation (counting, recording, stopping); optimizers only call it.
+#include <cstdint>
+#include <span>
+
+namespace dsb {
+
+// Thrown by an Objective when an optimizer asks for an episode after the budget is spent. The
+// runner catches it and ends the run normally; optimizers let it pass through.
+struct BudgetExhausted {};
+
+class Objective {
+ public:
+  virtual ~Objective() = default;
+  virtual int dim() const = 0;
+  virtual bool has_gradient() const = 0;
+  virtual std::int64_t budget() const = 0;
+  virtual std::int64_t used() const = 0;
+  std::int64_t remaining() const { return budget() - used(); }
+  // One episode. x must lie in [-1, 1]^dim. A failed episode (simulation blew up) returns
+  // +infinity, so it never looks better than a finite loss.
+  virtual double value(std::span<const double> x) = 0;
+  // One episode with dLoss/dx (normalized units). A failed episode returns +infinity and a zero
+  // gradient. Only when has_gradient().
+  virtual double value_and_grad(std::span<const double> x, std::span<double> grad) = 0;
+};
+
+}  // namespace dsb

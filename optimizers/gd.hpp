@@ -1,0 +1,33 @@
+#pragma once
+// Gradient descent with Adam in the normalized box, clipped to [-1, 1]:
+//  - `gd` runs one descent from the box centre for the whole budget;
+//  - `rand-descents` (the paper's RandDescents) restarts descents from uniform random starts,
+//    each ending after max_steps episodes or when the loss failed to improve `patience` times
+//    in a row.
+// A failed episode (+infinity) sends the descent back to its best point with half the step size.
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "optimizers/core/adam.hpp"
+#include "optimizers/core/optimizer.hpp"
+
+namespace dsb {
+
+struct DescentConfig {
+  AdamConfig adam;        // lr 0.1 (design)
+  bool random_starts = false;
+  int max_steps = 0;      // episodes per descent; 0 = until the budget ends
+  int patience = 0;       // stop a descent after this many non-improving steps; 0 = never
+  double min_improvement = 0.0;  // relative improvement that counts as progress
+  void validate(const std::string& owner) const;
+  nlohmann::json to_json() const;
+};
+
+DescentConfig gd_defaults();             // centre start, whole budget
+DescentConfig rand_descents_defaults();  // random starts, 100 steps, patience 10 (chosen here)
+
+std::unique_ptr<Optimizer> make_gd(const DescentConfig& cfg = gd_defaults());
+std::unique_ptr<Optimizer> make_rand_descents(const DescentConfig& cfg = rand_descents_defaults());
+
+}  // namespace dsb

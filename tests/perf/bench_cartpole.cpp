@@ -1,0 +1,103 @@
+// cartpole3 rollout: forward only, forward + reverse-pass gradient, and the same gradient by
+// central differences (2 x 400 rollouts), measured in one run and reported as ratios; plus a
+// whole 1,000-episode `gd` run on one core through the budget wrapper.
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "common/rng.hpp"
+#include "envs/core/registry.hpp"
+#include "harness/runner.hpp"
+#include "optimizers/core/registry.hpp"
+
+namespace {
+
+std::vector<double> point(const dsb::Env& env) {
+  dsb::Rng rng(1);
+  std::vector<double> x(env.dim());
+  for (auto& xi : x) xi = 0.5 * rng.uniform(-1.0, 1.0);
+  return x;
+}
+
+void BM_Cartpole3Forward(benchmark::State& state) {
+  const auto env = dsb::make_env("cartpole3");
+  const auto x = point(*env);
+  for (auto _ : state) benchmark::DoNotOptimize(env->loss(x));
+}
+BENCHMARK(BM_Cartpole3Forward);
+
+void BM_Cartpole3ForwardGradient(benchmark::State& state) {
+  const auto env = dsb::make_env("cartpole3");
+  const auto x = point(*env);
+  std::vector<double> g(env->dim());
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(env->loss_and_grad(x, g));
+    benchmark::ClobberMemory();
+  }
+}
+BENCHMARK(BM_Cartpole3ForwardGradient);
+
+void BM_Cartpole3CentralDifferences(benchmark::State& state) {
+  const auto env = dsb::make_env("cartpole3");
+  auto x = point(*env);
+  std::vector<double> g(env->dim());
+  for (auto _ : state) {
+    for (int i = 0; i < env->dim(); ++i) {
+      const double xi = x[i];
+      x[i] = xi + 1e-6;
+      const double fp = env->loss(x);
+      x[i] = xi - 1e-6;
+      const double fm = env->loss(x);
+      x[i] = xi;
+      g[i] = (fp - fm) / 2e-6;
+    }
+    benchmark::ClobberMemory();
+  }
+}
+BENCHMARK(BM_Cartpole3CentralDifferences)->Unit(benchmark::kMillisecond);
+
+void BM_GdRun1000EpisodesCartpole3(benchmark::State& state) {
+  const auto env = dsb::make_env("cartpole3");
+  for (auto _ : state) {
+    auto gd = dsb::make_optimizer("gd");
+    const auto r = dsb::execute_run({"cartpole3", "gd", 0, 1000, 1}, *env, *gd);
+    benchmark::DoNotOptimize(r.best_loss);
+  }
+}
+BENCHMARK(BM_GdRun1000EpisodesCartpole3)->Unit(benchmark::kMillisecond);
+
+// keeps each benchmark's real time per iteration (ns) for the ratio lines
+class RatioReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const auto& r : runs)
+      if (r.run_type == Run::RT_Iteration && !r.error_occurred)
+        ns[r.run_name.function_name] = r.GetAdjustedRealTime() *
+                                       (r.time_unit == benchmark::kMillisecond ? 1e6 : 1.0);
+    ConsoleReporter::ReportRuns(runs);
+  }
+  std::map<std::string, double> ns;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  RatioReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  auto& t = reporter.ns;
+  const double fwd = t["BM_Cartpole3Forward"], grad = t["BM_Cartpole3ForwardGradient"],
+               fd = t["BM_Cartpole3CentralDifferences"], gd = t["BM_GdRun1000EpisodesCartpole3"];
+  if (fwd > 0 && grad > 0 && fd > 0) {
+    std::printf("\nratios (same run):\n");
+    std::printf("  forward+gradient / forward          = %6.2f   (target <= 3)\n", grad / fwd);
+    std::printf("  central differences / reverse pass   = %6.0f   (target >= 100)\n", fd / grad);
+  }
+  if (gd > 0) std::printf("  1000-episode gd run on cartpole3     = %6.3f s (target < 2 s)\n", gd * 1e-9);
+  benchmark::Shutdown();
+  return 0;
+}

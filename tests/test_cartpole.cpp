@@ -1,0 +1,167 @@
+// cartpole1 / cartpole3: reverse-pass gradient vs central differences, closed-form checks of the
+// dynamics (energy of the free chain, the physical pendulum's period), RL interface parity.
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "common/rng.hpp"
+#include "envs/core/registry.hpp"
+#include "envs/rigid/cartpole_env.hpp"
+
+namespace dsb {
+namespace {
+
+std::vector<double> random_point(Rng& rng, int dim, double amplitude) {
+  std::vector<double> x(dim);
+  for (auto& xi : x) xi = amplitude * rng.uniform(-1.0, 1.0);
+  return x;
+}
+
+// central differences of the env's loss, all coordinates
+std::vector<double> central_differences(const Env& env, std::vector<double> x, double h) {
+  std::vector<double> g(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double xi = x[i];
+    x[i] = xi + h;
+    const double fp = env.loss(x);
+    x[i] = xi - h;
+    const double fm = env.loss(x);
+    x[i] = xi;
+    g[i] = (fp - fm) / (2.0 * h);
+  }
+  return g;
+}
+
+void expect_gradient_matches(const std::string& name, double amplitude, std::uint64_t seed) {
+  const auto env = make_env(name);
+  Rng rng(seed);
+  for (int point = 0; point < 3; ++point) {
+    const auto x = random_point(rng, env->dim(), amplitude);
+    std::vector<double> grad(env->dim());
+    const double loss = env->loss_and_grad(x, grad);
+    ASSERT_TRUE(std::isfinite(loss));
+    EXPECT_EQ(loss, env->loss(x)) << "loss_and_grad and loss disagree";
+    const auto fd = central_differences(*env, x, 1e-6);
+    double max_abs_grad = 0.0;
+    for (double g : fd) max_abs_grad = std::max(max_abs_grad, std::abs(g));
+    ASSERT_GT(max_abs_grad, 1e-3) << "degenerate test point";
+    for (std::size_t i = 0; i < grad.size(); ++i) {
+      // relative tolerance with an absolute floor scaled by the largest component
+      EXPECT_NEAR(grad[i], fd[i], 1e-6 * std::abs(fd[i]) + 1e-7 * max_abs_grad)
+          << name << " point " << point << " coordinate " << i;
+    }
+  }
+}
+
+TEST(CartpoleGradient, OneLinkMatchesCentralDifferences) {
+  expect_gradient_matches("cartpole1", 0.3, 11);
+  expect_gradient_matches("cartpole1", 1.0, 12);
+}
+
+TEST(CartpoleGradient, ThreeLinksMatchesCentralDifferences) {
+  expect_gradient_matches("cartpole3", 0.1, 21);
+  expect_gradient_matches("cartpole3", 0.3, 22);
+}
+
+TEST(CartpoleGradient, ZeroControlsStayAtRestWithKnownLoss) {
+  // hanging down at rest with no input stays put: tip at (0, -3), loss = |(0,-3) - (1, 2.5)|
+  const auto env = make_env("cartpole3");
+  std::vector<double> x(env->dim(), 0.0);
+  EXPECT_DOUBLE_EQ(env->loss(x), std::hypot(1.0, 5.5));
+}
+
+TEST(CartpoleDynamics, FreeChainEnergyStaysNearItsStartValue) {
+  // cart held still (u = 0) and no torques: the three-link chain released from a large angle
+  // conserves energy up to the O(dt) drift of semi-implicit Euler, which stays bounded
+  CartpoleConfig cfg = CartpoleConfig::three_links();
+  cfg.start_joint_angles = {1.2, -0.5, 0.8};
+  cfg.steps = 2000;
+  cfg.dt = 0.001;
+  const CartpoleModel model = CartpoleModel::build(cfg);
+  CartpoleState s = cartpole_initial_state(model, cfg);
+  const double e0 = cartpole_chain_energy(model, s, cfg);
+  const double tau[3] = {0.0, 0.0, 0.0};
+  double max_dev = 0.0;
+  for (int t = 0; t < cfg.steps; ++t) {
+    cartpole_step(model, s, 0.0, tau);
+    max_dev = std::max(max_dev, std::abs(cartpole_chain_energy(model, s, cfg) - e0));
+  }
+  // energy scale: potential difference of the start pose is several J
+  EXPECT_LT(max_dev, 0.02 * std::abs(e0)) << "e0 = " << e0;
+  EXPECT_GT(max_dev, 0.0);  // the integrator is not exact: the check is not vacuous
+}
+
+TEST(CartpoleDynamics, SingleLinkSwingsWithThePendulumPeriod) {
+  // uniform rod about its end: T = 2 pi sqrt(I_pivot / (m g L/2)) = 2 pi sqrt(2 L / (3 g))
+  CartpoleConfig cfg = CartpoleConfig::one_link();
+  cfg.start_joint_angles = {0.02};
+  cfg.dt = 0.001;
+  const CartpoleModel model = CartpoleModel::build(cfg);
+  CartpoleState s = cartpole_initial_state(model, cfg);
+  const double tau[1] = {0.0};
+  std::vector<double> crossings;  // times of downward zero crossings of phi, linearly interpolated
+  double t = 0.0;
+  for (int step = 0; step < 20000 && crossings.size() < 6; ++step) {
+    const double before = s.phi(0);
+    cartpole_step(model, s, 0.0, tau);
+    t += cfg.dt;
+    if (before > 0.0 && s.phi(0) <= 0.0)
+      crossings.push_back(t - cfg.dt + cfg.dt * before / (before - s.phi(0)));
+  }
+  ASSERT_EQ(crossings.size(), 6u);
+  const double measured = (crossings.back() - crossings.front()) / 5.0;
+  const double expected = 2.0 * std::numbers::pi * std::sqrt(2.0 * cfg.link_length / (3.0 * cfg.gravity));
+  EXPECT_NEAR(measured, expected, 1e-4 * expected) << "measured " << measured;
+}
+
+TEST(CartpoleDynamics, CartSpeedFollowsTheCommandExactly) {
+  const auto env = make_env("cartpole1");
+  std::vector<double> x(env->dim(), 0.0);
+  for (int t = 0; t < 100; ++t) x[2 * t] = 0.2;  // 1 m/s for 1 s
+  const auto& cart = dynamic_cast<const CartpoleEnv&>(*env);
+  const auto traj = cart.trajectory(x);
+  EXPECT_DOUBLE_EQ(traj.back().vx, 1.0);
+  EXPECT_NEAR(traj.back().x, 1.0, 1e-12);
+}
+
+TEST(CartpoleRl, StepInterfaceGivesTheSameLossAsTheRollout) {
+  const auto env = make_env("cartpole3");
+  Rng rng(5);
+  const auto x = random_point(rng, env->dim(), 0.5);
+  auto rl = env->make_rl();
+  ASSERT_NE(rl, nullptr);
+  EXPECT_EQ(rl->action_dim(), 4);
+  EXPECT_EQ(rl->horizon(), 100);
+  rl->reset();
+  for (int t = 0; t < rl->horizon(); ++t) {
+    ASSERT_FALSE(rl->done());
+    rl->step(std::span<const double>(x).subspan(4 * t, 4));
+  }
+  EXPECT_TRUE(rl->done());
+  EXPECT_EQ(rl->final_loss(), env->loss(x));  // bit-identical
+}
+
+TEST(CartpoleConfigTest, ValidationNamesTheField) {
+  CartpoleConfig cfg = CartpoleConfig::three_links();
+  cfg.link_masses = {1.0, 0.5};
+  try {
+    cfg.validate();
+    FAIL() << "expected ConfigError";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("link_masses"), std::string::npos) << e.what();
+  }
+  cfg = CartpoleConfig::three_links();
+  cfg.dt = -1.0;
+  EXPECT_THROW(cfg.validate(), std::exception);
+}
+
+TEST(CartpoleFamily, NamesAndDimensions) {
+  EXPECT_EQ(make_env("cartpole1")->dim(), 200);
+  EXPECT_EQ(make_env("cartpole3")->dim(), 400);
+  EXPECT_TRUE(make_env("cartpole3")->differentiable());
+}
+
+}  // namespace
+}  // namespace dsb

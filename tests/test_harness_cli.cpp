@@ -1,0 +1,255 @@
+// The `harness` program end to end, as a user runs it: the done-when grid, bit-identical evals
+// whatever --jobs, SIGKILL part-way then resume, bad input (exit 2, one line naming the value,
+// the database unchanged), eval/list/gradcheck output.
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <tuple>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sqlite3.h>
+
+#include "envs/core/registry.hpp"
+
+namespace dsb {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+class HarnessCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("dsb_cli_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // runs the harness through the shell; env_prefix may set variables
+  Result harness(const std::string& args, const std::string& env_prefix = "") {
+    const auto out = dir_ / "stdout", err = dir_ / "stderr";
+    const std::string cmd = env_prefix + " " + DSB_HARNESS_EXE + " " + args + " > " + out.string() +
+                            " 2> " + err.string() + " < /dev/null";
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = read(out);
+    r.err = read(err);
+    return r;
+  }
+  static std::string read(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  std::string db(const std::string& name) { return (dir_ / name).string(); }
+
+  fs::path dir_;
+};
+
+using EvalKey = std::tuple<std::string, std::string, int, std::int64_t>;
+
+// every eval's loss by (env, optimizer, seed, episode); NULL (failed) as NaN
+std::map<EvalKey, double> read_evals(const std::string& path) {
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* q = nullptr;
+  sqlite3_prepare_v2(db,
+                     "SELECT r.env, r.optimizer, r.seed, e.episode, e.loss FROM evals e "
+                     "JOIN runs r USING(run_id)",
+                     -1, &q, nullptr);
+  std::map<EvalKey, double> evals;
+  while (sqlite3_step(q) == SQLITE_ROW) {
+    EvalKey k{reinterpret_cast<const char*>(sqlite3_column_text(q, 0)),
+              reinterpret_cast<const char*>(sqlite3_column_text(q, 1)), sqlite3_column_int(q, 2),
+              sqlite3_column_int64(q, 3)};
+    evals[k] = sqlite3_column_type(q, 4) == SQLITE_NULL ? std::nan("") : sqlite3_column_double(q, 4);
+  }
+  sqlite3_finalize(q);
+  sqlite3_close(db);
+  return evals;
+}
+
+std::string scalar(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
+  sqlite3_stmt* q = nullptr;
+  sqlite3_prepare_v2(db, sql.c_str(), -1, &q, nullptr);
+  std::string v = sqlite3_step(q) == SQLITE_ROW && sqlite3_column_text(q, 0)
+                      ? reinterpret_cast<const char*>(sqlite3_column_text(q, 0))
+                      : "";
+  sqlite3_finalize(q);
+  sqlite3_close(db);
+  return v;
+}
+
+void expect_same_evals(const std::map<EvalKey, double>& a, const std::map<EvalKey, double>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (const auto& [k, v] : a) {
+    const auto it = b.find(k);
+    ASSERT_NE(it, b.end());
+    // bit-identical (NaN matches NaN)
+    EXPECT_TRUE(std::memcmp(&v, &it->second, sizeof v) == 0 || (std::isnan(v) && std::isnan(it->second)))
+        << std::get<0>(k) << "/" << std::get<1>(k) << " seed " << std::get<2>(k) << " episode "
+        << std::get<3>(k) << ": " << v << " vs " << it->second;
+  }
+}
+
+const std::string kGrid =
+    "--env cartpole3,rosenbrock-10,branin --optimizer random,gd,rand-descents,cmaes --seeds 2 --budget 60 --quiet";
+
+TEST_F(HarnessCli, DoneWhenGridStoresSixHundredEvals) {
+  const auto r = harness("--env cartpole3,rosenbrock-10 --optimizer random,gd,cmaes --seeds 2 "
+                         "--budget 50 --db " + db("x.sqlite"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(scalar(db("x.sqlite"), "SELECT count(*) FROM evals"), "600");
+  EXPECT_EQ(scalar(db("x.sqlite"), "SELECT count(*) FROM runs WHERE status='done' AND episodes=50"), "12");
+  EXPECT_NE(r.err.find("runs 12/12"), std::string::npos) << r.err;  // the progress line
+  // a second start finds everything done and changes nothing
+  const auto again = harness("--env cartpole3,rosenbrock-10 --optimizer random,gd,cmaes --seeds 2 "
+                             "--budget 50 --db " + db("x.sqlite"));
+  ASSERT_EQ(again.code, 0);
+  EXPECT_NE(again.err.find("12 already done, 0 done now"), std::string::npos) << again.err;
+  EXPECT_EQ(scalar(db("x.sqlite"), "SELECT count(*) FROM evals"), "600");
+}
+
+TEST_F(HarnessCli, EvalsAreBitIdenticalWhateverTheNumberOfJobs) {
+  ASSERT_EQ(harness(kGrid + " --jobs 1 --db " + db("j1.sqlite")).code, 0);
+  ASSERT_EQ(harness(kGrid + " --jobs 2 --db " + db("j2.sqlite")).code, 0);
+  const auto a = read_evals(db("j1.sqlite")), b = read_evals(db("j2.sqlite"));
+  EXPECT_EQ(a.size(), 3u * 4u * 2u * 60u);
+  expect_same_evals(a, b);
+}
+
+TEST_F(HarnessCli, GridKilledPartWayAndResumedEqualsTheUninterruptedGrid) {
+  ASSERT_EQ(harness(kGrid + " --jobs 2 --db " + db("full.sqlite")).code, 0);
+  // SIGKILL the harness three times at different points (after 150, 400 and 300 episodes in
+  // that start), resuming each time; then let it finish
+  int kills = 0;
+  for (const char* k : {"150", "400", "300"}) {
+    const auto r = harness(kGrid + " --jobs 1 --db " + db("resumed.sqlite"),
+                           std::string("DSB_FAULT_KILL_AFTER_EPISODES=") + k);
+    kills += r.code == 128 + SIGKILL;
+    // the killed run is left 'running' and does not count as done
+    EXPECT_EQ(scalar(db("resumed.sqlite"), "SELECT count(*) FROM runs WHERE status='running'"), "1");
+  }
+  EXPECT_EQ(kills, 3);
+  const auto final_run = harness(kGrid + " --jobs 2 --db " + db("resumed.sqlite"));
+  ASSERT_EQ(final_run.code, 0) << final_run.err;
+  EXPECT_EQ(scalar(db("resumed.sqlite"), "SELECT count(*) FROM runs WHERE status!='done'"), "0");
+  expect_same_evals(read_evals(db("full.sqlite")), read_evals(db("resumed.sqlite")));
+}
+
+TEST_F(HarnessCli, ExternalSigkillDuringALongRunLeavesNothingHalfDone) {
+  // a run long enough to be killed from outside while it is computing
+  const std::string grid = "--env cartpole3 --optimizer cmaes --seeds 3 --budget 20000 --jobs 1 --quiet";
+  const std::string cmd = std::string(DSB_HARNESS_EXE) + " " + grid + " --db " + db("k.sqlite") +
+                          " > /dev/null 2>&1 & pid=$!; sleep 1; kill -9 $pid; wait $pid";
+  std::system(cmd.c_str());
+  const auto done_before = scalar(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='done'");
+  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='running'"), "1");
+  // evals exist only for runs that are done
+  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT count(*) FROM evals JOIN runs USING(run_id) WHERE status!='done'"), "0");
+  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT count(*) FROM evals"),
+            std::to_string(std::stoi(done_before) * 20000));
+}
+
+TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase) {
+  ASSERT_EQ(harness("--env sphere-2 --optimizer random --seeds 1 --budget 5 --quiet --db " + db("keep.sqlite")).code, 0);
+  const std::string before = read(db("keep.sqlite"));
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--env nosuchenv --optimizer random --seeds 1", "nosuchenv"},
+      {"--env sphere-2 --optimizer nosuchopt --seeds 1", "nosuchopt"},
+      {"--env sphere-0 --optimizer random", "sphere-0"},
+      {"--env sphere-2 --optimizer random --seeds abc", "abc"},
+      {"--env sphere-2 --optimizer random --budget 1e", "1e"},
+      {"--env sphere-2 --optimizer random --seeds 0", "0"},
+      {"--env sphere-2 --optimizer random --jobs -3", "-3"},
+      {"--env sphere-2 --optimizer random --shard 3/2", "3/2"},
+      {"--all --bogus-flag", "--bogus-flag"},
+  };
+  for (const auto& [args, bad] : cases) {
+    const auto r = harness(args + " --db " + db("keep.sqlite"));
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
+    EXPECT_NE(r.err.find(bad), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(read(db("keep.sqlite")), before) << args;
+  }
+  // eval: wrong dimension, a non-number, outside the box, unknown env
+  const std::vector<std::pair<std::string, std::string>> eval_cases = {
+      {"eval --env sphere-3 --x 0.1,0.2", "3"},
+      {"eval --env sphere-2 --x 0.1,abc", "abc"},
+      {"eval --env sphere-2 --x 0.1,1.5", "1.5"},
+      {"eval --env nosuch --x 0.1", "nosuch"},
+  };
+  for (const auto& [args, bad] : eval_cases) {
+    const auto r = harness(args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
+    EXPECT_NE(r.err.find(bad), std::string::npos) << args << ": " << r.err;
+    EXPECT_TRUE(r.out.empty());
+  }
+  // unwritable database paths
+  for (const std::string& path : {db("no/such/dir/r.sqlite"), dir_.string()}) {
+    const auto r = harness("--env sphere-2 --optimizer random --db " + path);
+    EXPECT_EQ(r.code, 2) << path;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(path), std::string::npos) << r.err;
+  }
+}
+
+TEST_F(HarnessCli, EvalPrintsTheLossAndGradientAsJson) {
+  const auto env = make_env("cartpole1");
+  std::vector<double> x(env->dim(), 0.0);
+  x[0] = 0.5;
+  x[1] = -0.25;
+  std::string xs;
+  for (std::size_t i = 0; i < x.size(); ++i) xs += (i ? "," : "") + std::to_string(x[i]);
+  const auto r = harness("eval --env cartpole1 --grad --x " + xs);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["env"], "cartpole1");
+  EXPECT_EQ(j["loss"].get<double>(), env->loss(x));
+  std::vector<double> grad(env->dim());
+  env->loss_and_grad(x, grad);
+  ASSERT_EQ(j["grad"].size(), grad.size());
+  for (std::size_t i = 0; i < grad.size(); ++i) EXPECT_EQ(j["grad"][i].get<double>(), grad[i]);
+}
+
+TEST_F(HarnessCli, ListGradcheckVersionAndHelp) {
+  const auto list = harness("list");
+  ASSERT_EQ(list.code, 0);
+  EXPECT_NE(list.out.find("cartpole3"), std::string::npos);
+  EXPECT_NE(list.out.find("400"), std::string::npos);
+  EXPECT_NE(list.out.find("cmaes"), std::string::npos);
+  const auto gc = harness("gradcheck --env cartpole3 --points 2 --seed 1 --amplitude 0.3");
+  EXPECT_EQ(gc.code, 0) << gc.out;
+  EXPECT_NE(gc.out.find("PASS"), std::string::npos);
+  const auto version = harness("--version");
+  EXPECT_EQ(version.code, 0);
+  EXPECT_NE(version.out.find("harness 0."), std::string::npos) << version.out;
+  EXPECT_EQ(harness("--help").code, 0);
+  EXPECT_EQ(harness("eval --help").code, 0);
+}
+
+TEST_F(HarnessCli, ShardsPartitionTheGrid) {
+  const std::string grid = "--env sphere-2,branin --optimizer random,cmaes --seeds 3 --budget 5 --quiet";
+  ASSERT_EQ(harness(grid + " --db " + db("all.sqlite")).code, 0);
+  for (int i = 0; i < 3; ++i)
+    ASSERT_EQ(harness(grid + " --shard " + std::to_string(i) + "/3 --db " + db("s.sqlite")).code, 0);
+  EXPECT_EQ(scalar(db("s.sqlite"), "SELECT count(*) FROM runs"), "12");
+  expect_same_evals(read_evals(db("all.sqlite")), read_evals(db("s.sqlite")));
+}
+
+}  // namespace
+}  // namespace dsb

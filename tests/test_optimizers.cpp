@@ -1,0 +1,167 @@
+// random, gd, rand-descents: exact budget use, box respected, determinism, descent behaviour on
+// functions with known minima.
+#include <cmath>
+#include <numeric>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "optimizers/core/adam.hpp"
+#include "optimizers/core/registry.hpp"
+#include "optimizers/gd.hpp"
+#include "tests/support/function_objective.hpp"
+
+namespace dsb {
+namespace {
+
+using testing::FunctionObjective;
+
+// f(x) = sum (x_i - c_i)^2 with c_i = 0.3 - 0.05 i, minimum 0 inside the box
+double shifted_sphere(std::span<const double> x, std::span<double> g = {}) {
+  double f = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double d = x[i] - (0.3 - 0.05 * static_cast<double>(i));
+    f += d * d;
+    if (!g.empty()) g[i] = 2.0 * d;
+  }
+  return f;
+}
+
+FunctionObjective sphere_objective(int dim, std::int64_t budget) {
+  return FunctionObjective(
+      dim, budget, [](std::span<const double> x) { return shifted_sphere(x); },
+      [](std::span<const double> x, std::span<double> g) { return shifted_sphere(x, g); });
+}
+
+std::vector<double> run(const std::string& name, FunctionObjective& f, std::uint64_t seed) {
+  auto opt = make_optimizer(name);
+  Rng rng(seed);
+  try {
+    opt->minimize(f, rng);
+  } catch (const BudgetExhausted&) {
+  }
+  return f.losses();
+}
+
+class EveryOptimizer : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(EveryOptimizer, UsesExactlyTheBudgetInsideTheBox) {
+  auto f = sphere_objective(5, 137);
+  run(GetParam(), f, 1);
+  EXPECT_EQ(f.used(), 137);
+  for (const auto& p : f.points())
+    for (double xi : p) {
+      EXPECT_GE(xi, -1.0);
+      EXPECT_LE(xi, 1.0);
+    }
+}
+
+TEST_P(EveryOptimizer, SameSeedGivesBitIdenticalLosses) {
+  auto a = sphere_objective(4, 200), b = sphere_objective(4, 200);
+  EXPECT_EQ(run(GetParam(), a, 9), run(GetParam(), b, 9));
+}
+
+TEST_P(EveryOptimizer, ImprovesOnTheStartingLoss) {
+  auto f = sphere_objective(6, 400);
+  const auto losses = run(GetParam(), f, 2);
+  EXPECT_LT(f.best(), 0.5 * losses.front()) << GetParam();
+}
+
+INSTANTIATE_TEST_SUITE_P(Optimizers, EveryOptimizer,
+                         ::testing::Values("random", "gd", "rand-descents", "cmaes"));
+
+TEST(Random, DifferentSeedsDifferentPointsUniformMean) {
+  auto a = sphere_objective(3, 3000), b = sphere_objective(3, 100);
+  run("random", a, 1);
+  run("random", b, 2);
+  EXPECT_NE(a.points()[0], b.points()[0]);
+  double mean = 0.0;
+  for (const auto& p : a.points()) mean += p[0];
+  mean /= static_cast<double>(a.points().size());
+  EXPECT_NEAR(mean, 0.0, 0.05);  // 3 standard errors of U(-1,1) over 3000 draws
+}
+
+TEST(Gd, StartsAtTheCentreAndConvergesToTheMinimum) {
+  auto f = sphere_objective(4, 300);
+  run("gd", f, 0);
+  for (double xi : f.points().front()) EXPECT_EQ(xi, 0.0);
+  EXPECT_EQ(f.gradient_episodes(), 300);
+  EXPECT_LT(f.best(), 1e-6);
+}
+
+TEST(Gd, FirstAdamStepHasLengthLrPerCoordinate) {
+  // Adam's bias-corrected first step is lr * g / (|g| + eps), i.e. lr * sign(g) up to eps/|g|
+  auto f = sphere_objective(3, 2);
+  run("gd", f, 0);
+  const auto& x1 = f.points()[1];
+  EXPECT_NEAR(x1[0], 0.1, 1e-7);   // c_0 = 0.3 > 0: gradient negative, step +lr
+  EXPECT_NEAR(x1[1], 0.1, 1e-7);
+  EXPECT_NEAR(x1[2], 0.1, 1e-7);
+}
+
+TEST(Gd, RecoversFromAFailedEpisode) {
+  // losses are +inf beyond x_0 > 0.25: gd must back off and still finish the budget
+  FunctionObjective f(
+      2, 200,
+      [](std::span<const double> x) { return shifted_sphere(x); },
+      [](std::span<const double> x, std::span<double> g) {
+        const double v = shifted_sphere(x, g);
+        return x[0] > 0.25 ? std::numeric_limits<double>::quiet_NaN() : v;
+      });
+  run("gd", f, 0);
+  EXPECT_EQ(f.used(), 200);
+  EXPECT_LT(f.best(), 0.01);
+}
+
+TEST(RandDescents, RestartsFromRandomStartsAndStopsStaleDescents) {
+  // constant function: every descent goes stale after `patience` steps and restarts
+  FunctionObjective f(
+      3, 100, [](std::span<const double>) { return 1.0; },
+      [](std::span<const double>, std::span<double> g) {
+        std::fill(g.begin(), g.end(), 0.0);
+        return 1.0;
+      });
+  run("rand-descents", f, 4);
+  const int patience = rand_descents_defaults().patience;
+  // the descent runs patience + 1 episodes (the first sets the best), then restarts elsewhere
+  ASSERT_GT(f.used(), patience + 1);
+  EXPECT_EQ(f.points()[0], f.points()[patience]);
+  EXPECT_NE(f.points()[0], f.points()[patience + 1]);
+}
+
+TEST(RandDescents, EachDescentHasAtMostMaxSteps) {
+  auto f = sphere_objective(2, 450);
+  run("rand-descents", f, 5);
+  // count restarts: a jump that Adam's clipped step (<= lr per coordinate) cannot make
+  int longest = 0, current = 1;
+  for (std::size_t i = 1; i < f.points().size(); ++i) {
+    double jump = 0.0;
+    for (int d = 0; d < 2; ++d) jump = std::max(jump, std::abs(f.points()[i][d] - f.points()[i - 1][d]));
+    current = jump > 0.1 + 1e-12 ? 1 : current + 1;
+    longest = std::max(longest, current);
+  }
+  EXPECT_LE(longest, rand_descents_defaults().max_steps);
+}
+
+TEST(OptimizerConfig, ValidationNamesTheField) {
+  DescentConfig cfg = gd_defaults();
+  cfg.adam.lr = -1.0;
+  try {
+    make_gd(cfg);
+    FAIL();
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("'lr'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(OptimizerRegistry, UnknownNameIsAUsageErrorNamingIt) {
+  try {
+    make_optimizer("adamw");
+    FAIL();
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("'adamw'"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace dsb
