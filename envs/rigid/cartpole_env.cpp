@@ -144,8 +144,8 @@ EnvFamily cartpole_family(int links) {
   const std::string name = "cartpole" + std::to_string(links);
   EnvFamily f;
   f.pattern = name;
-  f.description = links == 1 ? "velocity-controlled cart + 1 link (1 kg), 100 steps, 200-D"
-                             : "velocity-controlled cart + 3 links (1, 0.5, 0.25 kg), 100 steps, 400-D";
+  f.description = links == 1 ? "velocity-controlled cart + 1 link (1 kg), 100 steps, 200-D, tip target (1, 0.8)"
+                             : "velocity-controlled cart + 3 links (1, 0.5, 0.25 kg), 100 steps, 400-D, tip target (1, 2.5)";
   f.grid_names = {name};
   f.try_make = [name, links](const std::string& requested) -> std::unique_ptr<Env> {
     if (requested != name) return nullptr;
