@@ -205,7 +205,8 @@ Eigen::VectorXd CmaState::ask(Rng& rng) {
   return x;
 }
 
-void CmaState::tell(const std::vector<Eigen::VectorXd>& xs, const std::vector<double>& fs) {
+void CmaState::tell(const std::vector<Eigen::VectorXd>& xs, const std::vector<double>& fs,
+                    const Eigen::VectorXd* moved_mean) {
   const int lambda = k_.lambda, mu = k_.mu;
   if (static_cast<int>(xs.size()) != lambda || static_cast<int>(fs.size()) != lambda)
     throw std::invalid_argument("cmaes: tell needs exactly lambda = " + std::to_string(lambda) + " solutions");
@@ -238,7 +239,14 @@ void CmaState::tell(const std::vector<Eigen::VectorXd>& xs, const std::vector<do
   Eigen::VectorXd y_w = Eigen::VectorXd::Zero(n_);
   for (int i = 0; i < mu; ++i) y_w += k_.weights[i] * Y.col(i);
   const double c_m = 1.0;
-  mean_ += c_m * sigma_ * y_w;
+  if (moved_mean) {
+    // BO-Leap: the step is where the gradient descent ended, not the sample's weighted mean
+    if (moved_mean->size() != n_) throw std::invalid_argument("cmaes: moved mean has the wrong dimension");
+    y_w = (*moved_mean - mean_) / sigma_;
+    mean_ = *moved_mean;
+  } else {
+    mean_ += c_m * sigma_ * y_w;
+  }
 
   // 5. C^-1/2 = B D^-1 B^T (Sec. 2); p_sigma <- (1 - c_s) p_sigma + sqrt(c_s (2 - c_s) mu_eff) C^-1/2 <y>_w   (eq. 43)
   const Eigen::MatrixXd C_inv_sqrt = B * D.cwiseInverse().asDiagonal() * B.transpose();

@@ -99,7 +99,11 @@ class CmaState {
   // One candidate inside [-1, 1]^n (resample, then clip).
   Eigen::VectorXd ask(Rng& rng);
   // Exactly lambda (x, f) pairs, xs[k] with loss fs[k]; throws std::invalid_argument otherwise.
-  void tell(const std::vector<Eigen::VectorXd>& xs, const std::vector<double>& fs);
+  // With `moved_mean` (BO-Leap), the mean moves there instead of to m + sigma <y>_w, and the
+  // evolution paths see that actual step <y>_w = (moved_mean - m) / sigma (Hansen & Ostermeier
+  // 2001, eqs. 14-17, driven by the realized mean shift); the rank-mu update still uses the sample.
+  void tell(const std::vector<Eigen::VectorXd>& xs, const std::vector<double>& fs,
+            const Eigen::VectorXd* moved_mean = nullptr);
   // The library's termination criteria; records which one fired in stop_reason().
   bool should_stop();
 

@@ -1,8 +1,11 @@
 #include "optimizers/core/registry.hpp"
 
 #include "common/error.hpp"
+#include "optimizers/bo/bo.hpp"
+#include "optimizers/boleap.hpp"
 #include "optimizers/cmaes.hpp"
 #include "optimizers/gd.hpp"
+#include "optimizers/nlopt_adapters.hpp"
 #include "optimizers/random_search.hpp"
 
 namespace dsb {
@@ -16,6 +19,18 @@ const std::vector<OptimizerEntry>& optimizer_entries() {
        [] { return make_rand_descents(); }},
       {"cmaes", "CMA-ES (cmaes library rules) with IPOP restarts, sigma0 0.5", false,
        [] { return make_cmaes(); }},
+      {"bo", "exact-GP Bayesian optimization (Matern-5/2 ARD, BoTorch-2022 priors), LCB beta 1", false,
+       [] { return make_bo(); }},
+      {"boleap", "BO-Leap (Alg. 1): LCB start, K=10 population, Adam descents, CMA-ES update", true,
+       [] { return make_boleap(); }},
+      {"nlopt-lbfgs", "NLopt LD_LBFGS (Luksan) from the centre, then random restarts", true,
+       [] { return make_nlopt_lbfgs(); }},
+      {"nlopt-bobyqa", "NLopt LN_BOBYQA (initial step 0.25), random restarts", false,
+       [] { return make_nlopt_bobyqa(); }},
+      {"nlopt-direct-l", "NLopt GN_DIRECT_L, restarts on random sub-boxes", false,
+       [] { return make_nlopt_direct_l(); }},
+      {"nlopt-crs2", "NLopt GN_CRS2_LM, restarts with a new random population", false,
+       [] { return make_nlopt_crs2(); }},
   };
   return entries;
 }

@@ -1,0 +1,115 @@
+#include "optimizers/bo/bo.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/error.hpp"
+#include "optimizers/bo/sobol.hpp"
+
+namespace dsb {
+
+void BoConfig::validate() const {
+  if (initial_points < 0) throw ConfigError("bo", "initial_points", "must be >= 0");
+  if (refit_every_until < 1) throw ConfigError("bo", "refit_every_until", "must be >= 1");
+  if (!(refit_growth > 0.0)) throw ConfigError("bo", "refit_growth", "must be > 0");
+  lcb.validate("bo");
+  gp.validate();
+}
+
+nlohmann::json BoConfig::to_json() const {
+  return {{"initial_points", initial_points}, {"initial_design", "scrambled Sobol"},
+          {"refit_every_until", refit_every_until}, {"refit_growth", refit_growth},
+          {"lcb", lcb.to_json()}, {"gp", gp.to_json()}};
+}
+
+int BoConfig::initial_points_for(int dim) const {
+  return initial_points > 0 ? initial_points : std::clamp(dim + 1, 5, 20);
+}
+
+BoSurrogate::BoSurrogate(int dim, const BoConfig& cfg) : cfg_(cfg), gp_(dim, cfg.gp) {}
+
+void BoSurrogate::refit(Rng& rng) {
+  const int n = size(), d = gp_.dim();
+  if (n == 0) return;
+  Eigen::MatrixXd X(n, d);
+  Eigen::VectorXd y(n);
+  for (int i = 0; i < n; ++i) {
+    X.row(i) = u_[i].transpose();
+    y[i] = y_[i];
+  }
+  // failed episodes carry the worst finite loss seen so far
+  const double fill = std::isfinite(worst_) ? worst_ : 0.0;
+  for (int i : failed_) y[i] = fill;
+  gp_.set_data(X, y);
+  gp_.fit(rng);
+  last_fit_n_ = n;
+  factored_n_ = n;
+  ++fits_;
+}
+
+void BoSurrogate::add(const Eigen::VectorXd& x, double loss, Rng& rng, bool defer_fit) {
+  Eigen::VectorXd u = (x.array() + 1.0) * 0.5;  // [-1,1] -> [0,1]
+  u_.push_back(u);
+  if (std::isfinite(loss)) {
+    worst_ = std::max(worst_, loss);
+    y_.push_back(loss);
+  } else {
+    failed_.push_back(size());
+    y_.push_back(std::isfinite(worst_) ? worst_ : 0.0);
+  }
+  if (defer_fit) return;
+  const int n = size();
+  const bool refit_now = n <= cfg_.refit_every_until ||
+                         n >= static_cast<int>(std::ceil((1.0 + cfg_.refit_growth) * last_fit_n_));
+  if (refit_now || factored_n_ != n - 1) {
+    refit(rng);
+  } else {
+    gp_.add_point(u, y_.back());  // O(n^2) extension with the current hyperparameters
+    factored_n_ = n;
+  }
+}
+
+Eigen::VectorXd BoSurrogate::propose(Rng& rng) {
+  const Eigen::VectorXd u = minimize_lcb(gp_, cfg_.lcb, rng);
+  return (2.0 * u.array() - 1.0).cwiseMax(-1.0).cwiseMin(1.0);
+}
+
+namespace {
+
+class BayesOpt : public Optimizer {
+ public:
+  explicit BayesOpt(const BoConfig& cfg) : cfg_(cfg) { cfg_.validate(); }
+  const std::string& name() const override { return name_; }
+  bool needs_gradient() const override { return false; }
+  nlohmann::json config() const override { return cfg_.to_json(); }
+
+  void minimize(Objective& f, Rng& rng) override {
+    const int d = f.dim();
+    BoSurrogate model(d, cfg_);
+    // space-filling initial design: scrambled Sobol in the unit box
+    const int n_init = cfg_.initial_points_for(d);
+    SobolSequence sobol(d, &rng);
+    for (int i = 0; i < n_init; ++i) {
+      const Eigen::VectorXd x = (2.0 * sobol.next().array() - 1.0).matrix();
+      const double loss = f.value(std::span<const double>(x.data(), d));
+      model.add(x, loss, rng, /*defer_fit=*/i + 1 < n_init);
+    }
+    // one LCB minimizer per episode until the budget ends
+    for (;;) {
+      const Eigen::VectorXd x = model.propose(rng);
+      const double loss = f.value(std::span<const double>(x.data(), d));
+      model.add(x, loss, rng);
+    }
+  }
+
+ private:
+  std::string name_ = "bo";
+  BoConfig cfg_;
+};
+
+}  // namespace
+
+std::unique_ptr<Optimizer> make_bo(const BoConfig& cfg) { return std::make_unique<BayesOpt>(cfg); }
+
+}  // namespace dsb

@@ -1,0 +1,55 @@
+#pragma once
+// `bo`: exact-GP Bayesian optimization with LCB (beta = 1). A scrambled Sobol initial design,
+// then one LCB minimizer per episode. Hyperparameters are refitted on a schedule that keeps
+// 1,000 iterations affordable: after every new point while n <= refit_every_until, then whenever n
+// has grown by refit_growth since the last fit; in between, each new point extends the Cholesky
+// factor in O(n^2).
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "optimizers/bo/acquisition.hpp"
+#include "optimizers/bo/gp.hpp"
+#include "optimizers/core/optimizer.hpp"
+
+namespace dsb {
+
+struct BoConfig {
+  int initial_points = 0;  // 0 = clamp(d + 1, 5, 20) (chosen here)
+  int refit_every_until = 50;  // refit after every point up to this many points
+  double refit_growth = 0.1;   // then refit when n >= (1 + growth) n_last_fit
+  LcbConfig lcb;
+  GpConfig gp;
+  void validate() const;
+  nlohmann::json to_json() const;
+  int initial_points_for(int dim) const;
+};
+
+// Data of a GP-based optimizer in the normalized box, with the refit schedule. Failed episodes
+// (+infinity) enter with the worst finite loss seen so far, so the model learns to avoid them.
+class BoSurrogate {
+ public:
+  BoSurrogate(int dim, const BoConfig& cfg);
+  // adds (x in [-1,1]^d, loss); refits or extends per the schedule
+  void add(const Eigen::VectorXd& x, double loss, Rng& rng, bool defer_fit = false);
+  // refit on all data now
+  void refit(Rng& rng);
+  // LCB argmin, in [-1, 1]^d
+  Eigen::VectorXd propose(Rng& rng);
+  int size() const { return static_cast<int>(y_.size()); }
+  int fits() const { return fits_; }
+  const GaussianProcess& gp() const { return gp_; }
+
+ private:
+  BoConfig cfg_;
+  GaussianProcess gp_;
+  std::vector<Eigen::VectorXd> u_;  // inputs in the unit box
+  std::vector<double> y_;
+  std::vector<int> failed_;  // indices whose loss was not finite
+  int last_fit_n_ = 0, fits_ = 0, factored_n_ = 0;
+  double worst_ = -std::numeric_limits<double>::infinity();
+};
+
+std::unique_ptr<Optimizer> make_bo(const BoConfig& cfg = {});
+
+}  // namespace dsb

@@ -1,0 +1,108 @@
+#pragma once
+// Exact Gaussian process regression for Bayesian optimization (Eigen, double):
+// constant mean, Matern-5/2 kernel with one lengthscale per input dimension and an outputscale,
+// Gaussian noise bounded below; priors as BoTorch's 2022 SingleTaskGP. Inputs are expected in the
+// unit box [0, 1]^d; outputs are standardized internally (mean, unbiased std) at every refit and
+// predictions are returned on the original scale.
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "common/rng.hpp"
+
+namespace dsb {
+
+struct GpConfig {
+  // Gamma(concentration, rate) priors on the constrained values, as GPyTorch's GammaPrior
+  double lengthscale_prior_concentration = 3.0, lengthscale_prior_rate = 6.0;
+  double outputscale_prior_concentration = 2.0, outputscale_prior_rate = 0.15;
+  double noise_prior_concentration = 1.1, noise_prior_rate = 0.05;
+  double noise_floor = 1e-4;      // lower bound of the noise variance (standardized units)
+  bool constant_mean = true;      // false: zero mean (on standardized outputs)
+  int fit_attempts = 3;           // L-BFGS starts: current values, then draws from the priors
+  int fit_max_evaluations = 200;  // per L-BFGS start
+  double min_variance = 1e-10;    // predictive variance floor (standardized units)
+  void validate() const;          // throws ConfigError naming the field
+  nlohmann::json to_json() const;
+};
+
+struct GpHyperparameters {
+  Eigen::VectorXd lengthscales;  // (d)
+  double outputscale = 0.0;      // signal variance
+  double noise = 0.0;            // noise variance
+  double mean = 0.0;             // constant mean (standardized units; 0 with a zero mean)
+};
+
+class GaussianProcess {
+ public:
+  GaussianProcess(int dim, const GpConfig& cfg);
+
+  int dim() const { return dim_; }
+  int size() const;
+  const GpHyperparameters& hyperparameters() const { return hyper_; }
+  void set_hyperparameters(const GpHyperparameters& h);  // refactors the kernel matrix
+
+  // Replaces the data: X (n x d) in [0,1]^d, y (n). Standardizes y, factors with the current
+  // hyperparameters (GPyTorch's initial values before the first fit).
+  void set_data(const Eigen::MatrixXd& X, const Eigen::VectorXd& y);
+
+  // Adds one point, extending the Cholesky factor in O(n^2) with the current hyperparameters and
+  // the standardization of the last refit (or set_data). Falls back to a full factorization with
+  // jitter when the new diagonal is not positive. On an empty GP it acts as set_data.
+  void add_point(const Eigen::VectorXd& x, double y);
+
+  // Maximizes log marginal likelihood + log priors over log-parameters with NLopt's L-BFGS
+  // (analytic gradient) from cfg.fit_attempts starts (the current values, then draws from the
+  // priors) and keeps the best (BoTorch stops at the first success instead); re-standardizes y
+  // and refactors. Jitter retries (1e-8, x10, up to 3 times, times the outputscale) when the
+  // Cholesky factorization fails. rng draws: per start, the prior sample (not for the first),
+  // then one nlopt::srand seed. Without data it does nothing.
+  void fit(Rng& rng);
+
+  // Objective of the fit on the current (standardized) data at log-parameters
+  // theta = (log lengthscales (d), log outputscale, log(noise - noise_floor), mean):
+  // [log N(y | mean, K + noise I) + sum log priors] / n, and its gradient (size d + 3).
+  double fit_objective(const Eigen::VectorXd& theta, Eigen::VectorXd* grad) const;
+  Eigen::VectorXd theta_of(const GpHyperparameters& h) const;
+  GpHyperparameters hyper_of(const Eigen::VectorXd& theta) const;
+
+  // Posterior of the latent function at x (original output scale); the variance is floored.
+  // With non-null gradients, also d mean / dx and d variance / dx (d); d variance is 0 where the
+  // floor is active. Cost O(n d) for the mean, + n^2 / 2 for the variance (one triangular solve),
+  // + n^2 / 2 for d variance (a second one). Without data: the prior.
+  void predict(const Eigen::VectorXd& x, double* mean, double* variance,
+               Eigen::VectorXd* dmean = nullptr, Eigen::VectorXd* dvariance = nullptr) const;
+
+  // The lower Cholesky factor of K + noise I (n x n), for tests: an O(n^2) copy out of the
+  // growable storage, refreshed by each call (so not safe to call from two threads at once).
+  const Eigen::MatrixXd& cholesky() const;
+
+  // Matern-5/2: k(r) = s (1 + sqrt5 r + 5/3 r^2) exp(-sqrt5 r), r^2 = sum ((a_i - b_i) / l_i)^2
+  static double matern52(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const GpHyperparameters& h);
+
+ private:
+  int dim_;
+  GpConfig cfg_;
+  GpHyperparameters hyper_;
+  // implementation state: data, standardization, factor, alpha
+  Eigen::MatrixXd X_;   // (n x d)
+  Eigen::MatrixXd Xs_;  // (d x n) inputs divided by the lengthscales, one point per column
+  Eigen::VectorXd y_raw_, y_std_;  // (n) original and standardized outputs
+  double y_mean_ = 0.0, y_scale_ = 1.0;
+  // lower Cholesky factor of K + (noise + jitter) I: the top-left n x n block of Lbuf_, whose
+  // spare capacity lets add_point grow it without moving the factor (only the lower part is kept)
+  Eigen::MatrixXd Lbuf_;        // (capacity x capacity)
+  mutable Eigen::MatrixXd L_;   // (n x n) copy made by cholesky(), upper part 0
+  Eigen::VectorXd z_;      // L^-1 (y_std - mean) (n), extended in O(n) by add_point
+  Eigen::VectorXd alpha_;  // (K + noise I)^-1 (y_std - mean) = L^-T z (n)
+  double jitter_ = 0.0;    // diagonal jitter of the current factor (0 when the plain one worked)
+  int n_ = 0;
+  void standardize();   // y_mean_, y_scale_, y_std_ from y_raw_
+  void rescale_inputs();  // Xs_ from X_ and the lengthscales
+  void refactor();      // factor, jitter_, z_, alpha_ from Xs_, y_std_ and hyper_ (jitter ladder)
+  void reserve_factor(int n, int keep);  // capacity of Lbuf_ >= n, keeping the top-left keep x keep
+};
+
+}  // namespace dsb

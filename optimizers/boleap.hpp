@@ -1,0 +1,59 @@
+#pragma once
+// `boleap`: BO-Leap, Algorithm 1 of Antonova et al. (CoRL 2022). Global level: a GP with LCB picks
+// a start x_n. Semi-local level (a "leap"), until episodes_per_leap episodes were spent:
+//   1. sample K candidates from N(mu, sigma^2 C) (resample, then clip to the box) and simulate them;
+//   2. the mean of the best half starts up to J gradient steps (Adam in the normalized box,
+//      clipped; the descent stops once the loss failed to improve `patience` times);
+//   3. mu moves to the descent's end and sigma, C follow the CMA-ES update driven by that step.
+// Then the GP is refitted on every point simulated so far (samples and descent iterates) and BO
+// proposes the next start. Needs gradients: refuses a non-differentiable objective.
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "optimizers/bo/bo.hpp"
+#include "optimizers/core/adam.hpp"
+#include "optimizers/core/optimizer.hpp"
+
+namespace dsb {
+
+struct BoLeapConfig {
+  int population = 10;          // K (paper)
+  double sigma0 = 1.0;          // sigma_1 (paper), in the normalized box; C_1 = I
+  int max_descent_steps = 10;   // J (chosen here; paper: not given)
+  int patience = 3;             // stop a descent after 3 non-improving steps (paper)
+  int episodes_per_leap = 100;  // semi-local episodes before BO proposes again (paper: ~100)
+  AdamConfig adam;              // lr 0.1 (design)
+  BoConfig bo;                  // GP, LCB (beta 1), initial design
+  void validate() const;
+  nlohmann::json to_json() const;
+};
+
+// What one run did, for tests and diagnostics.
+struct BoLeapStats {
+  int leaps = 0;
+  std::vector<int> leap_episodes;      // episodes spent in each leap
+  std::vector<int> descent_lengths;    // steps of each descent
+  std::vector<int> stale_stops;        // 1 when a descent ended by patience, 0 by J or budget
+  int gp_points = 0;                   // points in the GP at the last BO proposal
+  int episodes_seen = 0;               // episodes this optimizer asked for
+};
+
+class BoLeap : public Optimizer {
+ public:
+  explicit BoLeap(const BoLeapConfig& cfg = {});
+  const std::string& name() const override { return name_; }
+  bool needs_gradient() const override { return true; }
+  nlohmann::json config() const override { return cfg_.to_json(); }
+  void minimize(Objective& f, Rng& rng) override;
+  const BoLeapStats& last_run() const { return stats_; }
+
+ private:
+  std::string name_ = "boleap";
+  BoLeapConfig cfg_;
+  BoLeapStats stats_;
+};
+
+std::unique_ptr<Optimizer> make_boleap(const BoLeapConfig& cfg = {});
+
+}  // namespace dsb
