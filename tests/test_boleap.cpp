@@ -9,6 +9,7 @@
 #include "optimizers/boleap.hpp"
 #include "optimizers/cmaes.hpp"
 #include "tests/support/function_objective.hpp"
+#include "tests/support/test_functions.hpp"
 
 namespace dsb {
 namespace {
@@ -16,20 +17,8 @@ namespace {
 using testing::FunctionObjective;
 
 // shifted sphere with gradient, minimum 0 at c_i = 0.4 - 0.1 i
-double bowl(std::span<const double> x, std::span<double> g) {
-  double f = 0.0;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double d = x[i] - (0.4 - 0.1 * static_cast<double>(i));
-    f += d * d;
-    if (!g.empty()) g[i] = 2.0 * d;
-  }
-  return f;
-}
-
 FunctionObjective bowl_objective(int dim, std::int64_t budget) {
-  return FunctionObjective(
-      dim, budget, [](std::span<const double> x) { return bowl(x, {}); },
-      [](std::span<const double> x, std::span<double> g) { return bowl(x, g); });
+  return testing::shifted_sphere_objective(dim, budget, 0.4, 0.1);
 }
 
 BoLeapStats run(FunctionObjective& f, std::uint64_t seed, BoLeapConfig cfg = {}) {

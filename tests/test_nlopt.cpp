@@ -19,6 +19,7 @@
 
 #include "common/error.hpp"
 #include "tests/support/function_objective.hpp"
+#include "tests/support/test_functions.hpp"
 
 namespace dsb {
 namespace {
@@ -35,15 +36,9 @@ std::unique_ptr<NloptOptimizer> make(const std::string& name) {
   return std::make_unique<NloptOptimizer>(c);
 }
 
-// f(x) = sum (x_i - c_i)^2, c_i = 0.3 - 0.07 i (inside the box, not on DIRECT's grid of thirds)
+// c_i = 0.3 - 0.07 i (inside the box, not on DIRECT's grid of thirds)
 double shifted_sphere(std::span<const double> x, std::span<double> g = {}) {
-  double f = 0.0;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double d = x[i] - (0.3 - 0.07 * static_cast<double>(i));
-    f += d * d;
-    if (!g.empty()) g[i] = 2.0 * d;
-  }
-  return f;
+  return dsb::testing::shifted_sphere(x, g, 0.3, 0.07);
 }
 
 // rosenbrock on z = 2 x in [-2, 2]^n, minimum 0 at z = 1 (x = 0.5)

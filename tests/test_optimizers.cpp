@@ -10,27 +10,20 @@
 #include "optimizers/core/registry.hpp"
 #include "optimizers/gd.hpp"
 #include "tests/support/function_objective.hpp"
+#include "tests/support/test_functions.hpp"
 
 namespace dsb {
 namespace {
 
 using testing::FunctionObjective;
 
-// f(x) = sum (x_i - c_i)^2 with c_i = 0.3 - 0.05 i, minimum 0 inside the box
+// minimum 0 at c_i = 0.3 - 0.05 i
 double shifted_sphere(std::span<const double> x, std::span<double> g = {}) {
-  double f = 0.0;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double d = x[i] - (0.3 - 0.05 * static_cast<double>(i));
-    f += d * d;
-    if (!g.empty()) g[i] = 2.0 * d;
-  }
-  return f;
+  return testing::shifted_sphere(x, g, 0.3, 0.05);
 }
 
 FunctionObjective sphere_objective(int dim, std::int64_t budget) {
-  return FunctionObjective(
-      dim, budget, [](std::span<const double> x) { return shifted_sphere(x); },
-      [](std::span<const double> x, std::span<double> g) { return shifted_sphere(x, g); });
+  return testing::shifted_sphere_objective(dim, budget, 0.3, 0.05);
 }
 
 std::vector<double> run(const std::string& name, FunctionObjective& f, std::uint64_t seed) {

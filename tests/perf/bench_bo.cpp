@@ -3,7 +3,6 @@
 // factorization (ratio printed), and whole runs: `bo` on a 10-D env and `boleap`'s overhead.
 // The whole-run benchmarks are named Full* and are excluded from the CI smoke run.
 #include <cstdio>
-#include <map>
 
 #include <benchmark/benchmark.h>
 
@@ -12,6 +11,7 @@
 #include "optimizers/bo/acquisition.hpp"
 #include "optimizers/bo/gp.hpp"
 #include "optimizers/core/registry.hpp"
+#include "tests/perf/timing_reporter.hpp"
 
 namespace {
 
@@ -101,29 +101,18 @@ void BM_FullBoleapRun1000Rastrigin10(benchmark::State& s) { run_full(s, "rastrig
 BENCHMARK(BM_FullBoRun1000Rastrigin10)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_FullBoleapRun1000Rastrigin10)->Unit(benchmark::kSecond)->Iterations(1);
 
-class RatioReporter : public benchmark::ConsoleReporter {
- public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const auto& r : runs)
-      if (r.run_type == Run::RT_Iteration && !r.error_occurred) seconds[r.benchmark_name()] = r.real_accumulated_time / r.iterations;
-    ConsoleReporter::ReportRuns(runs);
-  }
-  std::map<std::string, double> seconds;
-};
-
 }  // namespace
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  RatioReporter rep;
+  dsb::perf::TimingReporter rep;
   benchmark::RunSpecifiedBenchmarks(&rep);
-  auto& t = rep.seconds;
-  const double add = t["BM_GpAddPoint/1000"], full = t["BM_GpFullFactorization/1000"];
+  const double add = rep.seconds("BM_GpAddPoint/1000"), full = rep.seconds("BM_GpFullFactorization/1000");
   if (add > 0 && full > 0)
     std::printf("\nratio (same run): full factorization / O(n^2) add_point at n = 1000 = %.0f\n", full / add);
   for (const char* name : {"BM_FullBoRun1000Rastrigin10/iterations:1", "BM_FullBoleapRun1000Rastrigin10/iterations:1"})
-    if (t.count(name)) std::printf("%s: %.1f s (targets: bo < 300 s, boleap < 60 s)\n", name, t[name]);
+    if (rep.seconds(name) > 0) std::printf("%s: %.1f s (targets: bo < 300 s, boleap < 60 s)\n", name, rep.seconds(name));
   benchmark::Shutdown();
   return 0;
 }

@@ -2,7 +2,6 @@
 // central differences (2 x 400 rollouts), measured in one run and reported as ratios; plus a
 // whole 1,000-episode `gd` run on one core through the budget wrapper.
 #include <cstdio>
-#include <map>
 #include <string>
 #include <vector>
 
@@ -12,6 +11,7 @@
 #include "envs/core/registry.hpp"
 #include "harness/runner.hpp"
 #include "optimizers/core/registry.hpp"
+#include "tests/perf/timing_reporter.hpp"
 
 namespace {
 
@@ -69,35 +69,23 @@ void BM_GdRun1000EpisodesCartpole3(benchmark::State& state) {
 }
 BENCHMARK(BM_GdRun1000EpisodesCartpole3)->Unit(benchmark::kMillisecond);
 
-// keeps each benchmark's real time per iteration (ns) for the ratio lines
-class RatioReporter : public benchmark::ConsoleReporter {
- public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const auto& r : runs)
-      if (r.run_type == Run::RT_Iteration && !r.error_occurred)
-        ns[r.run_name.function_name] = r.GetAdjustedRealTime() *
-                                       (r.time_unit == benchmark::kMillisecond ? 1e6 : 1.0);
-    ConsoleReporter::ReportRuns(runs);
-  }
-  std::map<std::string, double> ns;
-};
-
 }  // namespace
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  RatioReporter reporter;
+  dsb::perf::TimingReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
-  auto& t = reporter.ns;
-  const double fwd = t["BM_Cartpole3Forward"], grad = t["BM_Cartpole3ForwardGradient"],
-               fd = t["BM_Cartpole3CentralDifferences"], gd = t["BM_GdRun1000EpisodesCartpole3"];
+  const double fwd = reporter.seconds("BM_Cartpole3Forward"),
+               grad = reporter.seconds("BM_Cartpole3ForwardGradient"),
+               fd = reporter.seconds("BM_Cartpole3CentralDifferences"),
+               gd = reporter.seconds("BM_GdRun1000EpisodesCartpole3");
   if (fwd > 0 && grad > 0 && fd > 0) {
     std::printf("\nratios (same run):\n");
     std::printf("  forward+gradient / forward          = %6.2f   (target <= 3)\n", grad / fwd);
     std::printf("  central differences / reverse pass   = %6.0f   (target >= 100)\n", fd / grad);
   }
-  if (gd > 0) std::printf("  1000-episode gd run on cartpole3     = %6.3f s (target < 2 s)\n", gd * 1e-9);
+  if (gd > 0) std::printf("  1000-episode gd run on cartpole3     = %6.3f s (target < 2 s)\n", gd);
   benchmark::Shutdown();
   return 0;
 }

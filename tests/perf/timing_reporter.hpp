@@ -1,0 +1,30 @@
+#pragma once
+// Console reporter that also keeps each benchmark's real time per iteration (seconds), by full
+// benchmark name, so a binary can print ratios of benchmarks measured in the same run.
+#include <map>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+namespace dsb::perf {
+
+class TimingReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const auto& r : runs)
+      if (r.run_type == Run::RT_Iteration && !r.error_occurred && r.iterations > 0)
+        seconds_[r.benchmark_name()] = r.real_accumulated_time / static_cast<double>(r.iterations);
+    ConsoleReporter::ReportRuns(runs);
+  }
+  // seconds per iteration, 0 when the benchmark did not run (filtered out)
+  double seconds(const std::string& name) const {
+    const auto it = seconds_.find(name);
+    return it == seconds_.end() ? 0.0 : it->second;
+  }
+
+ private:
+  std::map<std::string, double> seconds_;
+};
+
+}  // namespace dsb::perf
