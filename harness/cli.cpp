@@ -124,6 +124,22 @@ int harness_main(int argc, char** argv) {
   gradcheck->add_option("--step", gc_step, "central-difference step (default 1e-6)");
   gradcheck->add_option("--tol", gc_tol, "largest accepted relative error (default 1e-4)");
 
+  std::string check_db, check_baseline;
+  auto* check = app.add_subcommand("check", "regression gate: database result table vs a baseline CSV");
+  check->add_option("--db", check_db, "results database")->required();
+  check->add_option("--baseline", check_baseline, "baseline CSV (data/baselines/NAME.csv)")->required();
+
+  std::string export_db, export_out;
+  auto* exporter = app.add_subcommand("export", "write the database's result table as a baseline CSV");
+  exporter->add_option("--db", export_db, "results database")->required();
+  exporter->add_option("--out", export_out, "CSV file to write")->required();
+
+  std::string report_db = "results.sqlite", report_out = "report", report_landscapes;
+  auto* report = app.add_subcommand("report", "comparison report (index.html, figures, tables) from a database");
+  report->add_option("--db", report_db, "results database (default ./results.sqlite)");
+  report->add_option("--out", report_out, "output folder (default ./report)");
+  report->add_option("--landscapes", report_landscapes, "folder of `harness landscape` CSVs to plot");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help, --version
@@ -135,6 +151,9 @@ int harness_main(int argc, char** argv) {
 
   try {
     if (list->parsed()) return command_list();
+    if (check->parsed()) return command_check(check_db, check_baseline);
+    if (exporter->parsed()) return command_export(export_db, export_out);
+    if (report->parsed()) return command_report(report_db, report_out, report_landscapes);
     if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
     if (gradcheck->parsed())
       return command_gradcheck(gc_env, gc_points, gc_seed, gc_amplitude, gc_step, gc_tol);

@@ -11,6 +11,14 @@ int command_eval(const std::string& env_name, const std::string& x_text, bool wi
 int command_gradcheck(const std::string& env_name, int points, std::uint64_t seed, double amplitude,
                       double step, double tolerance);
 
+// Regression gate: compares the database's result table with a baseline CSV. 0 equal, 1 any
+// difference (diff printed), 2 malformed baseline or unreadable database.
+int command_check(const std::string& db_path, const std::string& baseline_path);
+// Writes the database's result table (the baseline format) to a CSV file.
+int command_export(const std::string& db_path, const std::string& out_path);
+// Runs the Python report generator (reports/make_report.py) with Debian's system interpreter.
+int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes);
+
 // Parses a comma-separated list of finite numbers; UsageError naming the bad token.
 std::vector<double> parse_number_list(const std::string& option, const std::string& text);
 

@@ -71,8 +71,9 @@ bool Statement::column_is_null(int col) const {
   return sqlite3_column_type(stmt_, col) == SQLITE_NULL;
 }
 
-Database::Database(const std::string& path, bool create) : path_(path) {
-  const int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
+Database::Database(const std::string& path, Mode mode) : path_(path) {
+  const int flags = (mode == Mode::read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE) |
+                    (mode == Mode::write_create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
   const int rc = sqlite3_open_v2(path.c_str(), &db_, flags, nullptr);
   if (rc != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
@@ -80,7 +81,7 @@ Database::Database(const std::string& path, bool create) : path_(path) {
     db_ = nullptr;
     throw StoreError("cannot open database '" + path + "': " + msg);
   }
-  if (sqlite3_db_readonly(db_, "main") == 1) {
+  if (mode != Mode::read_only && sqlite3_db_readonly(db_, "main") == 1) {
     sqlite3_close(db_);
     db_ = nullptr;
     throw StoreError("cannot open database '" + path + "' for writing");

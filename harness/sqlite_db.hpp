@@ -41,9 +41,10 @@ class Statement {
 
 class Database {
  public:
-  // Opens (creating if needed) a database file for writing; throws StoreError naming the path
-  // when it cannot be opened for writing.
-  explicit Database(const std::string& path, bool create = true);
+  enum class Mode { write_create, write, read_only };
+  // Opens a database file (write_create: creating it if needed); throws StoreError naming the
+  // path when it cannot be opened in that mode.
+  explicit Database(const std::string& path, Mode mode = Mode::write_create);
   ~Database();
   Database(const Database&) = delete;
   Database& operator=(const Database&) = delete;

@@ -41,7 +41,7 @@ class StoreTest : public ::testing::Test {
     return r;
   }
   std::string query(const std::string& sql) {
-    Database db(path_, false);
+    Database db(path_, Database::Mode::read_only);
     Statement q(db.handle(), sql);
     std::ostringstream out;
     while (q.step()) out << (q.column_is_null(0) ? "NULL" : q.column_text(0)) << ";";

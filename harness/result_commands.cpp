@@ -1,0 +1,89 @@
+// `harness check`, `harness export`, `harness report`: what is done with a finished database.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "common/error.hpp"
+#include "harness/commands.hpp"
+#include "harness/result_table.hpp"
+#include "harness/sqlite_db.hpp"
+
+namespace dsb {
+namespace {
+
+std::vector<ResultRow> database_table(const std::string& db_path) {
+  if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
+  try {
+    Database db(db_path, Database::Mode::read_only);
+    return read_result_table(db);
+  } catch (const StoreError& e) {
+    throw UsageError(std::string("--db: ") + e.what());
+  }
+}
+
+}  // namespace
+
+int command_check(const std::string& db_path, const std::string& baseline_path) {
+  std::vector<ResultRow> baseline;
+  try {
+    baseline = read_result_csv(baseline_path);
+  } catch (const BaselineError& e) {
+    throw UsageError(std::string("--baseline: ") + e.what());
+  }
+  const auto current = database_table(db_path);
+  const TableDiff diff = compare_tables(baseline, current);
+  print_diff(diff, std::cout);
+  if (diff.empty()) {
+    std::cout << "check: database '" << db_path << "' equals baseline '" << baseline_path << "'\n";
+    return 0;
+  }
+  std::cout << "check: database '" << db_path << "' differs from baseline '" << baseline_path
+            << "'. If the change is intended, regenerate the baseline (README: regression CI) and say why in the commit.\n";
+  return 1;
+}
+
+int command_export(const std::string& db_path, const std::string& out_path) {
+  const auto rows = database_table(db_path);
+  std::ofstream out(out_path);
+  if (!out) throw UsageError("--out: cannot write '" + out_path + "'");
+  write_result_csv(rows, out);
+  out.close();
+  if (!out) throw UsageError("--out: writing '" + out_path + "' failed");
+  std::cerr << "harness: wrote " << rows.size() << " rows to " << out_path << "\n";
+  return 0;
+}
+
+int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes) {
+  if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
+  // Debian's pandas/matplotlib/scipy import only in Debian's interpreter; DSB_PYTHON overrides
+  const char* python_env = std::getenv("DSB_PYTHON");
+  const std::string python = python_env ? python_env
+                             : std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  const char* reports_env = std::getenv("DSB_REPORTS_DIR");
+  const std::string script = std::string(reports_env ? reports_env : DSB_SOURCE_DIR "/reports") + "/make_report.py";
+  if (!std::filesystem::is_regular_file(script)) throw UsageError("report generator not found at '" + script + "'");
+  std::vector<std::string> args = {python, script, "--db", db_path, "--out", out_dir, "--build-type", DSB_BUILD_TYPE};
+  if (!landscapes.empty()) {
+    args.push_back("--landscapes");
+    args.push_back(landscapes);
+  }
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::cout.flush();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execvp(argv[0], argv.data());
+    std::perror(("harness: cannot run " + python).c_str());
+    _exit(127);
+  }
+  int status = 0;
+  if (pid < 0 || waitpid(pid, &status, 0) < 0) throw std::runtime_error("cannot start the report generator");
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
+}
+
+}  // namespace dsb

@@ -1,0 +1,12 @@
+"""Helpers of reports/make_report.py: the diffsim-bench comparison report.
+
+Modules, one purpose each:
+  data        read a harness database (read-only) into runs, panels and best-so-far matrices
+  grid        the expected (env, optimizer, seed, budget) grid: missing, failed and running runs
+  stats       per-cell statistics, Student-t CIs, Mann-Whitney + Holm, ranks, ECDF of targets
+  style       palette (one fixed color per optimizer), fonts, the log-scale rule
+  plots       the figures: curves, finals, ranks, ECDF
+  landscape   heat maps with gradient arrows from `harness landscape` CSVs
+  tables      CSV and Markdown writers
+  html        index.html
+"""

@@ -1,0 +1,48 @@
+"""How to read each figure: the text under it in index.html (and the notes of summary.md)."""
+
+CURVES = ("Each line is the median over seeds of the best loss found so far after that many "
+          "episodes; the shaded band spans the 25th to 75th percentile over seeds. Lower is better. "
+          "The legend gives n, the number of completed seeds. {scale}")
+
+SCALE_LINEAR = "Linear y axis."
+SCALE_LOG = "Log y axis: the losses are positive and span more than two decades."
+SCALE_SHIFTED = ("Log y axis of the loss minus f* (= {fstar}, the best loss any optimizer found on "
+                 "this env) plus a tiny offset δ = {delta} so that the best run stays visible: some "
+                 "losses are zero or negative, which a log axis cannot show directly.")
+
+FINALS = ("Bars: mean over seeds of the final best loss at the budget; whiskers: 95% confidence "
+          "interval of the mean (Student t with n−1 degrees of freedom, no bootstrap); dots: the "
+          "individual seeds. '(best)' marks the optimizer with the lowest median final loss; '≈ best' "
+          "marks those that a two-sided Mann-Whitney U test against it, Holm-corrected over this "
+          "env's comparisons, cannot tell apart at α = 0.05. {scale}")
+
+RANKS = ("For each env and episode count, the optimizers are ranked by the median over seeds of "
+         "their best loss so far (1 = best; ties share the average rank). Each line is the mean rank "
+         "over the envs the optimizer ran on. Gradient optimizers do not run on non-differentiable "
+         "envs, so they may be ranked over fewer envs and among fewer competitors (see the env count "
+         "in the legend).")
+
+ECDF = ("COCO-style data profile. For each env, f* is the best loss any optimizer found and f0 the "
+        "median loss of the first episode over all its runs; the targets are f* + (f0 − f*)·10^−k "
+        "for k = 1, 2, 3, 4, 5 (relative targets). An (env, seed, target) triple is solved after e "
+        "episodes when the best loss so far is ≤ the target. Each line is the fraction of the "
+        "optimizer's triples solved after e episodes (over the envs it ran on): higher and further "
+        "left is better; the right end is the fraction solved within the budget.")
+
+SIGNIFICANCE = ("For each env, the best optimizer is the one with the lowest median final loss. Every "
+                "other optimizer's final best losses over seeds are compared with the best one's by a "
+                "two-sided Mann-Whitney U test (scipy.stats.mannwhitneyu: exact for small samples "
+                "without ties, normal approximation otherwise); the p-values of one env are "
+                "Holm-corrected over its comparisons, and an optimizer is indistinguishable from the "
+                "best when the corrected p is ≥ 0.05. {minp}")
+
+LANDSCAPE = ("Colors: the loss on a 2-D slice of the normalized box through dimensions i and j "
+             "(the other coordinates as `harness landscape` fixed them). Arrows: the descent "
+             "direction (minus the gradient) on at most 20 × 20 grid points, drawn with unit "
+             "length; arrow color: log10 of the gradient magnitude, so flat regions and cliffs "
+             "stand out.")
+
+MISSING = ("Expected grid: every (env, optimizer) pair with at least one run in the database, times "
+           "seed indices 0..{max_seed}, times the budgets present for that env. Every expected run "
+           "without a 'done' run is listed here; reason 'failed' or 'running' means such a run "
+           "exists (see below), 'absent' means none was ever stored.")

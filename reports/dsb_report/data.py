@@ -1,0 +1,162 @@
+"""Read a harness database (read-only) into the frames and arrays the report needs.
+
+Analysis unit: a *panel* = (env, budget). Within a panel each optimizer contributes its 'done'
+runs, one per seed. If one (env, optimizer, budget) has runs under more than one config variant
+(env_config_hash, opt_config_hash), the variant with the most 'done' runs is analysed (ties: the
+one with the newest run) and the others are listed in the report, never mixed silently.
+"""
+from __future__ import annotations
+
+import os
+import re
+import sqlite3
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+RUN_COLUMNS = ["run_id", "env", "optimizer", "seed", "budget", "env_config_hash",
+               "opt_config_hash", "status", "episodes", "failed_episodes", "best_loss",
+               "wall_s", "error", "started_at", "finished_at", "harness_version", "git_sha",
+               "host"]
+
+
+class DataError(Exception):
+    """The database cannot be read as a harness database (one-line message)."""
+
+
+@dataclass
+class Panel:
+    env: str
+    budget: int
+    slug: str                 # file-name part: env, or env_b<budget> when an env has several budgets
+    runs: pd.DataFrame        # selected 'done' runs, sorted by optimizer, seed
+    best: np.ndarray          # [n_runs, budget] best loss so far after episode k+1; +inf = none yet
+    first_loss: np.ndarray    # [n_runs] loss of episode 0 (NaN if failed or absent)
+    optimizers: list = field(default_factory=list)
+
+    def rows(self, optimizer: str) -> np.ndarray:
+        return np.flatnonzero(self.runs["optimizer"].to_numpy() == optimizer)
+
+    @property
+    def fstar(self) -> float:
+        finite = self.best[np.isfinite(self.best)]
+        return float(finite.min()) if finite.size else float("nan")
+
+    @property
+    def f0(self) -> float:
+        v = self.first_loss[np.isfinite(self.first_loss)]
+        return float(np.median(v)) if v.size else float("nan")
+
+
+@dataclass
+class Data:
+    db_path: str
+    db_size: int
+    meta: dict
+    runs: pd.DataFrame        # every run, any status
+    selected: pd.DataFrame    # 'done' runs analysed (one config variant per env, optimizer, budget)
+    ignored: pd.DataFrame     # 'done' runs of other config variants
+    panels: list
+    optimizers: list          # sorted names of every optimizer in the database
+
+
+def slugify(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9._-]", "_", text)
+
+
+def connect_ro(path: str) -> sqlite3.Connection:
+    if not os.path.isfile(path):
+        raise DataError(f"cannot read database '{path}': no such file")
+    uri = "file:" + os.path.abspath(path).replace("?", "%3f").replace("#", "%23") + "?mode=ro"
+    try:
+        con = sqlite3.connect(uri, uri=True)
+        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+    except sqlite3.Error as e:
+        raise DataError(f"cannot read database '{path}': {e}") from None
+    missing = {"runs", "evals", "meta"} - tables
+    if missing:
+        raise DataError(f"'{path}' is not a harness database (no table {', '.join(sorted(missing))})")
+    return con
+
+
+def _choose_variants(done: pd.DataFrame):
+    """Split 'done' runs into the analysed config variant per (env, optimizer, budget) and the rest."""
+    if done.empty:
+        return done, done
+    key = ["env", "optimizer", "budget"]
+    var = ["env_config_hash", "opt_config_hash"]
+    counts = (done.groupby(key + var).agg(n=("run_id", "size"), newest=("run_id", "max"))
+              .reset_index().sort_values(key + ["n", "newest"], ascending=[True] * 3 + [False] * 2))
+    chosen = counts.drop_duplicates(key)[key + var]
+    merged = done.merge(chosen.assign(_keep=True), on=key + var, how="left")
+    keep = merged["_keep"].eq(True).to_numpy()
+    sel = done[keep]
+    # one run per seed inside the variant (the UNIQUE key guarantees it; stay safe anyway)
+    sel = sel.sort_values("run_id").drop_duplicates(key + ["seed"], keep="last")
+    return sel.sort_values(["env", "budget", "optimizer", "seed"]).reset_index(drop=True), \
+        done[~keep].reset_index(drop=True)
+
+
+def _best_matrix(runs: pd.DataFrame, ev: pd.DataFrame, budget: int):
+    n = len(runs)
+    best = np.full((n, budget), np.nan)
+    first = np.full(n, np.nan)
+    if n and not ev.empty:
+        row_of = pd.Series(np.arange(n), index=runs["run_id"].to_numpy())
+        ev = ev[ev["run_id"].isin(row_of.index) & (ev["episode"] >= 0) & (ev["episode"] < budget)]
+        r = row_of.loc[ev["run_id"].to_numpy()].to_numpy()
+        e = ev["episode"].to_numpy()
+        b = ev["best_loss"].to_numpy(dtype=float)
+        best[r, e] = np.where(np.isnan(b), np.inf, b)       # NULL best = no finite loss yet
+        m0 = e == 0
+        first[r[m0]] = ev["loss"].to_numpy(dtype=float)[m0]
+    # episodes without a row (a run that stopped early) keep the last best; none yet = +inf
+    best = pd.DataFrame(best).ffill(axis=1).to_numpy()
+    best[np.isnan(best)] = np.inf
+    return best, first
+
+
+def load(path: str) -> Data:
+    con = connect_ro(path)
+    try:
+        meta = dict(con.execute("SELECT key, value FROM meta").fetchall())
+        cols = [r[1] for r in con.execute("PRAGMA table_info(runs)")]
+        absent = [c for c in RUN_COLUMNS if c not in cols]
+        if absent:
+            raise DataError(f"'{path}': table runs lacks column(s) {', '.join(absent)}")
+        runs = pd.read_sql_query(f"SELECT {', '.join(RUN_COLUMNS)} FROM runs", con)
+        ev = pd.read_sql_query(
+            "SELECT e.run_id, e.episode, e.loss, e.best_loss FROM evals e "
+            "JOIN runs r ON r.run_id = e.run_id WHERE r.status = 'done'", con)
+    except sqlite3.Error as e:
+        raise DataError(f"cannot read database '{path}': {e}") from None
+    finally:
+        con.close()
+    for c in ("best_loss", "wall_s"):
+        runs[c] = pd.to_numeric(runs[c], errors="coerce").astype(float)
+    ev["loss"] = pd.to_numeric(ev["loss"], errors="coerce").astype(float)
+    ev["best_loss"] = pd.to_numeric(ev["best_loss"], errors="coerce").astype(float)
+    runs = runs.sort_values(["env", "optimizer", "seed", "budget", "run_id"]).reset_index(drop=True)
+
+    selected, ignored = _choose_variants(runs[runs["status"] == "done"])
+    panels = []
+    budgets_per_env = selected.groupby("env")["budget"].nunique().to_dict()
+    for (env, budget), g in selected.groupby(["env", "budget"], sort=True):
+        g = g.sort_values(["optimizer", "seed"]).reset_index(drop=True)
+        best, first = _best_matrix(g, ev[ev["run_id"].isin(g["run_id"])], int(budget))
+        slug = slugify(env if budgets_per_env[env] == 1 else f"{env}_b{budget}")
+        panels.append(Panel(env, int(budget), slug, g, best, first,
+                            sorted(g["optimizer"].unique())))
+    return Data(db_path=path, db_size=os.path.getsize(path), meta=meta, runs=runs,
+                selected=selected, ignored=ignored, panels=panels,
+                optimizers=sorted(runs["optimizer"].unique()))
+
+
+def main_panels(data: Data) -> list:
+    """One panel per env for the across-env views: the one with the largest budget."""
+    out = {}
+    for p in data.panels:
+        if p.env not in out or p.budget > out[p.env].budget:
+            out[p.env] = p
+    return [out[e] for e in sorted(out)]

@@ -1,0 +1,112 @@
+"""The report's figures. Each function draws one PNG and returns nothing."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from . import stats
+from .style import plt, save
+
+WIDE = (7.6, 4.4)
+
+
+def _finite_or_nan(v):
+    v = np.asarray(v, dtype=float).copy()
+    v[~np.isfinite(v)] = np.nan
+    return v
+
+
+def _log_episodes_axis(ax, max_episode: int):
+    """Log x axis with plain-number ticks at 1, 2, 5, 10, ... episodes."""
+    ax.set_xscale("log")
+    ticks = stats.checkpoints(max(1, max_episode))
+    ax.set_xticks(ticks, [str(t) for t in ticks])
+    ax.minorticks_off()
+    ax.set_xlabel("episodes (log scale)")
+
+
+def _legend(ax):
+    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
+
+
+def curves(panel, pal: dict, ys, path: str):
+    fig, ax = plt.subplots(figsize=WIDE)
+    x = np.arange(1, panel.budget + 1)
+    for o in panel.optimizers:
+        med, q25, q75 = stats.quantile_curves(panel, o)
+        color, ls = pal[o]
+        ax.fill_between(x, _finite_or_nan(ys(q25)), _finite_or_nan(ys(q75)), color=color,
+                        alpha=0.18, lw=0, step="post")
+        ax.plot(x, _finite_or_nan(ys(med)), color=color, ls=ls, lw=1.8, drawstyle="steps-post",
+                label=f"{o} (n={panel.rows(o).size})")
+    ys.apply(ax)
+    ax.set_xlim(1, panel.budget)
+    ax.set_xlabel("episodes")
+    ax.set_ylabel(ys.label("best loss so far"))
+    ax.set_title(f"{panel.env}: best loss so far, median and IQR over seeds (budget {panel.budget})")
+    _legend(ax)
+    save(fig, path)
+
+
+def finals(panel, table: pd.DataFrame, pal: dict, ys, path: str):
+    t = table[table["n_seeds"] > 0].reset_index(drop=True)
+    fig, ax = plt.subplots(figsize=(max(4.8, 1.1 * len(t) + 2.5), 4.4))
+    xs = np.arange(len(t))
+    floor = ys.delta if ys.shifted else None
+    for i, r in t.iterrows():
+        color, _ = pal[r["optimizer"]]
+        h = float(ys(r["mean"]))
+        ax.bar(i, h if np.isfinite(h) else np.nan, width=0.65, color=color, alpha=0.85,
+               edgecolor="black", lw=0.6)
+        lo, hi = float(ys(r["ci95_low"])), float(ys(r["ci95_high"]))
+        if np.isfinite(lo) and np.isfinite(hi) and np.isfinite(h):
+            if ys.log:
+                lo = max(lo, floor if floor else h * 1e-3)
+            ax.errorbar(i, h, yerr=[[max(h - lo, 0)], [max(hi - h, 0)]], color="black",
+                        capsize=4, lw=1.2)
+        v = _finite_or_nan(ys(stats.final_values(panel, r["optimizer"])))
+        off = np.linspace(-0.18, 0.18, len(v)) if len(v) > 1 else np.zeros(len(v))
+        ax.plot(i + off, v, "o", ms=3.5, color="black", alpha=0.75, zorder=3)
+    labels = []
+    for _, r in t.iterrows():
+        mark = "\n(best)" if r["is_best"] else ("\n≈ best" if r["indistinguishable_from_best"] else "")
+        labels.append(f"{r['optimizer']}{mark}")
+    ax.set_xticks(xs, labels, rotation=0 if len(t) <= 5 else 30,
+                  ha="center" if len(t) <= 5 else "right")
+    ys.apply(ax)
+    ax.set_ylabel(ys.label("final best loss"))
+    ax.set_title(f"{panel.env}: final best loss at {panel.budget} episodes\n"
+                 f"bars = mean, whiskers = 95% CI (Student t), dots = seeds")
+    ax.grid(axis="x", visible=False)
+    save(fig, path)
+
+
+def ranks(mean_ranks: pd.DataFrame, pal: dict, n_envs: int, path: str):
+    fig, ax = plt.subplots(figsize=WIDE)
+    for o in sorted(mean_ranks["optimizer"].unique()):
+        g = mean_ranks[mean_ranks["optimizer"] == o].sort_values("episodes")
+        color, ls = pal[o]
+        ax.plot(g["episodes"], g["mean_rank"], color=color, ls=ls, lw=1.8, marker="o", ms=4,
+                label=f"{o} ({int(g['n_envs'].max())} envs)")
+    _log_episodes_axis(ax, int(mean_ranks["episodes"].max()) if len(mean_ranks) else 1)
+    ax.set_ylabel("average rank (1 = best, lower is better)")
+    ax.set_title(f"Average rank of the median best-so-far over {n_envs} envs")
+    _legend(ax)
+    save(fig, path)
+
+
+def ecdf(table: pd.DataFrame, pal: dict, n_envs: int, path: str):
+    fig, ax = plt.subplots(figsize=WIDE)
+    for o in sorted(table["optimizer"].unique()):
+        g = table[table["optimizer"] == o]
+        color, ls = pal[o]
+        ax.plot(g["episodes"], g["fraction_solved"], color=color, ls=ls, lw=1.8,
+                drawstyle="steps-post", label=f"{o} ({int(g['n_triples'].iloc[0])} triples)")
+    max_e = int(table["episodes"].max()) if len(table) else 1
+    _log_episodes_axis(ax, max_e)
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlim(1, max(max_e, 2))
+    ax.set_ylabel("fraction of (env, seed, target) solved")
+    ax.set_title(f"Data profile over {n_envs} envs: targets f* + (f0 − f*)·10^−k, k = 1..5")
+    _legend(ax)
+    save(fig, path)

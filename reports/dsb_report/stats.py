@@ -1,0 +1,206 @@
+"""Statistics: per-cell summaries, Student-t CIs, Mann-Whitney U with Holm, ranks, target ECDF.
+
+Conventions (also stated in the report):
+- final best loss of a run = runs.best_loss of a 'done' run; NULL (no finite episode) counts as +inf;
+- quantiles: linear interpolation (numpy default); CI: mean +- t(0.975, n-1) * s / sqrt(n);
+- best optimizer of an env = lowest median final loss (ties: lower mean, then name);
+- ranks: rank of the median best-so-far over seeds among the optimizers of an env, ties averaged.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+from scipy import stats as sps
+
+ALPHA = 0.05
+TARGET_EXPONENTS = (1, 2, 3, 4, 5)
+
+
+def pct(values: np.ndarray, q, axis=None):
+    """np.percentile where +inf means 'no finite loss': inf - inf interpolation gives inf, not NaN."""
+    with np.errstate(invalid="ignore"):
+        r = np.percentile(values, q, axis=axis)
+    return np.where(np.isnan(r), np.inf, r)
+
+
+def checkpoints(max_budget: int) -> list:
+    """1, 2, 5, 10, 20, 50, ... up to max_budget."""
+    out, base = [], 1
+    while base <= max_budget:
+        out += [m * base for m in (1, 2, 5) if m * base <= max_budget]
+        base *= 10
+    return out
+
+
+def final_values(panel, optimizer: str) -> np.ndarray:
+    v = panel.runs.loc[panel.runs["optimizer"] == optimizer, "best_loss"].to_numpy(dtype=float)
+    return np.where(np.isnan(v), np.inf, v)
+
+
+def t_ci(values: np.ndarray, level: float = 0.95):
+    n = len(values)
+    if n < 2 or not np.all(np.isfinite(values)):
+        return float("nan"), float("nan")
+    m, s = float(np.mean(values)), float(np.std(values, ddof=1))
+    h = float(sps.t.ppf(0.5 + level / 2, n - 1)) * s / math.sqrt(n)
+    return m - h, m + h
+
+
+def holm(pvals: list) -> list:
+    """Holm step-down adjusted p-values, same order as given; NaN stays NaN and is not counted."""
+    idx = [i for i, p in enumerate(pvals) if not math.isnan(p)]
+    m = len(idx)
+    out = [float("nan")] * len(pvals)
+    running = 0.0
+    for rank, i in enumerate(sorted(idx, key=lambda i: pvals[i])):
+        running = max(running, min(1.0, (m - rank) * pvals[i]))
+        out[i] = running
+    return out
+
+
+def mwu_p(a: np.ndarray, b: np.ndarray) -> float:
+    if len(a) == 0 or len(b) == 0:
+        return float("nan")
+    both = np.concatenate([a, b])
+    if np.all(both == both[0]):
+        return 1.0                      # identical samples: nothing to tell apart
+    return float(sps.mannwhitneyu(a, b, alternative="two-sided").pvalue)
+
+
+def min_exact_p(n1: int, n2: int) -> float:
+    """Smallest two-sided exact Mann-Whitney p-value for sample sizes n1, n2 (no ties)."""
+    if n1 < 1 or n2 < 1:
+        return float("nan")
+    return min(1.0, 2.0 / math.comb(n1 + n2, n1))
+
+
+def final_table(panel, all_runs: pd.DataFrame) -> pd.DataFrame:
+    """One row per optimizer of (env, budget): summaries of the final best loss over seeds, and the
+    significance against the best optimizer (Mann-Whitney U, two-sided, Holm over the env)."""
+    cell = all_runs[(all_runs["env"] == panel.env) & (all_runs["budget"] == panel.budget)]
+    opts = sorted(set(panel.optimizers) | set(cell["optimizer"]))
+    rows = []
+    for opt in opts:
+        v = final_values(panel, opt)
+        c = cell[cell["optimizer"] == opt]
+        sel = panel.runs[panel.runs["optimizer"] == opt]
+        lo, hi = t_ci(v)
+        fin = v.size > 0
+        rows.append(dict(
+            env=panel.env, budget=panel.budget, optimizer=opt, n_seeds=int(v.size),
+            failed_runs=int((c["status"] == "failed").sum()),
+            running_runs=int((c["status"] == "running").sum()),
+            failed_episodes=int(sel["failed_episodes"].sum()),
+            median=float(pct(v, 50)) if fin else np.nan,
+            q25=float(pct(v, 25)) if fin else np.nan,
+            q75=float(pct(v, 75)) if fin else np.nan,
+            mean=float(np.mean(v)) if fin else np.nan,
+            std=float(np.std(v, ddof=1)) if v.size > 1 else np.nan,
+            ci95_low=lo, ci95_high=hi,
+            min=float(np.min(v)) if fin else np.nan,
+            max=float(np.max(v)) if fin else np.nan,
+            median_wall_s=float(sel["wall_s"].median()) if fin else np.nan))
+    df = pd.DataFrame(rows)
+    return _add_significance(panel, df)
+
+
+def _add_significance(panel, df: pd.DataFrame) -> pd.DataFrame:
+    df["is_best"] = False
+    df["p_raw"] = np.nan
+    df["p_holm"] = np.nan
+    df["indistinguishable_from_best"] = False
+    have = df[df["n_seeds"] > 0]
+    if have.empty:
+        return df
+    best = have.sort_values(["median", "mean", "optimizer"]).iloc[0]["optimizer"]
+    ref = final_values(panel, best)
+    others = [o for o in have["optimizer"] if o != best]
+    raw = [mwu_p(final_values(panel, o), ref) for o in others]
+    adj = holm(raw)
+    for o, p, q in zip(others, raw, adj):
+        i = df.index[df["optimizer"] == o][0]
+        df.loc[i, ["p_raw", "p_holm"]] = [p, q]
+        df.loc[i, "indistinguishable_from_best"] = bool(not math.isnan(q) and q >= ALPHA)
+    i = df.index[df["optimizer"] == best][0]
+    df.loc[i, "is_best"] = True
+    df.loc[i, "indistinguishable_from_best"] = True
+    return df
+
+
+def quantile_curves(panel, optimizer: str):
+    """Median, q25, q75 over seeds of the best loss so far per episode (+inf = none yet)."""
+    b = panel.best[panel.rows(optimizer)]
+    if b.size == 0:
+        return None
+    q = pct(b, [50, 25, 75], axis=0)
+    return q[0], q[1], q[2]
+
+
+def ranks(panels: list) -> pd.DataFrame:
+    """Long table env, episodes, optimizer, median_best, rank (1 = best, ties averaged)."""
+    rows = []
+    for p in panels:
+        for c in checkpoints(p.budget):
+            meds = {}
+            for o in p.optimizers:
+                b = p.best[p.rows(o), c - 1]
+                meds[o] = float(pct(b, 50))
+            r = pd.Series(meds).rank(method="average")
+            for o in p.optimizers:
+                rows.append((p.env, c, o, meds[o], float(r[o]), len(p.optimizers)))
+    return pd.DataFrame(rows, columns=["env", "episodes", "optimizer", "median_best", "rank",
+                                       "n_optimizers"])
+
+
+def mean_ranks(by_env: pd.DataFrame) -> pd.DataFrame:
+    if by_env.empty:
+        return pd.DataFrame(columns=["episodes", "optimizer", "mean_rank", "n_envs"])
+    g = by_env.groupby(["episodes", "optimizer"])["rank"]
+    return (pd.DataFrame({"mean_rank": g.mean(), "n_envs": g.size()}).reset_index()
+            .sort_values(["episodes", "optimizer"]).reset_index(drop=True))
+
+
+def targets(panel) -> tuple:
+    """Relative targets f* + (f0 - f*) 10^-k, k in TARGET_EXPONENTS."""
+    fs, f0 = panel.fstar, panel.f0
+    gap = f0 - fs if math.isfinite(f0) and math.isfinite(fs) and f0 > fs else 0.0
+    return fs, f0, [fs + gap * 10.0 ** (-k) for k in TARGET_EXPONENTS]
+
+
+def first_hits(panel, optimizer: str, tlist: list) -> np.ndarray:
+    """Episodes (1-based) until best-so-far <= target, per (seed, target); inf if never."""
+    b = panel.best[panel.rows(optimizer)]
+    out = np.full((b.shape[0], len(tlist)), np.inf)
+    for k, t in enumerate(tlist):
+        hit = b <= t
+        any_hit = hit.any(axis=1)
+        out[any_hit, k] = hit[any_hit].argmax(axis=1) + 1
+    return out.ravel()
+
+
+def ecdf(panels: list, optimizers: list):
+    """Fraction of (env, seed, target) triples solved per optimizer at every episode count.
+    Returns (long table optimizer, episodes, fraction_solved, n_triples; per-env targets)."""
+    hits = {o: [] for o in optimizers}
+    tinfo = []
+    for p in panels:
+        fs, f0, tl = targets(p)
+        tinfo.append(dict(env=p.env, budget=p.budget, f_star=fs, f0=f0,
+                          **{f"target_1e-{k}": t for k, t in zip(TARGET_EXPONENTS, tl)}))
+        for o in p.optimizers:
+            hits[o].append(first_hits(p, o, tl))
+    max_b = max((p.budget for p in panels), default=0)
+    episodes = np.arange(1, max_b + 1)
+    rows = []
+    for o in optimizers:
+        if not hits[o]:
+            continue
+        h = np.sort(np.concatenate(hits[o]))
+        frac = np.searchsorted(h, episodes, side="right") / h.size
+        rows.append(pd.DataFrame(dict(optimizer=o, episodes=episodes, fraction_solved=frac,
+                                      n_triples=h.size)))
+    table = pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(
+        columns=["optimizer", "episodes", "fraction_solved", "n_triples"])
+    return table, pd.DataFrame(tinfo)

@@ -1,0 +1,60 @@
+"""summary.md: the report's tables in Markdown (overview, per-env finals, ranks, problems)."""
+from __future__ import annotations
+
+from . import captions
+from .tables import final_md_rows, fmt, mark, md_table, rank_md_rows
+
+
+def overview(panels: list, optimizers: list) -> tuple:
+    """Rows env (budget), columns optimizers: median final best loss and the significance mark."""
+    headers = ["env", "budget"] + list(optimizers)
+    rows = []
+    for it in panels:
+        t = it["table"].set_index("optimizer")
+        row = [it["panel"].env, str(it["panel"].budget)]
+        for o in optimizers:
+            if o not in t.index or t.loc[o, "n_seeds"] == 0:
+                row.append("—")
+                continue
+            r = t.loc[o]
+            m = mark(r)
+            row.append(fmt(r["median"]) + ("" if m == "worse" else f" ({m})"))
+        rows.append(row)
+    return headers, rows
+
+
+def render(ctx) -> str:
+    out = ["# diffsim-bench comparison report", "", ctx["headline"], ""]
+    out += [f"> {n}" for n in ctx["notes"]] + ([""] if ctx["notes"] else [])
+    out += ["## Provenance", "", md_table(["item", "value"], ctx["provenance"]), ""]
+    out += ["## Overview: median final best loss", "",
+            "Marks: (best) = lowest median on the env; (≈ best) = not distinguishable from it "
+            "(Mann-Whitney U, Holm, α = 0.05); no mark = worse; — = no done run.", "",
+            md_table(*ctx["overview"]), ""]
+    h, rows = rank_md_rows(ctx["mean_ranks"])
+    out += ["## Average ranks", "", captions.RANKS, "", md_table(h, rows), ""]
+    out += ["## Final best loss per env", "",
+            "Over seeds at the budget; 95% CI = Student t; p (Holm) = two-sided Mann-Whitney U "
+            "against the env's best, Holm-corrected over the env. " + ctx["minp_text"], ""]
+    for it in ctx["panels"]:
+        pn = it["panel"]
+        out += [f"### {pn.env} (budget {pn.budget})", "", md_table(*final_md_rows(it["table"])), ""]
+    m = ctx["missing"]
+    out += [f"## Missing runs ({len(m)})", ""]
+    out += ["None."] if m.empty else [md_table(
+        ["env", "optimizer", "seed", "budget", "reason", "error"],
+        [[str(v) for v in r] for r in m[["env", "optimizer", "seed", "budget", "reason", "error"]]
+         .itertuples(index=False, name=None)])]
+    f = ctx["failed"]
+    out += ["", f"## Failed runs ({len(f)})", ""]
+    out += ["None."] if f.empty else [md_table(
+        ["env", "optimizer", "seed", "budget", "error"],
+        [[str(v) for v in r] for r in f[["env", "optimizer", "seed", "budget", "error"]]
+         .itertuples(index=False, name=None)])]
+    r = ctx["running"]
+    out += ["", f"## Incomplete runs, status running ({len(r)})", ""]
+    out += ["None."] if r.empty else [md_table(
+        ["env", "optimizer", "seed", "budget", "started"],
+        [[str(v) for v in x] for x in r[["env", "optimizer", "seed", "budget", "started_at"]]
+         .itertuples(index=False, name=None)])]
+    return "\n".join(out) + "\n"

@@ -1,0 +1,97 @@
+#!/usr/bin/python3
+"""diffsim-bench comparison report: reads a harness SQLite database (read-only) and writes a
+self-contained folder with index.html, summary.md, PNG figures and CSV tables.
+
+usage: /usr/bin/python3 reports/make_report.py --db FILE --out DIR [--landscapes DIR] [--build-type T]
+
+Needs pandas, matplotlib and scipy (Debian: python3-pandas python3-matplotlib python3-scipy, which
+only Debian's /usr/bin/python3 sees). Exit codes: 0 written, 2 bad input or missing modules.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime
+import importlib
+import os
+import re
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REQUIRED = ("pandas", "matplotlib", "scipy", "scipy.stats")
+OWN_FILES = re.compile(r"^(curves_.+\.png|final_.+\.(png|csv)|landscape_.+\.png)$")
+
+
+def missing_modules() -> list:
+    missing = []
+    for name in REQUIRED:
+        if name.split(".")[0] in missing:
+            continue
+        try:
+            importlib.import_module(name)
+        except Exception:  # ImportError, or a broken install raising something else
+            missing.append(name)
+    if "matplotlib" not in missing:
+        try:
+            import matplotlib
+            matplotlib.use("Agg")
+            importlib.import_module("matplotlib.pyplot")
+        except Exception:
+            missing.append("matplotlib (Agg backend)")
+    return missing
+
+
+def fail(msg: str) -> int:
+    print(f"make_report: {msg}", file=sys.stderr)
+    return 2
+
+
+def parse_args(argv):
+    p = argparse.ArgumentParser(prog="make_report.py", description=__doc__.splitlines()[0])
+    p.add_argument("--db", required=True, help="harness SQLite database (opened read-only)")
+    p.add_argument("--out", required=True, help="output folder (created; files overwritten)")
+    p.add_argument("--landscapes", help="folder of <env>_<i>_<j>.csv from `harness landscape`")
+    p.add_argument("--build-type", default="unknown", help="build type of the harness (provenance)")
+    return p.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    missing = missing_modules()
+    if missing:
+        return fail(f"{sys.executable} cannot import {', '.join(missing)}; run with Debian's "
+                    "/usr/bin/python3 (apt-get install python3-pandas python3-matplotlib "
+                    "python3-scipy)")
+    args = parse_args(sys.argv[1:] if argv is None else argv)
+    if HERE not in sys.path:
+        sys.path.insert(0, HERE)
+    from dsb_report import build
+    from dsb_report.data import DataError, load
+
+    t0 = time.monotonic()
+    try:
+        data = load(args.db)
+    except DataError as e:
+        return fail(str(e))
+    if args.landscapes is not None and not os.path.isdir(args.landscapes):
+        return fail(f"--landscapes '{args.landscapes}' is not a directory")
+    try:
+        os.makedirs(args.out, exist_ok=True)
+        probe = os.path.join(args.out, ".make_report_probe")
+        with open(probe, "w"):
+            pass
+        os.remove(probe)
+    except OSError as e:
+        return fail(f"cannot write to --out '{args.out}': {e.strerror or e}")
+    made = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    written = build.build(data, args.out, args.landscapes, args.build_type, made)
+    for name in sorted(os.listdir(args.out)):        # stale figures/tables of an older report
+        if OWN_FILES.match(name) and name not in written:
+            os.remove(os.path.join(args.out, name))
+    n_png = sum(f.endswith(".png") for f in written)
+    print(f"make_report: wrote {os.path.join(args.out, 'index.html')} ({len(written)} files, "
+          f"{n_png} figures) in {time.monotonic() - t0:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

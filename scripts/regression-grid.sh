@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The frozen regression grid of CI: 4 cheap envs x every optimizer x 2 seeds x 30 episodes.
+#   scripts/regression-grid.sh check [BUILD_DIR]       run the grid, compare with the baseline (exit 1 on any difference)
+#   scripts/regression-grid.sh regenerate [BUILD_DIR]  run the grid, rewrite data/baselines/small-grid.csv
+# A change that alters results on purpose regenerates the baseline in the same commit and says why.
+set -euo pipefail
+mode=${1:?usage: regression-grid.sh check|regenerate [BUILD_DIR]}
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=$(cd "${2:-$root/build}" && pwd)
+baseline=$root/data/baselines/small-grid.csv
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+"$build/bin/harness" \
+  --env cartpole1,rosenbrock-10,branin,hartmann6 \
+  --optimizer random,gd,rand-descents,cmaes,bo,boleap,nlopt-lbfgs,nlopt-bobyqa,nlopt-direct-l,nlopt-crs2 \
+  --seeds 2 --budget 30 --jobs 2 --quiet --db "$work/grid.sqlite"
+
+case $mode in
+  check) exec "$build/bin/harness" check --db "$work/grid.sqlite" --baseline "$baseline" ;;
+  regenerate) exec "$build/bin/harness" export --db "$work/grid.sqlite" --out "$baseline" ;;
+  *) echo "regression-grid.sh: unknown mode '$mode' (check or regenerate)" >&2; exit 2 ;;
+esac
