@@ -124,6 +124,15 @@ int harness_main(int argc, char** argv) {
   gradcheck->add_option("--step", gc_step, "central-difference step (default 1e-6)");
   gradcheck->add_option("--tol", gc_tol, "largest accepted relative error (default 1e-4)");
 
+  std::string ls_env, ls_dims, ls_center, ls_out;
+  int ls_res = 0;
+  auto* landscape = app.add_subcommand("landscape", "loss and gradient on an N x N grid over a 2-D slice");
+  landscape->add_option("--env", ls_env, "env name")->required();
+  landscape->add_option("--dims", ls_dims, "the two coordinates of the slice, I,J (0-based)")->required();
+  landscape->add_option("--res", ls_res, "grid points per axis, N")->required();
+  landscape->add_option("--center", ls_center, "comma-separated point for the other coordinates (default 0)");
+  landscape->add_option("--out", ls_out, "CSV file to write")->required();
+
   std::string check_db, check_baseline;
   auto* check = app.add_subcommand("check", "regression gate: database result table vs a baseline CSV");
   check->add_option("--db", check_db, "results database")->required();
@@ -151,6 +160,7 @@ int harness_main(int argc, char** argv) {
 
   try {
     if (list->parsed()) return command_list();
+    if (landscape->parsed()) return command_landscape(ls_env, ls_dims, ls_res, ls_center, ls_out);
     if (check->parsed()) return command_check(check_db, check_baseline);
     if (exporter->parsed()) return command_export(export_db, export_out);
     if (report->parsed()) return command_report(report_db, report_out, report_landscapes);

@@ -2,6 +2,8 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <iostream>
 
 #include <fmt/format.h>
@@ -59,13 +61,14 @@ int command_list() {
 
 namespace {
 
-std::vector<double> checked_point(const Env& env, const std::string& x_text) {
-  const auto x = parse_number_list("--x", x_text);
+std::vector<double> checked_point(const Env& env, const std::string& x_text,
+                                  const std::string& option = "--x") {
+  const auto x = parse_number_list(option, x_text);
   if (static_cast<int>(x.size()) != env.dim())
-    throw UsageError(fmt::format("--x has {} values, env '{}' needs {}", x.size(), env.name(), env.dim()));
+    throw UsageError(fmt::format("{} has {} values, env '{}' needs {}", option, x.size(), env.name(), env.dim()));
   for (std::size_t i = 0; i < x.size(); ++i)
     if (x[i] < -1.0 || x[i] > 1.0)
-      throw UsageError(fmt::format("--x: value {} at position {} is outside [-1, 1]", x[i], i));
+      throw UsageError(fmt::format("{}: value {} at position {} is outside [-1, 1]", option, x[i], i));
   return x;
 }
 
@@ -146,6 +149,45 @@ int command_gradcheck(const std::string& env_name, int points, std::uint64_t see
   std::cout << fmt::format("gradcheck {}: {} points, worst relative error {:.3e} (tolerance {:.1e}): {}\n",
                            env_name, points, worst, tolerance, pass ? "PASS" : "FAIL");
   return pass ? 0 : 1;
+}
+
+int command_landscape(const std::string& env_name, const std::string& dims, int resolution,
+                      const std::string& center, const std::string& out_path) {
+  const auto env = make_env(env_name);
+  const int n = env->dim();
+  const auto d = parse_number_list("--dims", dims);
+  if (d.size() != 2 || d[0] != std::floor(d[0]) || d[1] != std::floor(d[1]) || d[0] < 0 || d[1] < 0 ||
+      d[0] >= n || d[1] >= n || d[0] == d[1])
+    throw UsageError(fmt::format("--dims: '{}' must be two different indices in 0..{}", dims, n - 1));
+  if (resolution < 2 || resolution > 2000)
+    throw UsageError(fmt::format("--res must be in 2..2000, got {}", resolution));
+  std::vector<double> x(n, 0.0);
+  if (!center.empty()) x = checked_point(*env, center, "--center");
+  std::ofstream out(out_path);
+  if (!out) throw UsageError("--out: cannot write '" + out_path + "'");
+  const int i = static_cast<int>(d[0]), j = static_cast<int>(d[1]);
+  out << "i,j,xi,xj,loss,grad_i,grad_j\n";
+  std::vector<double> grad(n);
+  auto num = [](double v) { return std::isfinite(v) ? fmt::format("{:.17g}", v) : std::string("nan"); };
+  for (int a = 0; a < resolution; ++a) {
+    for (int b = 0; b < resolution; ++b) {
+      // grid over [-1, 1]: endpoints included
+      x[i] = -1.0 + 2.0 * a / (resolution - 1);
+      x[j] = -1.0 + 2.0 * b / (resolution - 1);
+      out << a << ',' << b << ',' << num(x[i]) << ',' << num(x[j]) << ',';
+      if (env->differentiable()) {
+        const double loss = env->loss_and_grad(x, grad);
+        out << num(loss) << ',' << num(grad[i]) << ',' << num(grad[j]) << '\n';
+      } else {
+        out << num(env->loss(x)) << ",,\n";
+      }
+    }
+  }
+  out.close();
+  if (!out) throw UsageError("--out: writing '" + out_path + "' failed");
+  std::cerr << fmt::format("harness: wrote {} grid points of {} (dims {}, {}) to {}\n", resolution * resolution,
+                           env_name, i, j, out_path);
+  return 0;
 }
 
 }  // namespace dsb

@@ -11,6 +11,12 @@ int command_eval(const std::string& env_name, const std::string& x_text, bool wi
 int command_gradcheck(const std::string& env_name, int points, std::uint64_t seed, double amplitude,
                       double step, double tolerance);
 
+// Loss and the two gradient components on an N x N grid over a 2-D slice of the normalized box
+// (dims I, J from -1 to 1; other coordinates at the centre, default 0). CSV with header
+// i,j,xi,xj,loss,grad_i,grad_j and N^2 rows (gradients empty for a non-differentiable env).
+int command_landscape(const std::string& env_name, const std::string& dims, int resolution,
+                      const std::string& center, const std::string& out_path);
+
 // Regression gate: compares the database's result table with a baseline CSV. 0 equal, 1 any
 // difference (diff printed), 2 malformed baseline or unreadable database.
 int command_check(const std::string& db_path, const std::string& baseline_path);

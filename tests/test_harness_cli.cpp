@@ -242,6 +242,39 @@ TEST_F(HarnessCli, ListGradcheckVersionAndHelp) {
   EXPECT_EQ(harness("eval --help").code, 0);
 }
 
+TEST_F(HarnessCli, LandscapeWritesTheGridWithLossAndGradient) {
+  const std::string out = db("land.csv");
+  const auto r = harness("landscape --env branin --dims 0,1 --res 7 --out " + out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::ifstream in(out);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "i,j,xi,xj,loss,grad_i,grad_j");
+  const auto env = make_env("branin");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::vector<double> v;
+    for (std::string f; std::getline(s, f, ',');) v.push_back(std::stod(f));
+    ASSERT_EQ(v.size(), 7u);
+    const std::vector<double> x{v[2], v[3]};
+    std::vector<double> g(2);
+    EXPECT_EQ(v[4], env->loss_and_grad(x, g)) << line;  // 17 digits round-trip exactly
+    EXPECT_EQ(v[5], g[0]);
+    EXPECT_EQ(v[6], g[1]);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 49);
+  // bad slices: one line naming the value, exit 2
+  for (const std::string& bad : {std::string("--dims 0,0"), std::string("--dims 0,2"), std::string("--dims a,1")}) {
+    const auto b = harness("landscape --env branin " + bad + " --res 5 --out " + out);
+    EXPECT_EQ(b.code, 2) << bad;
+    EXPECT_EQ(std::count(b.err.begin(), b.err.end(), '\n'), 1) << b.err;
+  }
+  EXPECT_EQ(harness("landscape --env branin --dims 0,1 --res 1 --out " + out).code, 2);
+  EXPECT_EQ(harness("landscape --env branin --dims 0,1 --res 5 --center 0.1 --out " + out).code, 2);
+}
+
 TEST_F(HarnessCli, ShardsPartitionTheGrid) {
   const std::string grid = "--env sphere-2,branin --optimizer random,cmaes --seeds 3 --budget 5 --quiet";
   ASSERT_EQ(harness(grid + " --db " + db("all.sqlite")).code, 0);

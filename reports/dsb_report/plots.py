@@ -26,6 +26,9 @@ def _log_episodes_axis(ax, max_episode: int):
 
 
 def _legend(ax):
+    if not ax.get_legend_handles_labels()[0]:
+        ax.text(0.5, 0.5, "no completed runs", transform=ax.transAxes, ha="center", va="center")
+        return
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
 
 
@@ -58,6 +61,9 @@ def finals(panel, table: pd.DataFrame, pal: dict, ys, path: str):
         h = float(ys(r["mean"]))
         ax.bar(i, h if np.isfinite(h) else np.nan, width=0.65, color=color, alpha=0.85,
                edgecolor="black", lw=0.6)
+        if not np.isfinite(h):
+            ax.text(i, 0.97, "mean = ∞\n(a seed without\nfinite loss)", ha="center", va="top",
+                    fontsize=8, transform=ax.get_xaxis_transform())
         lo, hi = float(ys(r["ci95_low"])), float(ys(r["ci95_high"]))
         if np.isfinite(lo) and np.isfinite(hi) and np.isfinite(h):
             if ys.log:

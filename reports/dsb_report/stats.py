@@ -15,14 +15,16 @@ import pandas as pd
 from scipy import stats as sps
 
 ALPHA = 0.05
+_SENTINEL = np.finfo(float).max
 TARGET_EXPONENTS = (1, 2, 3, 4, 5)
 
 
 def pct(values: np.ndarray, q, axis=None):
-    """np.percentile where +inf means 'no finite loss': inf - inf interpolation gives inf, not NaN."""
-    with np.errstate(invalid="ignore"):
-        r = np.percentile(values, q, axis=axis)
-    return np.where(np.isnan(r), np.inf, r)
+    """np.percentile where +inf means 'no finite loss'. numpy's interpolation turns inf into NaN
+    even at weight 0, so inf is replaced by a finite sentinel and results beyond 1e300 mapped back."""
+    v = np.where(np.isposinf(values), _SENTINEL, values)
+    r = np.percentile(v, q, axis=axis)
+    return np.where(r > 1e300, np.inf, r)
 
 
 def checkpoints(max_budget: int) -> list:
@@ -97,7 +99,7 @@ def final_table(panel, all_runs: pd.DataFrame) -> pd.DataFrame:
             q25=float(pct(v, 25)) if fin else np.nan,
             q75=float(pct(v, 75)) if fin else np.nan,
             mean=float(np.mean(v)) if fin else np.nan,
-            std=float(np.std(v, ddof=1)) if v.size > 1 else np.nan,
+            std=float(np.std(v, ddof=1)) if v.size > 1 and np.all(np.isfinite(v)) else np.nan,
             ci95_low=lo, ci95_high=hi,
             min=float(np.min(v)) if fin else np.nan,
             max=float(np.max(v)) if fin else np.nan,

@@ -1,0 +1,89 @@
+#pragma once
+// `bounce`: a ball (point mass with a contact radius, no spin: Warp's particle) thrown from
+// (0, 1, 0) bounces on the ground y = 0 and the wall x = wall_x under the penalty contact law of
+// contact.hpp; semi-implicit Euler. Params (3): the initial velocity, affine from [-1, 1]^3 to
+// [v_low, v_high] per component. Loss: L2 of the final centre to the target. The gradient comes
+// from a reverse pass through every step (bounce_step_adjoint), contact forces included.
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "envs/core/env.hpp"
+#include "envs/core/registry.hpp"
+#include "envs/rigid/bounce_config.hpp"
+
+namespace dsb {
+
+// state of the ball, also used as its adjoint (dLoss/dposition, dLoss/dvelocity)
+struct BallState {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // centre (m)
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // (m/s)
+};
+
+// constants of one simulation, built from a validated config
+struct BounceModel {
+  double dt = 0.0;        // s
+  int steps = 0;          // round(duration / dt)
+  double mass = 0.0;      // kg
+  double radius = 0.0;    // m, contact radius
+  double gravity = 0.0;   // m/s^2 along -y
+  double wall_x = 0.0;    // m, wall plane x = wall_x (normal -x)
+  ContactConfig contact;
+
+  static BounceModel build(const BounceConfig& cfg);
+};
+
+// what the reverse pass needs from one step: the contact Jacobians summed over the surfaces
+struct BounceStepCache {
+  Eigen::Matrix3d df_dx = Eigen::Matrix3d::Zero();  // d(total contact force)/d position (3 x 3)
+  Eigen::Matrix3d df_dv = Eigen::Matrix3d::Zero();  // d(total contact force)/d velocity (3 x 3)
+  bool ground = false, wall = false;                // which contacts were active
+};
+
+// one semi-implicit Euler step: v += dt (g + f(x, v) / m); x += dt v. Fills `cache` when given.
+void bounce_step(const BounceModel& m, BallState& s, BounceStepCache* cache = nullptr);
+
+// reverse of bounce_step: `adj` holds dLoss/d(state after the step) on entry and
+// dLoss/d(state before it) on exit
+void bounce_step_adjoint(const BounceModel& m, const BounceStepCache& cache, BallState& adj);
+
+// steps in which each surface touched the ball (tests use it to stay away from contact events)
+struct BounceContactSteps {
+  int ground = 0, wall = 0;
+  bool operator==(const BounceContactSteps&) const = default;
+};
+
+class BounceEnv : public Env {
+ public:
+  explicit BounceEnv(BounceConfig cfg = {});
+  const std::string& name() const override { return name_; }
+  int dim() const override { return 3; }
+  bool differentiable() const override { return true; }
+  double loss(std::span<const double> x) const override;
+  double loss_and_grad(std::span<const double> x, std::span<double> grad) const override;
+  nlohmann::json config() const override { return cfg_.to_json(); }
+
+  const BounceConfig& bounce_config() const { return cfg_; }
+  const BounceModel& model() const { return model_; }
+  // physical initial velocity (m/s) for the normalized parameters x (size 3)
+  Eigen::Vector3d initial_velocity(std::span<const double> x) const;
+  BallState initial_state(std::span<const double> x) const;
+  // the states of the rollout (steps + 1, the initial one first): used by tests and references
+  std::vector<BallState> trajectory(std::span<const double> x) const;
+  BounceContactSteps contact_steps(std::span<const double> x) const;
+  // loss of a final state (NaN when it is not finite)
+  double final_loss(const BallState& s) const;
+
+ private:
+  std::string name_ = "bounce";
+  BounceConfig cfg_;
+  BounceModel model_;
+};
+
+// family entry for the registry: `bounce`
+EnvFamily bounce_family();
+
+}  // namespace dsb

@@ -1,0 +1,41 @@
+#pragma once
+// `pinball-1x2`, `pinball-4x4` (after the paper's Nimble pinball): a vertical board 8 m wide and
+// 10 m tall with walls at x = 0 and x = 8 and a floor at y = 0; a ball dropped at rest from
+// (1.0, 9.5) falls through an n_h x n_w grid of paddles, each a box on a revolute joint locked at
+// its parameter angle; loss = L2 of the ball's final position to the target near the bottom right.
+// Params (n_h n_w): paddle angles, x in [-1, 1] mapped to [-pi/2, pi/2] (row-major).
+#include <array>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "envs/rigid/contact_config.hpp"
+
+namespace dsb {
+
+struct PinballConfig {
+  int rows = 1, cols = 2;                        // n_h x n_w
+  double width = 8.0, height = 10.0;             // m
+  double ball_radius = 0.2;                      // m (chosen here)
+  double ball_mass = 1.0;                        // kg (chosen here)
+  std::array<double, 2> start = {1.0, 9.5};      // m (chosen here)
+  double paddle_length = 1.6, paddle_thickness = 0.15;  // m (chosen here)
+  // paddle centres: rows evenly spaced from first_row_y down to last_row_y, columns from
+  // first_col_x to last_col_x (a single row or column uses the first value); chosen here so that
+  // the first paddle sits under the drop point
+  double first_row_y = 7.5, last_row_y = 2.5;
+  double first_col_x = 1.4, last_col_x = 6.2;
+  double max_angle = 1.5707963267948966;          // rad, x = +-1
+  double gravity = 9.81;                          // m/s^2 along -y
+  double dt = 1.0 / 480.0;                        // s, semi-implicit Euler
+  double duration = 4.0;                          // s
+  std::array<double, 2> target = {7.0, 0.5};      // m (chosen here)
+  ContactConfig contact;                          // same law as bounce
+  static constexpr int max_paddles = 64;          // validate() bounds rows * cols by this
+  static PinballConfig grid(int rows, int cols);
+  std::array<double, 2> paddle_centre(int row, int col) const;
+  void validate() const;
+  nlohmann::json to_json() const;
+};
+
+}  // namespace dsb

@@ -1,0 +1,412 @@
+#include "reference/bullet_adapter.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "envs/rigid/contact.hpp"
+
+#if DSB_HAVE_BULLET
+#include <btBulletDynamicsCommon.h>
+#include <BulletDynamics/Featherstone/btMultiBody.h>
+#include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
+#include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
+#include <BulletDynamics/Featherstone/btMultiBodyJointMotor.h>
+#include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
+#endif
+
+namespace dsb::reference {
+
+double equivalent_restitution(const ContactConfig& contact, double mass, double dt) {
+  // a ball of radius 1 touching the plane y = 0 with unit approach speed, integrated with our
+  // own law (contact_force) and step (v += dt f / m; y += dt v) until it leaves the plane
+  const double radius = 1.0;
+  Eigen::Vector3d p(0.0, radius, 0.0), v(0.0, -1.0, 0.0);
+  for (int t = 0; t < 1000000; ++t) {
+    const auto g = plane_geometry<3>(p, Eigen::Vector3d::UnitY(), 0.0);
+    const auto f = contact_force<3>(contact, radius, g, v);
+    v += (dt / mass) * f.f;
+    p += dt * v;
+    if (p.y() >= radius && v.y() > 0.0) return v.y();
+  }
+  return 0.0;  // never left the plane: fully inelastic
+}
+
+#if DSB_HAVE_BULLET
+
+bool bullet_available() { return true; }
+std::string bullet_version() {
+  const int v = btGetVersion();
+  return std::to_string(v / 100) + "." + std::to_string(v % 100) +
+         (sizeof(btScalar) == 8 ? " (double)" : " (single)");
+}
+
+namespace {
+
+btVector3 bt(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+Eigen::Vector3d eig(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
+
+// the collision and solver objects every Bullet world needs, owned together
+template <class World, class Solver>
+struct WorldParts {
+  btDefaultCollisionConfiguration config;
+  btCollisionDispatcher dispatcher{&config};
+  btDbvtBroadphase broadphase;
+  Solver solver;
+  World world{&dispatcher, &broadphase, &solver, &config};
+};
+
+// a static (mass 0) rigid body with its shape, owned together
+struct StaticBody {
+  std::unique_ptr<btCollisionShape> shape;
+  std::unique_ptr<btRigidBody> body;
+  StaticBody(btCollisionShape* s, const btTransform& where, double friction, double restitution)
+      : shape(s) {
+    btRigidBody::btRigidBodyConstructionInfo info(0.0, nullptr, s, btVector3(0, 0, 0));
+    info.m_startWorldTransform = where;
+    body = std::make_unique<btRigidBody>(info);
+    // Bullet combines friction and restitution as products: the statics carry 1, the ball the value
+    body->setFriction(friction);
+    body->setRestitution(restitution);
+    body->setRollingFriction(0.0);
+    body->setSpinningFriction(0.0);
+  }
+};
+
+// the ball: a sphere that translates only (our ball is a point mass without spin)
+std::unique_ptr<btRigidBody> make_ball(btCollisionShape* shape, double mass, double mu,
+                                       double restitution, const btVector3& linear_factor) {
+  btVector3 inertia(0, 0, 0);
+  shape->calculateLocalInertia(mass, inertia);
+  btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, shape, inertia);
+  auto ball = std::make_unique<btRigidBody>(info);
+  ball->setAngularFactor(btVector3(0, 0, 0));
+  ball->setLinearFactor(linear_factor);
+  ball->setDamping(0.0, 0.0);
+  ball->setFriction(mu);
+  ball->setRollingFriction(0.0);
+  ball->setSpinningFriction(0.0);
+  ball->setRestitution(restitution);
+  ball->setActivationState(DISABLE_DEACTIVATION);
+  return ball;
+}
+
+}  // namespace
+
+// ---------------------------------- cartpole ------------------------------------------------
+
+struct BulletCartpole::Impl {
+  CartpoleConfig cfg;
+  WorldParts<btMultiBodyDynamicsWorld, btMultiBodyConstraintSolver> parts;
+  std::unique_ptr<btMultiBody> body;
+  std::unique_ptr<btMultiBodyJointMotor> motor;
+  std::unique_ptr<btBoxShape> cart_shape;
+  std::unique_ptr<btMultiBodyLinkCollider> cart_collider;
+  ~Impl() {
+    if (motor) parts.world.removeMultiBodyConstraint(motor.get());
+    if (cart_collider) parts.world.removeCollisionObject(cart_collider.get());
+    if (body) parts.world.removeMultiBody(body.get());
+  }
+};
+
+BulletCartpole::BulletCartpole(const CartpoleConfig& cfg) : impl_(std::make_unique<Impl>()) {
+  cfg.validate();
+  impl_->cfg = cfg;
+  const int n = cfg.links;
+  const double L = cfg.link_length;
+  const double rod_radius = 0.02 * L;  // as the MuJoCo model: only the axial inertia uses it
+  auto& world = impl_->parts.world;
+  world.setGravity(btVector3(0, -cfg.gravity, 0));
+  // fixed base (the rail), link 0 the cart (prismatic along x), links 1..n the rods (revolute
+  // about z); a link's frame sits at its centre of mass
+  auto mb = std::make_unique<btMultiBody>(n + 1, 1.0, btVector3(1, 1, 1), true, false);
+  const double cart_inertia = cfg.cart_mass * 0.1 * 0.1 / 6.0;
+  const btQuaternion identity(0, 0, 0, 1);
+  const btVector3 zero(0, 0, 0), half_down(0, -0.5 * L, 0);
+  mb->setupPrismatic(0, cfg.cart_mass, btVector3(cart_inertia, cart_inertia, cart_inertia), -1,
+                     identity, btVector3(1, 0, 0), zero, zero, true);
+  for (int i = 0; i < n; ++i) {
+    const double m = cfg.link_masses[i];
+    // uniform rod along the link's y axis: m L^2 / 12 across, m r^2 / 2 along
+    const double across = m * L * L / 12.0, along = 0.5 * m * rod_radius * rod_radius;
+    // the pivot is the cart's centre for the first rod, the previous rod's end otherwise
+    mb->setupRevolute(1 + i, m, btVector3(across, along, across), i, identity, btVector3(0, 0, 1),
+                      i == 0 ? zero : half_down, half_down, true);
+  }
+  mb->finalizeMultiDof();
+  // no damping (Bullet's default is 0.04), no velocity clamp, no sleeping
+  mb->setLinearDamping(0.0);
+  mb->setAngularDamping(0.0);
+  mb->setMaxCoordinateVelocity(1e30);
+  mb->setMaxAppliedImpulse(1e30);
+  mb->setCanSleep(false);
+  world.addMultiBody(mb.get());
+  // Bullet solves multibody constraints per simulation island, and a multibody's island comes
+  // from its link colliders: the cart gets one that collides with nothing (group and mask 0)
+  impl_->cart_shape = std::make_unique<btBoxShape>(btVector3(0.2, 0.1, 0.05));
+  impl_->cart_collider = std::make_unique<btMultiBodyLinkCollider>(mb.get(), 0);
+  impl_->cart_collider->setCollisionShape(impl_->cart_shape.get());
+  world.addCollisionObject(impl_->cart_collider.get(), 0, 0);
+  mb->getLink(0).m_collider = impl_->cart_collider.get();
+  // velocity control of the cart: a motor row with unbounded impulse, kd = 1 (the full error in
+  // one step), no position term
+  impl_->motor = std::make_unique<btMultiBodyJointMotor>(mb.get(), 0, 0.0, 1e30);
+  impl_->motor->setPositionTarget(0.0, 0.0);
+  world.addMultiBodyConstraint(impl_->motor.get());
+  impl_->body = std::move(mb);
+  reset();
+}
+
+BulletCartpole::~BulletCartpole() = default;
+
+void BulletCartpole::reset() {
+  const auto& cfg = impl_->cfg;
+  btMultiBody& mb = *impl_->body;
+  mb.setJointPos(0, 0.0);
+  mb.setJointVel(0, 0.0);
+  for (int i = 0; i < cfg.links; ++i) {
+    mb.setJointPos(1 + i, cfg.start_joint_angles.empty() ? 0.0 : cfg.start_joint_angles[i]);
+    mb.setJointVel(1 + i, cfg.start_joint_velocities.empty() ? 0.0 : cfg.start_joint_velocities[i]);
+  }
+  mb.clearForcesAndTorques();
+}
+
+void BulletCartpole::step(double u, const double* tau) {
+  impl_->motor->setVelocityTarget(u, 1.0);
+  for (int j = 0; j < impl_->cfg.links; ++j) impl_->body->addJointTorque(1 + j, tau[j]);
+  // exactly one internal step of dt (maxSubSteps = 0: the step is the given time)
+  impl_->parts.world.stepSimulation(impl_->cfg.dt, 0);
+}
+
+CartpoleState BulletCartpole::state() const {
+  const btMultiBody& mb = *impl_->body;
+  const int n = impl_->cfg.links;
+  CartpoleState s;
+  s.x = mb.getJointPos(0);
+  s.vx = mb.getJointVel(0);
+  s.phi = LinkVec::Zero(n);
+  s.dphi = LinkVec::Zero(n);
+  double phi = 0.0, dphi = 0.0;
+  for (int i = 0; i < n; ++i) {
+    phi += mb.getJointPos(1 + i);
+    dphi += mb.getJointVel(1 + i);
+    s.phi(i) = phi;
+    s.dphi(i) = dphi;
+  }
+  return s;
+}
+
+Eigen::Vector2d BulletCartpole::tip() const {
+  // the far end of the last rod: half a length below its centre of mass, in its own frame
+  const int last = impl_->cfg.links;
+  const btVector3 p =
+      impl_->body->localPosToWorld(last, btVector3(0, -0.5 * impl_->cfg.link_length, 0));
+  return {p.x(), p.y()};
+}
+
+std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(std::span<const double> x) {
+  const auto& cfg = impl_->cfg;
+  const int stride = 1 + cfg.links;
+  if (static_cast<int>(x.size()) != cfg.steps * stride)
+    throw std::invalid_argument("BulletCartpole: expected " + std::to_string(cfg.steps * stride) +
+                                " parameters, got " + std::to_string(x.size()));
+  reset();
+  std::vector<Eigen::Vector2d> tips{tip()};
+  tips.reserve(cfg.steps + 1);
+  double tau[kMaxLinks];
+  for (int t = 0; t < cfg.steps; ++t) {
+    for (int j = 0; j < cfg.links; ++j) tau[j] = cfg.max_torque * x[t * stride + 1 + j];
+    step(cfg.max_cart_speed * x[t * stride], tau);
+    tips.push_back(tip());
+  }
+  return tips;
+}
+
+// ---------------------------------- bounce --------------------------------------------------
+
+struct BulletBounce::Impl {
+  BounceConfig cfg;
+  int steps = 0;
+  WorldParts<btDiscreteDynamicsWorld, btSequentialImpulseConstraintSolver> parts;
+  std::vector<std::unique_ptr<StaticBody>> statics;
+  std::unique_ptr<btSphereShape> ball_shape;
+  std::unique_ptr<btRigidBody> ball;
+  ~Impl() {
+    if (ball) parts.world.removeRigidBody(ball.get());
+    for (auto& s : statics) parts.world.removeRigidBody(s->body.get());
+  }
+};
+
+BulletBounce::BulletBounce(const BounceConfig& cfg) : impl_(std::make_unique<Impl>()) {
+  impl_->cfg = cfg;
+  impl_->steps = BounceModel::build(cfg).steps;
+  auto& world = impl_->parts.world;
+  world.setGravity(btVector3(0, -cfg.gravity, 0));
+  const double e = equivalent_restitution(cfg.contact, cfg.mass, cfg.dt);
+  // ground y = 0 (normal +y) and wall x = wall_x (normal -x): planes n . p = c
+  btTransform identity;
+  identity.setIdentity();
+  impl_->statics.push_back(std::make_unique<StaticBody>(
+      new btStaticPlaneShape(btVector3(0, 1, 0), 0.0), identity, 1.0, 1.0));
+  impl_->statics.push_back(std::make_unique<StaticBody>(
+      new btStaticPlaneShape(btVector3(-1, 0, 0), -cfg.wall_x), identity, 1.0, 1.0));
+  for (auto& s : impl_->statics) world.addRigidBody(s->body.get());
+  impl_->ball_shape = std::make_unique<btSphereShape>(cfg.radius);
+  impl_->ball = make_ball(impl_->ball_shape.get(), cfg.mass, cfg.contact.mu, e, btVector3(1, 1, 1));
+  world.addRigidBody(impl_->ball.get());
+}
+
+BulletBounce::~BulletBounce() = default;
+
+std::vector<BallState> BulletBounce::trajectory(const Eigen::Vector3d& v0) {
+  auto& world = impl_->parts.world;
+  btRigidBody& ball = *impl_->ball;
+  const auto& cfg = impl_->cfg;
+  // restart: place the ball, set its velocity, forget old contacts
+  btTransform start;
+  start.setIdentity();
+  start.setOrigin(btVector3(cfg.start[0], cfg.start[1], cfg.start[2]));
+  ball.setWorldTransform(start);
+  ball.setInterpolationWorldTransform(start);
+  ball.setLinearVelocity(bt(v0));
+  ball.setAngularVelocity(btVector3(0, 0, 0));
+  ball.setInterpolationLinearVelocity(bt(v0));
+  ball.clearForces();
+  world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(ball.getBroadphaseHandle(),
+                                                                       world.getDispatcher());
+  auto read = [&] {
+    BallState s;
+    s.position = eig(ball.getWorldTransform().getOrigin());
+    s.velocity = eig(ball.getLinearVelocity());
+    return s;
+  };
+  std::vector<BallState> states;
+  states.reserve(impl_->steps + 1);
+  states.push_back(read());
+  for (int t = 0; t < impl_->steps; ++t) {
+    world.stepSimulation(cfg.dt, 0);
+    states.push_back(read());
+  }
+  return states;
+}
+
+// ---------------------------------- pinball -------------------------------------------------
+
+struct BulletPinball::Impl {
+  PinballConfig cfg;
+  int steps = 0;
+  WorldParts<btDiscreteDynamicsWorld, btSequentialImpulseConstraintSolver> parts;
+  std::vector<std::unique_ptr<StaticBody>> statics;
+  std::unique_ptr<btSphereShape> ball_shape;
+  std::unique_ptr<btRigidBody> ball;
+  ~Impl() {
+    if (ball) parts.world.removeRigidBody(ball.get());
+    for (auto& s : statics) parts.world.removeRigidBody(s->body.get());
+  }
+};
+
+BulletPinball::BulletPinball(const PinballConfig& cfg, std::span<const double> angles)
+    : impl_(std::make_unique<Impl>()) {
+  cfg.validate();
+  if (static_cast<int>(angles.size()) != cfg.rows * cfg.cols)
+    throw std::invalid_argument("BulletPinball: expected " + std::to_string(cfg.rows * cfg.cols) +
+                                " paddle angles, got " + std::to_string(angles.size()));
+  impl_->cfg = cfg;
+  impl_->steps = PinballModel::build(cfg).steps;
+  auto& world = impl_->parts.world;
+  world.setGravity(btVector3(0, -cfg.gravity, 0));
+  const double e = equivalent_restitution(cfg.contact, cfg.ball_mass, cfg.dt);
+  btTransform identity;
+  identity.setIdentity();
+  // floor y = 0, walls x = 0 and x = width
+  impl_->statics.push_back(std::make_unique<StaticBody>(
+      new btStaticPlaneShape(btVector3(0, 1, 0), 0.0), identity, 1.0, 1.0));
+  impl_->statics.push_back(std::make_unique<StaticBody>(
+      new btStaticPlaneShape(btVector3(1, 0, 0), 0.0), identity, 1.0, 1.0));
+  impl_->statics.push_back(std::make_unique<StaticBody>(
+      new btStaticPlaneShape(btVector3(-1, 0, 0), -cfg.width), identity, 1.0, 1.0));
+  // paddles: capsules along their local x (segment paddle_length - thickness, radius
+  // thickness / 2), turned about z by their angle around their centre
+  const double segment = cfg.paddle_length - cfg.paddle_thickness;
+  for (int r = 0; r < cfg.rows; ++r)
+    for (int c = 0; c < cfg.cols; ++c) {
+      const auto centre = cfg.paddle_centre(r, c);
+      btTransform where;
+      where.setIdentity();
+      where.setOrigin(btVector3(centre[0], centre[1], 0.0));
+      where.setRotation(btQuaternion(btVector3(0, 0, 1), angles[r * cfg.cols + c]));
+      impl_->statics.push_back(std::make_unique<StaticBody>(
+          new btCapsuleShapeX(0.5 * cfg.paddle_thickness, segment), where, 1.0, 1.0));
+    }
+  for (auto& s : impl_->statics) world.addRigidBody(s->body.get());
+  impl_->ball_shape = std::make_unique<btSphereShape>(cfg.ball_radius);
+  // the board's plane: no motion along z
+  impl_->ball = make_ball(impl_->ball_shape.get(), cfg.ball_mass, cfg.contact.mu, e, btVector3(1, 1, 0));
+  btTransform start;
+  start.setIdentity();
+  start.setOrigin(btVector3(cfg.start[0], cfg.start[1], 0.0));
+  impl_->ball->setWorldTransform(start);
+  impl_->ball->setInterpolationWorldTransform(start);
+  world.addRigidBody(impl_->ball.get());
+}
+
+BulletPinball::~BulletPinball() = default;
+
+std::vector<Ball2State> BulletPinball::trajectory() {
+  auto& world = impl_->parts.world;
+  btRigidBody& ball = *impl_->ball;
+  const auto& cfg = impl_->cfg;
+  btTransform start;
+  start.setIdentity();
+  start.setOrigin(btVector3(cfg.start[0], cfg.start[1], 0.0));
+  ball.setWorldTransform(start);
+  ball.setInterpolationWorldTransform(start);
+  ball.setLinearVelocity(btVector3(0, 0, 0));
+  ball.setAngularVelocity(btVector3(0, 0, 0));
+  ball.clearForces();
+  world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(ball.getBroadphaseHandle(),
+                                                                       world.getDispatcher());
+  auto read = [&] {
+    Ball2State s;
+    s.position = eig(ball.getWorldTransform().getOrigin()).head<2>();
+    s.velocity = eig(ball.getLinearVelocity()).head<2>();
+    return s;
+  };
+  std::vector<Ball2State> states;
+  states.reserve(impl_->steps + 1);
+  states.push_back(read());
+  for (int t = 0; t < impl_->steps; ++t) {
+    world.stepSimulation(cfg.dt, 0);
+    states.push_back(read());
+  }
+  return states;
+}
+
+#else  // no Bullet in this build: every entry point says so
+
+namespace {
+[[noreturn]] void missing() { throw std::runtime_error("this build has no Bullet (DSB_WITH_BULLET)"); }
+}  // namespace
+
+bool bullet_available() { return false; }
+std::string bullet_version() { return "none"; }
+struct BulletCartpole::Impl {};
+BulletCartpole::BulletCartpole(const CartpoleConfig&) { missing(); }
+BulletCartpole::~BulletCartpole() = default;
+void BulletCartpole::reset() { missing(); }
+void BulletCartpole::step(double, const double*) { missing(); }
+CartpoleState BulletCartpole::state() const { missing(); }
+Eigen::Vector2d BulletCartpole::tip() const { missing(); }
+std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(std::span<const double>) { missing(); }
+struct BulletBounce::Impl {};
+BulletBounce::BulletBounce(const BounceConfig&) { missing(); }
+BulletBounce::~BulletBounce() = default;
+std::vector<BallState> BulletBounce::trajectory(const Eigen::Vector3d&) { missing(); }
+struct BulletPinball::Impl {};
+BulletPinball::BulletPinball(const PinballConfig&, std::span<const double>) { missing(); }
+BulletPinball::~BulletPinball() = default;
+std::vector<Ball2State> BulletPinball::trajectory() { missing(); }
+
+#endif
+
+}  // namespace dsb::reference
