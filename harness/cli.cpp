@@ -14,6 +14,7 @@
 #include "harness/grid.hpp"
 #include "harness/runner.hpp"
 #include "harness/store.hpp"
+#include "reference/crosscheck.hpp"
 
 namespace dsb {
 namespace {
@@ -133,6 +134,10 @@ int harness_main(int argc, char** argv) {
   landscape->add_option("--center", ls_center, "comma-separated point for the other coordinates (default 0)");
   landscape->add_option("--out", ls_out, "CSV file to write")->required();
 
+  std::vector<std::string> cc_envs;
+  auto* crosscheck = app.add_subcommand("crosscheck", "in-house vs MuJoCo vs Bullet: table of deviations");
+  crosscheck->add_option("--env", cc_envs, "rigid envs, comma-separated (default: all five)")->delimiter(',');
+
   std::string check_db, check_baseline;
   auto* check = app.add_subcommand("check", "regression gate: database result table vs a baseline CSV");
   check->add_option("--db", check_db, "results database")->required();
@@ -161,6 +166,11 @@ int harness_main(int argc, char** argv) {
   try {
     if (list->parsed()) return command_list();
     if (landscape->parsed()) return command_landscape(ls_env, ls_dims, ls_res, ls_center, ls_out);
+    if (crosscheck->parsed()) {
+      if (!crosscheck_available())
+        throw UsageError("crosscheck: this build has neither MuJoCo nor Bullet (DSB_WITH_MUJOCO, DSB_WITH_BULLET)");
+      return run_crosscheck(cc_envs, std::cout);
+    }
     if (check->parsed()) return command_check(check_db, check_baseline);
     if (exporter->parsed()) return command_export(export_db, export_out);
     if (report->parsed()) return command_report(report_db, report_out, report_landscapes);

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <cstdlib>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -17,7 +17,7 @@ namespace dsb::reference {
 Eigen::Vector3d to_mujoco(const Eigen::Vector3d& p) { return {p.x(), -p.z(), p.y()}; }
 Eigen::Vector3d from_mujoco(const Eigen::Vector3d& q) { return {q.x(), q.z(), -q.y()}; }
 
-MujocoContactParams mujoco_contact_params(const ContactConfig& c, double mass, double gravity) {
+MujocoContactParams mujoco_contact_params(const ContactConfig& c, double mass) {
   MujocoContactParams p;
   // constraint space of a point mass: acceleration = force / m along the normal, so our
   // ke (N/m) is a stiffness of ke / m (1/s^2) in MuJoCo's reference acceleration -b v - k r
@@ -25,14 +25,11 @@ MujocoContactParams mujoco_contact_params(const ContactConfig& c, double mass, d
   // MuJoCo damps approach and rebound, ours only the approach: half the damping gives the same
   // restitution to first order in the damping ratio
   p.damping = 0.5 * c.kd / mass;
-  // our smooth Coulomb law below the smoothing speed eps is viscous with rate mu f_n / (m eps);
-  // at the resting normal force m g that is mu g / eps; MuJoCo's friction rows relax the slip
-  // velocity at this rate inside the friction cone
-  p.friction_damping = c.mu * gravity / c.friction_smoothing;
   // constant impedance close to 1: the constraint follows the reference acceleration
   p.impedance = 0.99;
-  if (const char* e = std::getenv("DSB_MJ_IMP")) p.impedance = std::atof(e);
-  if (const char* e = std::getenv("DSB_MJ_DAMP")) p.damping = std::atof(e) * c.kd / mass;
+  // Coulomb coefficient of the elliptic cone; MuJoCo 2.2's <pair> has no solreffriction, so its
+  // friction rows relax the slip with the same damping inside the cone (README: why its friction
+  // is weaker than ours during impacts)
   p.friction = c.mu;
   return p;
 }
@@ -54,7 +51,7 @@ Eigen::Vector3d planar(double x, double y) { return to_mujoco(Eigen::Vector3d(x,
 // <option> shared by every scene: semi-implicit Euler at the env's dt, gravity along -z
 std::string option(double dt, double gravity, bool contacts) {
   std::string s = "  <option timestep=\"" + num(dt) + "\" gravity=\"0 0 " + num(-gravity) +
-                  "\" integrator=\"Euler\" cone=\"" + std::string(std::getenv("DSB_MJ_CONE") ? std::getenv("DSB_MJ_CONE") : "elliptic") + "\">\n";
+                  "\" integrator=\"Euler\" cone=\"elliptic\">\n";
   s += contacts ? "    <flag contact=\"enable\"/>\n" : "    <flag contact=\"disable\"/>\n";
   return s + "  </option>\n";
 }
@@ -64,7 +61,8 @@ std::string contact_pair(const std::string& geom, const MujocoContactParams& p) 
   const std::string d = num(p.impedance);
   return "    <pair geom1=\"ball\" geom2=\"" + geom + "\" condim=\"3\" friction=\"" +
          num(p.friction) + " " + num(p.friction) + " 0 0 0\" solref=\"" + num(-p.stiffness) +
-         " " + num(-p.damping) + "\" solimp=\"" + d + " " + d + " 0.001 0.5 2\" margin=\"0\" gap=\"0\"/>\n";
+         " " + num(-p.damping) + "\" solimp=\"" + d + " " + d +
+         " 0.001 0.5 2\" margin=\"0\" gap=\"0\"/>\n";
 }
 
 // slide-only ball body: joints along the given MuJoCo axes, no rotational freedom
@@ -136,7 +134,7 @@ std::string cartpole_mjcf(const CartpoleConfig& cfg) {
 
 std::string bounce_mjcf(const BounceConfig& cfg) {
   cfg.validate();
-  const MujocoContactParams p = mujoco_contact_params(cfg.contact, cfg.mass, cfg.gravity);
+  const MujocoContactParams p = mujoco_contact_params(cfg.contact, cfg.mass);
   std::ostringstream s;
   s << "<mujoco model=\"bounce\">\n"
     << "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>\n"
@@ -155,7 +153,7 @@ std::string pinball_mjcf(const PinballConfig& cfg, std::span<const double> angle
   if (static_cast<int>(angles.size()) != cfg.rows * cfg.cols)
     throw std::invalid_argument("pinball_mjcf: expected " + std::to_string(cfg.rows * cfg.cols) +
                                 " paddle angles, got " + std::to_string(angles.size()));
-  const MujocoContactParams p = mujoco_contact_params(cfg.contact, cfg.ball_mass, cfg.gravity);
+  const MujocoContactParams p = mujoco_contact_params(cfg.contact, cfg.ball_mass);
   const double half = 0.5 * (cfg.paddle_length - cfg.paddle_thickness);
   const double radius = 0.5 * cfg.paddle_thickness;
   std::ostringstream s, pairs;
@@ -201,6 +199,9 @@ struct MujocoSim::Impl {
 };
 
 MujocoSim::MujocoSim(const std::string& mjcf) : impl_(std::make_unique<Impl>()) {
+  // MuJoCo 2.2's XML loader keeps global state (the last parsed model): one load at a time
+  static std::mutex loading;
+  const std::lock_guard<std::mutex> lock(loading);
   // compile from memory: one file in a virtual file system (about 2 MB, so on the heap)
   auto vfs = std::make_unique<mjVFS>();
   mj_defaultVFS(vfs.get());
@@ -235,6 +236,7 @@ MujocoCartpole::MujocoCartpole(const CartpoleConfig& cfg)
     : cfg_(cfg), sim_(cartpole_mjcf(cfg)) {
   const int nv = sim_.model()->nv;
   mass_matrix_.assign(static_cast<std::size_t>(nv) * nv, 0.0);
+  tip_site_ = mj_name2id(sim_.model(), mjOBJ_SITE, "tip");
   reset();
 }
 
@@ -263,9 +265,11 @@ void MujocoCartpole::step(double u, const double* tau) {
   // M_ll qacc_l = tau - bias_l - M_l0 a, and the cart force is the first row of M qacc + bias
   const double a = (u - d->qvel[0]) / m->opt.timestep;
   const Eigen::Map<const Eigen::VectorXd> torque(tau, n);
-  const Eigen::VectorXd rhs = torque - bias.tail(n) - M.block(1, 0, n, 1) * a;
-  const Eigen::VectorXd qacc_links = M.block(1, 1, n, n).llt().solve(rhs);
-  const double cart_force = M(0, 0) * a + M.block(0, 1, 1, n).transpose().col(0).dot(qacc_links) + bias(0);
+  const LinkVec M_l0 = M.block(1, 0, n, 1);                // (n), = M_0l by symmetry
+  const LinkMat M_ll = M.block(1, 1, n, n);                // (n x n)
+  const LinkVec rhs = torque - bias.tail(n) - M_l0 * a;   // (n)
+  const LinkVec qacc_links = M_ll.llt().solve(rhs);        // (n)
+  const double cart_force = M(0, 0) * a + M_l0.dot(qacc_links) + bias(0);
   d->qfrc_applied[0] = cart_force;
   for (int j = 0; j < n; ++j) d->qfrc_applied[1 + j] = tau[j];
   // forces -> qacc (MuJoCo's own factorization) -> semi-implicit Euler
@@ -292,8 +296,7 @@ CartpoleState MujocoCartpole::state() const {
 }
 
 Eigen::Vector2d MujocoCartpole::tip() const {
-  const int site = mj_name2id(sim_.model(), mjOBJ_SITE, "tip");
-  const mjtNum* p = sim_.data()->site_xpos + 3 * site;
+  const mjtNum* p = sim_.data()->site_xpos + 3 * tip_site_;
   const Eigen::Vector3d ours = from_mujoco(Eigen::Vector3d(p[0], p[1], p[2]));
   return ours.head<2>();
 }

@@ -51,14 +51,12 @@ Eigen::Vector3d from_mujoco(const Eigen::Vector3d& mj);
 
 // soft-contact parameters standing in for our penalty law (ContactConfig) on a ball of `mass`
 struct MujocoContactParams {
-  double stiffness = 0.0;         // solref[0] = -stiffness (direct format), 1/s^2 (= ke / m)
-  double damping = 0.0;           // solref[1] = -damping, 1/s (= kd / (2 m), see README)
-  double friction_damping = 0.0;  // solreffriction[1] = -friction_damping, 1/s (= mu g / eps)
-  double impedance = 0.0;         // solimp d0 = dwidth (constant impedance)
-  double friction = 0.0;          // sliding friction coefficient (= mu)
+  double stiffness = 0.0;  // solref[0] = -stiffness (direct format), 1/s^2 (= ke / m)
+  double damping = 0.0;    // solref[1] = -damping, 1/s (= kd / (2 m): see README)
+  double impedance = 0.0;  // solimp d0 = dwidth (constant impedance)
+  double friction = 0.0;   // sliding friction coefficient (= mu)
 };
-MujocoContactParams mujoco_contact_params(const ContactConfig& contact, double mass,
-                                          double gravity);
+MujocoContactParams mujoco_contact_params(const ContactConfig& contact, double mass);
 
 // MJCF text generated from the configs
 std::string cartpole_mjcf(const CartpoleConfig& cfg);
@@ -111,6 +109,7 @@ class MujocoCartpole {
   CartpoleConfig cfg_;
   MujocoSim sim_;
   std::vector<double> mass_matrix_;  // dense M (nv x nv), scratch
+  int tip_site_ = -1;                // id of the site at the chain's end
 };
 
 // bounce in MuJoCo: a slide-only ball, ground and wall planes, explicit contact pairs

@@ -1,7 +1,9 @@
 #include "envs/core/registry.hpp"
 
 #include "common/error.hpp"
+#include "envs/rigid/bounce_env.hpp"
 #include "envs/rigid/cartpole_env.hpp"
+#include "envs/rigid/pinball_env.hpp"
 #include "envs/synthetic/synthetic.hpp"
 
 namespace dsb {
@@ -12,6 +14,9 @@ const std::vector<EnvFamily>& env_families() {
     // one registration line per env family
     f.push_back(cartpole_family(1));
     f.push_back(cartpole_family(3));
+    f.push_back(pinball_family(1, 2));
+    f.push_back(pinball_family(4, 4));
+    f.push_back(bounce_family());
     for (auto& s : synthetic_families()) f.push_back(std::move(s));
     return f;
   }();
