@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/finite_differences.hpp"
+
 #include "common/rng.hpp"
 #include "envs/core/registry.hpp"
 #include "envs/rigid/bounce_env.hpp"
@@ -28,19 +30,8 @@ std::vector<int> contact_pattern(const BounceEnv& env, std::span<const double> x
   return flags;
 }
 
-struct Differences {
-  double central, right, left;
-};
-
-Differences differences(const Env& env, std::vector<double> x, int i, double h) {
-  const double f0 = env.loss(x);
-  const double xi = x[i];
-  x[i] = xi + h;
-  const double fp = env.loss(x);
-  x[i] = xi - h;
-  const double fm = env.loss(x);
-  return {(fp - fm) / (2.0 * h), (fp - f0) / h, (f0 - fm) / h};
-}
+using testing::Differences;
+using testing::differences;
 
 // A point is smooth at scale h when no contact begins or ends within +-h along any coordinate
 // (same per-step contact pattern) and the one-sided differences agree.

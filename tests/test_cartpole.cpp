@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/finite_differences.hpp"
+
 #include "common/rng.hpp"
 #include "envs/core/registry.hpp"
 #include "envs/rigid/cartpole_env.hpp"
@@ -19,20 +21,7 @@ std::vector<double> random_point(Rng& rng, int dim, double amplitude) {
   return x;
 }
 
-// central differences of the env's loss, all coordinates
-std::vector<double> central_differences(const Env& env, std::vector<double> x, double h) {
-  std::vector<double> g(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double xi = x[i];
-    x[i] = xi + h;
-    const double fp = env.loss(x);
-    x[i] = xi - h;
-    const double fm = env.loss(x);
-    x[i] = xi;
-    g[i] = (fp - fm) / (2.0 * h);
-  }
-  return g;
-}
+using testing::central_differences;
 
 void expect_gradient_matches(const std::string& name, double amplitude, std::uint64_t seed) {
   const auto env = make_env(name);

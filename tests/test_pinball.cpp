@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/finite_differences.hpp"
+
 #include "common/rng.hpp"
 #include "envs/core/registry.hpp"
 #include "envs/rigid/contact.hpp"
@@ -19,19 +21,8 @@ namespace {
 
 const PinballEnv& as_pinball(const Env& env) { return dynamic_cast<const PinballEnv&>(env); }
 
-struct Differences {
-  double central, right, left;
-};
-
-Differences differences(const Env& env, std::vector<double> x, int i, double h) {
-  const double f0 = env.loss(x);
-  const double xi = x[i];
-  x[i] = xi + h;
-  const double fp = env.loss(x);
-  x[i] = xi - h;
-  const double fm = env.loss(x);
-  return {(fp - fm) / (2.0 * h), (fp - f0) / h, (f0 - fm) / h};
-}
+using testing::Differences;
+using testing::differences;
 
 // Smooth at scale h: the contact-step counts of every surface are the same at x +- h along every
 // coordinate, and the one-sided differences agree. The ball often bounces many times on rounded
