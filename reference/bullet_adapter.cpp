@@ -235,72 +235,99 @@ std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(std::span<const doub
   return tips;
 }
 
+// ------------------------------ ball scenes (bounce, pinball) ------------------------------
+
+namespace {
+
+// A ball (btRigidBody sphere, no spin) among static bodies, with Bullet's impulse contacts; what
+// bounce and the pinballs share. The ball is added last, after every static body.
+struct BallWorld {
+  WorldParts<btDiscreteDynamicsWorld, btSequentialImpulseConstraintSolver> parts;
+  std::vector<std::unique_ptr<StaticBody>> statics;
+  std::unique_ptr<btSphereShape> ball_shape;
+  std::unique_ptr<btRigidBody> ball;
+
+  explicit BallWorld(double gravity) {
+    parts.world.setGravity(btVector3(0, -gravity, 0));
+    impulse_only_contacts(parts.world);
+  }
+  ~BallWorld() {
+    if (ball) parts.world.removeRigidBody(ball.get());
+    for (auto& s : statics) parts.world.removeRigidBody(s->body.get());
+  }
+  // static plane n . p = c
+  void add_plane(const btVector3& normal, double c) {
+    btTransform identity;
+    identity.setIdentity();
+    add_static(new btStaticPlaneShape(normal, c), identity);
+  }
+  void add_static(btCollisionShape* shape, const btTransform& where) {
+    statics.push_back(std::make_unique<StaticBody>(shape, where, 1.0, 1.0));
+    parts.world.addRigidBody(statics.back()->body.get());
+  }
+  void add_ball(double radius, double mass, const ContactConfig& contact, double dt,
+                const btVector3& linear_factor) {
+    ball_shape = std::make_unique<btSphereShape>(radius);
+    ball = make_ball(ball_shape.get(), mass, contact.mu, equivalent_restitution(contact, mass, dt),
+                     linear_factor);
+    parts.world.addRigidBody(ball.get());
+  }
+  // restart from (start, v0), forgetting old contacts; steps + 1 (position, velocity) pairs
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> roll(const btVector3& start,
+                                                                 const btVector3& v0, int steps,
+                                                                 double dt) {
+    btTransform where;
+    where.setIdentity();
+    where.setOrigin(start);
+    ball->setWorldTransform(where);
+    ball->setInterpolationWorldTransform(where);
+    ball->setLinearVelocity(v0);
+    ball->setAngularVelocity(btVector3(0, 0, 0));
+    ball->setInterpolationLinearVelocity(v0);
+    ball->clearForces();
+    parts.world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(
+        ball->getBroadphaseHandle(), parts.world.getDispatcher());
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> states;
+    states.reserve(steps + 1);
+    auto read = [&] {
+      states.emplace_back(eig(ball->getWorldTransform().getOrigin()), eig(ball->getLinearVelocity()));
+    };
+    read();
+    for (int t = 0; t < steps; ++t) {
+      parts.world.stepSimulation(dt, 0);
+      read();
+    }
+    return states;
+  }
+};
+
+}  // namespace
+
 // ---------------------------------- bounce --------------------------------------------------
 
 struct BulletBounce::Impl {
   BounceConfig cfg;
   int steps = 0;
-  WorldParts<btDiscreteDynamicsWorld, btSequentialImpulseConstraintSolver> parts;
-  std::vector<std::unique_ptr<StaticBody>> statics;
-  std::unique_ptr<btSphereShape> ball_shape;
-  std::unique_ptr<btRigidBody> ball;
-  ~Impl() {
-    if (ball) parts.world.removeRigidBody(ball.get());
-    for (auto& s : statics) parts.world.removeRigidBody(s->body.get());
-  }
+  BallWorld world;
+  explicit Impl(const BounceConfig& c) : cfg(c), steps(BounceModel::build(c).steps), world(c.gravity) {}
 };
 
-BulletBounce::BulletBounce(const BounceConfig& cfg) : impl_(std::make_unique<Impl>()) {
-  impl_->cfg = cfg;
-  impl_->steps = BounceModel::build(cfg).steps;
-  auto& world = impl_->parts.world;
-  world.setGravity(btVector3(0, -cfg.gravity, 0));
-  impulse_only_contacts(world);
-  const double e = equivalent_restitution(cfg.contact, cfg.mass, cfg.dt);
+BulletBounce::BulletBounce(const BounceConfig& cfg) : impl_(std::make_unique<Impl>(cfg)) {
+  auto& w = impl_->world;
   // ground y = 0 (normal +y) and wall x = wall_x (normal -x): planes n . p = c
-  btTransform identity;
-  identity.setIdentity();
-  impl_->statics.push_back(std::make_unique<StaticBody>(
-      new btStaticPlaneShape(btVector3(0, 1, 0), 0.0), identity, 1.0, 1.0));
-  impl_->statics.push_back(std::make_unique<StaticBody>(
-      new btStaticPlaneShape(btVector3(-1, 0, 0), -cfg.wall_x), identity, 1.0, 1.0));
-  for (auto& s : impl_->statics) world.addRigidBody(s->body.get());
-  impl_->ball_shape = std::make_unique<btSphereShape>(cfg.radius);
-  impl_->ball = make_ball(impl_->ball_shape.get(), cfg.mass, cfg.contact.mu, e, btVector3(1, 1, 1));
-  world.addRigidBody(impl_->ball.get());
+  w.add_plane(btVector3(0, 1, 0), 0.0);
+  w.add_plane(btVector3(-1, 0, 0), -cfg.wall_x);
+  w.add_ball(cfg.radius, cfg.mass, cfg.contact, cfg.dt, btVector3(1, 1, 1));
 }
 
 BulletBounce::~BulletBounce() = default;
 
 std::vector<BallState> BulletBounce::trajectory(const Eigen::Vector3d& v0) {
-  auto& world = impl_->parts.world;
-  btRigidBody& ball = *impl_->ball;
   const auto& cfg = impl_->cfg;
-  // restart: place the ball, set its velocity, forget old contacts
-  btTransform start;
-  start.setIdentity();
-  start.setOrigin(btVector3(cfg.start[0], cfg.start[1], cfg.start[2]));
-  ball.setWorldTransform(start);
-  ball.setInterpolationWorldTransform(start);
-  ball.setLinearVelocity(bt(v0));
-  ball.setAngularVelocity(btVector3(0, 0, 0));
-  ball.setInterpolationLinearVelocity(bt(v0));
-  ball.clearForces();
-  world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(ball.getBroadphaseHandle(),
-                                                                       world.getDispatcher());
-  auto read = [&] {
-    BallState s;
-    s.position = eig(ball.getWorldTransform().getOrigin());
-    s.velocity = eig(ball.getLinearVelocity());
-    return s;
-  };
   std::vector<BallState> states;
-  states.reserve(impl_->steps + 1);
-  states.push_back(read());
-  for (int t = 0; t < impl_->steps; ++t) {
-    world.stepSimulation(cfg.dt, 0);
-    states.push_back(read());
-  }
+  for (const auto& [p, v] : impl_->world.roll(btVector3(cfg.start[0], cfg.start[1], cfg.start[2]), bt(v0),
+                                              impl_->steps, cfg.dt))
+    states.push_back({p, v});
   return states;
 }
 
@@ -309,37 +336,21 @@ std::vector<BallState> BulletBounce::trajectory(const Eigen::Vector3d& v0) {
 struct BulletPinball::Impl {
   PinballConfig cfg;
   int steps = 0;
-  WorldParts<btDiscreteDynamicsWorld, btSequentialImpulseConstraintSolver> parts;
-  std::vector<std::unique_ptr<StaticBody>> statics;
-  std::unique_ptr<btSphereShape> ball_shape;
-  std::unique_ptr<btRigidBody> ball;
-  ~Impl() {
-    if (ball) parts.world.removeRigidBody(ball.get());
-    for (auto& s : statics) parts.world.removeRigidBody(s->body.get());
-  }
+  BallWorld world;
+  explicit Impl(const PinballConfig& c) : cfg(c), steps(PinballModel::build(c).steps), world(c.gravity) {}
 };
 
-BulletPinball::BulletPinball(const PinballConfig& cfg, std::span<const double> angles)
-    : impl_(std::make_unique<Impl>()) {
+BulletPinball::BulletPinball(const PinballConfig& cfg, std::span<const double> angles) {
   cfg.validate();
   if (static_cast<int>(angles.size()) != cfg.rows * cfg.cols)
     throw std::invalid_argument("BulletPinball: expected " + std::to_string(cfg.rows * cfg.cols) +
                                 " paddle angles, got " + std::to_string(angles.size()));
-  impl_->cfg = cfg;
-  impl_->steps = PinballModel::build(cfg).steps;
-  auto& world = impl_->parts.world;
-  world.setGravity(btVector3(0, -cfg.gravity, 0));
-  impulse_only_contacts(world);
-  const double e = equivalent_restitution(cfg.contact, cfg.ball_mass, cfg.dt);
-  btTransform identity;
-  identity.setIdentity();
+  impl_ = std::make_unique<Impl>(cfg);
+  auto& w = impl_->world;
   // floor y = 0, walls x = 0 and x = width
-  impl_->statics.push_back(std::make_unique<StaticBody>(
-      new btStaticPlaneShape(btVector3(0, 1, 0), 0.0), identity, 1.0, 1.0));
-  impl_->statics.push_back(std::make_unique<StaticBody>(
-      new btStaticPlaneShape(btVector3(1, 0, 0), 0.0), identity, 1.0, 1.0));
-  impl_->statics.push_back(std::make_unique<StaticBody>(
-      new btStaticPlaneShape(btVector3(-1, 0, 0), -cfg.width), identity, 1.0, 1.0));
+  w.add_plane(btVector3(0, 1, 0), 0.0);
+  w.add_plane(btVector3(1, 0, 0), 0.0);
+  w.add_plane(btVector3(-1, 0, 0), -cfg.width);
   // paddles: capsules along their local x (segment paddle_length - thickness, radius
   // thickness / 2), turned about z by their angle around their centre
   const double segment = cfg.paddle_length - cfg.paddle_thickness;
@@ -350,50 +361,20 @@ BulletPinball::BulletPinball(const PinballConfig& cfg, std::span<const double> a
       where.setIdentity();
       where.setOrigin(btVector3(centre[0], centre[1], 0.0));
       where.setRotation(btQuaternion(btVector3(0, 0, 1), angles[r * cfg.cols + c]));
-      impl_->statics.push_back(std::make_unique<StaticBody>(
-          new btCapsuleShapeX(0.5 * cfg.paddle_thickness, segment), where, 1.0, 1.0));
+      w.add_static(new btCapsuleShapeX(0.5 * cfg.paddle_thickness, segment), where);
     }
-  for (auto& s : impl_->statics) world.addRigidBody(s->body.get());
-  impl_->ball_shape = std::make_unique<btSphereShape>(cfg.ball_radius);
   // the board's plane: no motion along z
-  impl_->ball = make_ball(impl_->ball_shape.get(), cfg.ball_mass, cfg.contact.mu, e, btVector3(1, 1, 0));
-  btTransform start;
-  start.setIdentity();
-  start.setOrigin(btVector3(cfg.start[0], cfg.start[1], 0.0));
-  impl_->ball->setWorldTransform(start);
-  impl_->ball->setInterpolationWorldTransform(start);
-  world.addRigidBody(impl_->ball.get());
+  w.add_ball(cfg.ball_radius, cfg.ball_mass, cfg.contact, cfg.dt, btVector3(1, 1, 0));
 }
 
 BulletPinball::~BulletPinball() = default;
 
 std::vector<Ball2State> BulletPinball::trajectory() {
-  auto& world = impl_->parts.world;
-  btRigidBody& ball = *impl_->ball;
   const auto& cfg = impl_->cfg;
-  btTransform start;
-  start.setIdentity();
-  start.setOrigin(btVector3(cfg.start[0], cfg.start[1], 0.0));
-  ball.setWorldTransform(start);
-  ball.setInterpolationWorldTransform(start);
-  ball.setLinearVelocity(btVector3(0, 0, 0));
-  ball.setAngularVelocity(btVector3(0, 0, 0));
-  ball.clearForces();
-  world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(ball.getBroadphaseHandle(),
-                                                                       world.getDispatcher());
-  auto read = [&] {
-    Ball2State s;
-    s.position = eig(ball.getWorldTransform().getOrigin()).head<2>();
-    s.velocity = eig(ball.getLinearVelocity()).head<2>();
-    return s;
-  };
   std::vector<Ball2State> states;
-  states.reserve(impl_->steps + 1);
-  states.push_back(read());
-  for (int t = 0; t < impl_->steps; ++t) {
-    world.stepSimulation(cfg.dt, 0);
-    states.push_back(read());
-  }
+  for (const auto& [p, v] : impl_->world.roll(btVector3(cfg.start[0], cfg.start[1], 0.0), btVector3(0, 0, 0),
+                                              impl_->steps, cfg.dt))
+    states.push_back({p.head<2>(), v.head<2>()});
   return states;
 }
 
