@@ -1,17 +1,32 @@
 #include "harness/budget.hpp"
 
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
+#include "common/parallel.hpp"
+
 namespace dsb {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
 
 BudgetedObjective::BudgetedObjective(const Env& env, std::int64_t budget,
-                                     std::atomic<std::int64_t>* episode_counter)
-    : env_(env), budget_(budget), counter_(episode_counter),
-      best_(std::numeric_limits<double>::quiet_NaN()) {
+                                     std::atomic<std::int64_t>* episode_counter, ThreadTeam* team)
+    : env_(env), budget_(budget), counter_(episode_counter), team_(team ? *team : serial_team()),
+      workspaces_(static_cast<std::size_t>(team_.size())), best_(std::numeric_limits<double>::quiet_NaN()) {
   evals_.reserve(static_cast<std::size_t>(budget));
+}
+
+Workspace& BudgetedObjective::workspace(std::size_t slot) {
+  if (!workspaces_[slot]) workspaces_[slot] = env_.make_workspace();
+  return *workspaces_[slot];
 }
 
 void BudgetedObjective::check_point(std::span<const double> x) const {
@@ -24,10 +39,7 @@ void BudgetedObjective::check_point(std::span<const double> x) const {
                              std::to_string(x[i]) + " outside [-1, 1]");
 }
 
-double BudgetedObjective::record(std::span<const double> x, double loss, bool used_grad,
-                                 std::chrono::steady_clock::time_point start) {
-  const double wall =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+double BudgetedObjective::record(std::span<const double> x, double loss, bool used_grad, double wall_s) {
   const bool failed = !std::isfinite(loss);
   if (failed) {
     loss = std::numeric_limits<double>::quiet_NaN();
@@ -36,7 +48,7 @@ double BudgetedObjective::record(std::span<const double> x, double loss, bool us
     best_ = loss;
     best_x_.assign(x.begin(), x.end());
   }
-  evals_.push_back({static_cast<std::int64_t>(evals_.size()), loss, best_, used_grad, wall});
+  evals_.push_back({static_cast<std::int64_t>(evals_.size()), loss, best_, used_grad, wall_s});
   if (counter_) counter_->fetch_add(1, std::memory_order_relaxed);
   return failed ? std::numeric_limits<double>::infinity() : loss;
 }
@@ -45,7 +57,8 @@ double BudgetedObjective::value(std::span<const double> x) {
   if (used() >= budget_) throw BudgetExhausted{};
   check_point(x);
   const auto start = std::chrono::steady_clock::now();
-  return record(x, env_.loss(x), false, start);
+  const double loss = env_.loss(x, workspace(0), team_);
+  return record(x, loss, false, seconds_since(start));
 }
 
 double BudgetedObjective::value_and_grad(std::span<const double> x, std::span<double> grad) {
@@ -54,11 +67,59 @@ double BudgetedObjective::value_and_grad(std::span<const double> x, std::span<do
   if (static_cast<int>(grad.size()) != env_.dim())
     throw std::logic_error("gradient buffer has the wrong size");
   const auto start = std::chrono::steady_clock::now();
-  const double loss = env_.loss_and_grad(x, grad);
+  const double loss = env_.loss_and_grad(x, grad, workspace(0), team_);
   bool finite = std::isfinite(loss);
   for (double g : grad) finite = finite && std::isfinite(g);
   if (!finite) std::fill(grad.begin(), grad.end(), 0.0);
-  return record(x, finite ? loss : std::numeric_limits<double>::quiet_NaN(), true, start);
+  return record(x, finite ? loss : std::numeric_limits<double>::quiet_NaN(), true, seconds_since(start));
+}
+
+void BudgetedObjective::values(std::span<const double> xs, std::span<double> out) {
+  const std::size_t d = static_cast<std::size_t>(env_.dim());
+  if (xs.size() != out.size() * d)
+    throw std::logic_error("batch of " + std::to_string(out.size()) + " points has " +
+                           std::to_string(xs.size()) + " values, expected " + std::to_string(out.size() * d));
+  if (out.empty()) return;
+  if (used() >= budget_) throw BudgetExhausted{};
+  auto point = [&](std::size_t i) { return xs.subspan(i * d, d); };
+  // what one-at-a-time evaluation would reach: the points before the first bad one, within budget
+  std::size_t n = std::min<std::size_t>(out.size(), static_cast<std::size_t>(budget_ - used()));
+  std::exception_ptr bad_point;
+  for (std::size_t i = 0; i < n; ++i) {
+    try {
+      check_point(point(i));
+    } catch (...) {
+      bad_point = std::current_exception();
+      n = i;
+      break;
+    }
+  }
+  // each slot takes every slots-th point with its own workspace, serially inside the rollout
+  // (a nested parallel loop of the env runs on the slot's thread): results do not depend on the slot
+  struct Outcome {
+    double loss = 0.0, wall_s = 0.0;
+    std::exception_ptr error;
+  };
+  std::vector<Outcome> outcomes(n);
+  const std::size_t slots = std::min<std::size_t>(n, static_cast<std::size_t>(team_.size()));
+  for (std::size_t s = 0; s < slots; ++s) workspace(s);
+  team_.run(static_cast<int>(slots), [&](int slot) {
+    for (std::size_t i = static_cast<std::size_t>(slot); i < n; i += slots) {
+      const auto start = std::chrono::steady_clock::now();
+      try {
+        outcomes[i].loss = env_.loss(point(i), *workspaces_[slot], team_);
+      } catch (...) {
+        outcomes[i].error = std::current_exception();
+      }
+      outcomes[i].wall_s = seconds_since(start);
+    }
+  });
+  for (std::size_t i = 0; i < n; ++i) {
+    if (outcomes[i].error) std::rethrow_exception(outcomes[i].error);
+    out[i] = record(point(i), outcomes[i].loss, false, outcomes[i].wall_s);
+  }
+  if (bad_point) std::rethrow_exception(bad_point);
+  if (n < out.size()) throw BudgetExhausted{};
 }
 
 }  // namespace dsb

@@ -2,11 +2,15 @@
 // The budget wrapper: the only way an optimizer reaches an env. It checks every point (size, in
 // the box, finite), counts and records every episode, keeps the best, turns a blown-up
 // simulation into a failed episode, and throws BudgetExhausted once the budget is spent.
+// Rollouts reuse workspaces made once per run (one per thread of the run's team); a batch is
+// spread over the team, one rollout per thread at a time, and recorded in batch order.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "common/thread_team.hpp"
 #include "envs/core/env.hpp"
 #include "harness/run_spec.hpp"
 #include "optimizers/core/objective.hpp"
@@ -15,9 +19,10 @@ namespace dsb {
 
 class BudgetedObjective : public Objective {
  public:
-  // episode_counter (may be null) is incremented after every episode, for progress lines
+  // episode_counter (may be null) is incremented after every episode, for progress lines; team
+  // (may be null: one thread) runs the threads inside a rollout and the points of a batch
   BudgetedObjective(const Env& env, std::int64_t budget,
-                    std::atomic<std::int64_t>* episode_counter = nullptr);
+                    std::atomic<std::int64_t>* episode_counter = nullptr, ThreadTeam* team = nullptr);
 
   int dim() const override { return env_.dim(); }
   bool has_gradient() const override { return env_.differentiable(); }
@@ -25,6 +30,7 @@ class BudgetedObjective : public Objective {
   std::int64_t used() const override { return static_cast<std::int64_t>(evals_.size()); }
   double value(std::span<const double> x) override;
   double value_and_grad(std::span<const double> x, std::span<double> grad) override;
+  void values(std::span<const double> xs, std::span<double> out) override;
 
   const std::vector<EvalRecord>& evals() const { return evals_; }
   double best_loss() const { return best_; }  // NaN while no episode succeeded
@@ -33,12 +39,14 @@ class BudgetedObjective : public Objective {
 
  private:
   void check_point(std::span<const double> x) const;
-  double record(std::span<const double> x, double loss, bool used_grad,
-                std::chrono::steady_clock::time_point start);
+  Workspace& workspace(std::size_t slot);
+  double record(std::span<const double> x, double loss, bool used_grad, double wall_s);
 
   const Env& env_;
   std::int64_t budget_;
   std::atomic<std::int64_t>* counter_;
+  ThreadTeam& team_;
+  std::vector<std::unique_ptr<Workspace>> workspaces_;  // one per team thread, made on first use
   std::vector<EvalRecord> evals_;
   double best_;
   std::vector<double> best_x_;

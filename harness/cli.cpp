@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "common/error.hpp"
+#include "common/usable_cpus.hpp"
 #include "harness/commands.hpp"
 #include "harness/grid.hpp"
 #include "harness/runner.hpp"
@@ -27,7 +28,8 @@ struct RunArgs {
   int seeds = 1;
   std::int64_t budget = 1000;
   std::string db = "results.sqlite";
-  int jobs = 0;  // 0 = all cores
+  int jobs = 0;     // 0 = usable CPUs / threads
+  int threads = 1;  // inside one rollout
   std::string shard;
   bool quiet = false;
 };
@@ -39,7 +41,8 @@ void add_run_options(CLI::App& app, RunArgs& a) {
   app.add_option("--seeds", a.seeds, "number of seeds per (env, optimizer), seed indices 0..N-1");
   app.add_option("--budget", a.budget, "episodes per run (default 1000)");
   app.add_option("--db", a.db, "SQLite results file (default ./results.sqlite); resumes");
-  app.add_option("--jobs", a.jobs, "worker threads (default: all cores)");
+  app.add_option("--jobs", a.jobs, "runs at once (default: the CPUs this process may use, divided by --threads)");
+  app.add_option("--threads", a.threads, "threads inside one run's rollouts and batches (default 1; same results for any value)");
   app.add_option("--shard", a.shard, "run only shard I of N (I/N, 0-based): deterministic slices");
   app.add_flag("--quiet", a.quiet, "no progress lines");
 }
@@ -66,7 +69,9 @@ int command_run(const RunArgs& a) {
     req.shard_count = n;
   }
   if (a.jobs < 0) throw UsageError("--jobs must be >= 1, got " + std::to_string(a.jobs));
-  const int jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
+  if (a.threads < 1 || a.threads > 1024)
+    throw UsageError("--threads must be from 1 to 1024, got " + std::to_string(a.threads));
+  const int jobs = a.jobs > 0 ? a.jobs : std::max(1, usable_cpus() / a.threads);
   // every name and number is checked before the database is opened
   const auto grid = expand_grid(req);
 
@@ -77,7 +82,7 @@ int command_run(const RunArgs& a) {
     throw UsageError(std::string("--db: ") + e.what());
   }
   std::FILE* progress = a.quiet ? nullptr : stderr;
-  const auto s = run_grid(grid, *store, jobs, progress);
+  const auto s = run_grid(grid, *store, jobs, a.threads, progress);
   std::fprintf(stderr, "harness: %zu runs in the grid: %lld already done, %lld done now, %lld failed; database %s\n",
                grid.size(), static_cast<long long>(s.skipped), static_cast<long long>(s.done),
                static_cast<long long>(s.failed), a.db.c_str());

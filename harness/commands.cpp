@@ -45,9 +45,9 @@ int command_list() {
                            "description");
   for (const auto& family : env_families()) {
     for (const auto& name : family.grid_names) {
-      const auto env = make_env(name);
-      std::cout << fmt::format("{:<16} {:>5} {:>14} {:>3}  {}\n", name, env->dim(),
-                               env->differentiable() ? "yes" : "no", env->supports_rl() ? "yes" : "no",
+      const EnvInfo& info = shared_env(name)->info();  // metadata only: no model is built
+      std::cout << fmt::format("{:<16} {:>5} {:>14} {:>3}  {}\n", name, info.dim,
+                               info.differentiable ? "yes" : "no", info.rl ? "yes" : "no",
                                family.pattern == name ? family.description
                                                       : family.pattern + ": " + family.description);
     }

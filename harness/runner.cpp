@@ -2,23 +2,24 @@
 
 #include <atomic>
 #include <chrono>
-#include <cstdlib>
-#include <csignal>
+#include <map>
+#include <mutex>
 #include <thread>
 
 #include "common/config_hash.hpp"
 #include "envs/core/registry.hpp"
 #include "harness/budget.hpp"
+#include "harness/fault_injection.hpp"
 #include "harness/progress.hpp"
 #include "optimizers/core/registry.hpp"
 
 namespace dsb {
 
 RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
-                      std::atomic<std::int64_t>* episode_counter) {
+                      std::atomic<std::int64_t>* episode_counter, ThreadTeam* team) {
   RunResult result;
   const auto start = std::chrono::steady_clock::now();
-  BudgetedObjective objective(env, spec.budget, episode_counter);
+  BudgetedObjective objective(env, spec.budget, episode_counter, team);
   Rng rng(spec.rng_seed);
   result.status = "done";
   try {
@@ -38,34 +39,37 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
   return result;
 }
 
-namespace {
-
-// Fault injection for the interruption tests: DSB_FAULT_KILL_AFTER_EPISODES=K makes the process
-// SIGKILL itself once K episodes have run in total (single job gives a deterministic point).
-std::int64_t kill_after_episodes() {
-  const char* v = std::getenv("DSB_FAULT_KILL_AFTER_EPISODES");
-  return v ? std::atoll(v) : -1;
-}
-
-}  // namespace
-
-GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs,
+GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs, int threads,
                      std::FILE* progress_out) {
   GridSummary summary;
-  // resolve configs and skip runs already done
+  // resolve each distinct env's and optimizer's config once (cheap: no env model is built) and
+  // skip runs already done
   struct Pending {
     RunSpec spec;
     RunKey key;
-    nlohmann::json env_config, opt_config;
+    const nlohmann::json* env_config;
+    const nlohmann::json* opt_config;
+  };
+  struct Resolved {
+    nlohmann::json config;
+    std::string hash;
+  };
+  std::map<std::string, Resolved> env_configs, opt_configs;
+  auto resolve = [](std::map<std::string, Resolved>& cache, const std::string& name, auto&& config_of) -> const Resolved& {
+    auto it = cache.find(name);
+    if (it == cache.end()) {
+      nlohmann::json c = config_of(name);
+      std::string h = config_hash(c);
+      it = cache.emplace(name, Resolved{std::move(c), std::move(h)}).first;
+    }
+    return it->second;
   };
   std::vector<Pending> pending;
   const auto done = store.done_keys();
   for (const auto& spec : grid) {
-    const auto env = make_env(spec.env);
-    const auto opt = make_optimizer(spec.optimizer);
-    Pending p{spec, {}, env->config(), opt->config()};
-    p.key = {spec.env, spec.optimizer, spec.seed, spec.budget, config_hash(p.env_config),
-             config_hash(p.opt_config)};
+    const Resolved& env = resolve(env_configs, spec.env, [](const std::string& n) { return shared_env(n)->config(); });
+    const Resolved& opt = resolve(opt_configs, spec.optimizer, [](const std::string& n) { return make_optimizer(n)->config(); });
+    Pending p{spec, {spec.env, spec.optimizer, spec.seed, spec.budget, env.hash, opt.hash}, &env.config, &opt.config};
     if (done.count(p.key)) {
       ++summary.skipped;
       continue;
@@ -81,22 +85,22 @@ GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs,
                  static_cast<long long>(summary.skipped), pending.size());
   progress.start();
 
-  const std::int64_t kill_at = kill_after_episodes();
   std::atomic<std::size_t> next{0};
   std::atomic<std::int64_t> n_done{0}, n_failed{0};
   std::mutex error_mutex;
   std::exception_ptr store_error;
   auto worker = [&] {
+    ThreadTeam team(threads);  // this job's threads, reused by all its runs
     for (;;) {
       const std::size_t i = next.fetch_add(1);
       if (i >= pending.size()) return;
       const Pending& p = pending[i];
       try {
-        const std::int64_t run_id = store.begin_run(p.key, p.spec.rng_seed, p.env_config, p.opt_config);
-        const auto env = make_env(p.spec.env);
+        const std::int64_t run_id = store.begin_run(p.key, p.spec.rng_seed, *p.env_config, *p.opt_config);
+        const auto env = shared_env(p.spec.env);
         const auto opt = make_optimizer(p.spec.optimizer);
-        const RunResult r = execute_run(p.spec, *env, *opt, &progress.episodes());
-        if (kill_at >= 0 && progress.episodes().load() >= kill_at) std::raise(SIGKILL);
+        const RunResult r = execute_run(p.spec, *env, *opt, &progress.episodes(), &team);
+        fault_maybe_kill(progress.episodes().load());
         store.finish_run(run_id, r);
         (r.status == "done" ? n_done : n_failed).fetch_add(1);
         progress.run_finished(r.status != "done");
@@ -109,10 +113,10 @@ GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs,
       }
     }
   };
-  const int n_threads = std::max(1, std::min<int>(jobs, static_cast<int>(pending.size())));
-  std::vector<std::thread> threads;
-  for (int t = 0; t < n_threads; ++t) threads.emplace_back(worker);
-  for (auto& t : threads) t.join();
+  const int n_workers = std::max(1, std::min<int>(jobs, static_cast<int>(pending.size())));
+  std::vector<std::thread> workers;
+  for (int t = 0; t < n_workers; ++t) workers.emplace_back(worker);
+  for (auto& t : workers) t.join();
   if (store_error) std::rethrow_exception(store_error);
   summary.done = n_done.load();
   summary.failed = n_failed.load();

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "common/thread_team.hpp"
 #include "envs/core/env.hpp"
 #include "harness/run_spec.hpp"
 #include "harness/store.hpp"
@@ -12,15 +13,20 @@
 
 namespace dsb {
 
-// One run of an optimizer on an env under the budget wrapper. Never throws for optimizer or
+// One run of an optimizer on an env under the budget wrapper, with `team` (may be null: one
+// thread) for the threads inside its rollouts and batches. Never throws for optimizer or
 // simulation failures: they become status "failed" with the error text.
 RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
-                      std::atomic<std::int64_t>* episode_counter = nullptr);
+                      std::atomic<std::int64_t>* episode_counter = nullptr, ThreadTeam* team = nullptr);
 
 struct GridSummary {
   std::int64_t skipped = 0, done = 0, failed = 0;
 };
 
-GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs, std::FILE* progress_out);
+// `jobs` runs at once, each with a team of `threads` threads. Runs already done are recognised by
+// their keys alone: configs are resolved once per distinct env and optimizer name, and no env
+// model is built for a run that is skipped.
+GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs, int threads,
+                     std::FILE* progress_out);
 
 }  // namespace dsb

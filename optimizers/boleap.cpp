@@ -79,10 +79,27 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
     while (spent + K < cfg_.episodes_per_leap) {
       // 1. K candidates from N(mu, sigma^2 C), simulated
       std::vector<Eigen::VectorXd> xs(K);
-      std::vector<double> fs(K);
+      std::vector<double> fs(K), flat(static_cast<std::size_t>(K) * d);
       for (int k = 0; k < K; ++k) {
         xs[k] = cma.ask(rng);
-        fs[k] = simulate(xs[k]);
+        std::copy(xs[k].begin(), xs[k].end(), flat.begin() + std::size_t(k) * d);
+      }
+      // one batch (evaluation and deferred GP insertion draw nothing from rng: same records); when
+      // the budget ends inside it, the points that fit still reach the GP, as one at a time
+      const std::int64_t used_before = f.used();
+      try {
+        f.values(flat, fs);
+      } catch (const BudgetExhausted&) {
+        for (int k = 0; k < static_cast<int>(f.used() - used_before); ++k) {
+          ++stats_.episodes_seen;
+          model.add(xs[k], fs[k], rng, /*defer_fit=*/true);
+        }
+        ++stats_.episodes_seen;  // the refused request, counted as simulate() counts it
+        throw;
+      }
+      for (int k = 0; k < K; ++k) {
+        ++stats_.episodes_seen;
+        model.add(xs[k], fs[k], rng, /*defer_fit=*/true);
         ++spent;
       }
       // 2. the mean of the best half starts the descent

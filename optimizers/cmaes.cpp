@@ -353,20 +353,21 @@ void Cmaes::minimize(Objective& f, Rng& rng) {
   Eigen::VectorXd mean = Eigen::VectorXd::Zero(n);  // box centre
 
   std::vector<Eigen::VectorXd> xs;
-  std::vector<double> fs;
+  std::vector<double> flat, fs;
   for (;;) {
     CmaState es(mean, cfg_.sigma0, lambda, cfg_);
     stats_.populations.push_back(lambda);
     for (;;) {
       xs.clear();
-      fs.clear();
-      for (int k = 0; k < lambda; ++k) {
-        xs.push_back(es.ask(rng));
-        // throws BudgetExhausted when the budget is spent: it ends the run, by design
-        double v = f.value(std::span<const double>(xs.back().data(), static_cast<std::size_t>(n)));
+      for (int k = 0; k < lambda; ++k) xs.push_back(es.ask(rng));
+      // the population as one batch (evaluation draws nothing from rng, so asking first changes
+      // nothing); throws BudgetExhausted when the budget is spent: it ends the run, by design
+      flat.resize(static_cast<std::size_t>(lambda) * n);
+      for (int k = 0; k < lambda; ++k) std::copy(xs[k].begin(), xs[k].end(), flat.begin() + std::size_t(k) * n);
+      fs.resize(lambda);
+      f.values(flat, fs);
+      for (double& v : fs)
         if (std::isnan(v)) v = std::numeric_limits<double>::infinity();  // failed episode = worst
-        fs.push_back(v);
-      }
       es.tell(xs, fs);
       ++stats_.generations;
       if (es.should_stop()) break;

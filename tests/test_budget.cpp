@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include "common/rng.hpp"
 #include "envs/core/registry.hpp"
+#include "harness/grid.hpp"
 #include "harness/budget.hpp"
 #include "harness/runner.hpp"
 #include "optimizers/core/registry.hpp"
@@ -16,20 +18,18 @@ namespace {
 // a 1-D env that blows up (NaN) for x > 0.5
 class FragileEnv : public Env {
  public:
-  const std::string& name() const override { return name_; }
-  int dim() const override { return 1; }
-  bool differentiable() const override { return true; }
-  double loss(std::span<const double> x) const override {
-    return x[0] > 0.5 ? std::numeric_limits<double>::quiet_NaN() : (x[0] - 0.2) * (x[0] - 0.2);
-  }
-  double loss_and_grad(std::span<const double> x, std::span<double> g) const override {
-    g[0] = 2.0 * (x[0] - 0.2);
-    return loss(x);
-  }
+  FragileEnv() : Env(EnvInfo{"fragile", 1, true, false, false, 0.0}) {}
   nlohmann::json config() const override { return {{"fragile", true}}; }
 
- private:
-  std::string name_ = "fragile";
+ protected:
+  double rollout(std::span<const double> x, Workspace&, ThreadTeam&) const override {
+    return x[0] > 0.5 ? std::numeric_limits<double>::quiet_NaN() : (x[0] - 0.2) * (x[0] - 0.2);
+  }
+  double rollout_with_grad(std::span<const double> x, std::span<double> g, Workspace& ws,
+                           ThreadTeam& team) const override {
+    g[0] = 2.0 * (x[0] - 0.2);
+    return rollout(x, ws, team);
+  }
 };
 
 TEST(Budget, RecordsEveryEpisodeAndStopsAtTheBudget) {
@@ -91,7 +91,7 @@ TEST(ExecuteRun, FullBudgetAndIdenticalReruns) {
 TEST(ExecuteRun, OptimizerErrorBecomesAFailedRun) {
   // gd on an env whose gradient call throws: recorded as failed with the message, no crash
   class Throwing : public FragileEnv {
-    double loss_and_grad(std::span<const double>, std::span<double>) const override {
+    double rollout_with_grad(std::span<const double>, std::span<double>, Workspace&, ThreadTeam&) const override {
       throw std::runtime_error("solver diverged");
     }
   } env;
@@ -99,6 +99,89 @@ TEST(ExecuteRun, OptimizerErrorBecomesAFailedRun) {
   const RunResult r = execute_run({"fragile", "gd", 0, 10, 1}, env, *gd);
   EXPECT_EQ(r.status, "failed");
   EXPECT_NE(r.error.find("solver diverged"), std::string::npos);
+}
+
+// the records of a batch equal those of one value() call per point, whatever the team size, and
+// a batch that overruns the budget records the points that fit, then throws BudgetExhausted
+std::vector<EvalRecord> batch_records(const Env& env, std::span<const double> xs, std::size_t n,
+                                      std::int64_t budget, int threads, bool batched, bool* exhausted) {
+  ThreadTeam team(threads);
+  BudgetedObjective f(env, budget, nullptr, &team);
+  std::vector<double> out(n);
+  *exhausted = false;
+  try {
+    if (batched) {
+      f.values(xs, out);
+    } else {
+      const std::size_t d = static_cast<std::size_t>(env.dim());
+      for (std::size_t i = 0; i < n; ++i) out[i] = f.value(xs.subspan(i * d, d));
+    }
+  } catch (const BudgetExhausted&) {
+    *exhausted = true;
+  }
+  return f.evals();
+}
+
+TEST(Budget, BatchRecordsEqualOneAtATimeForAnyTeamSize) {
+  const auto env = make_env("rastrigin-5");
+  Rng rng(5);
+  const std::size_t n = 23;
+  std::vector<double> xs(n * 5);
+  for (double& v : xs) v = rng.uniform(-1.0, 1.0);
+  for (const std::int64_t budget : {std::int64_t{100}, std::int64_t{17}}) {
+    bool ex_serial = false;
+    const auto serial = batch_records(*env, xs, n, budget, 1, false, &ex_serial);
+    for (const int threads : {1, 2, 3}) {
+      bool ex = false;
+      const auto batch = batch_records(*env, xs, n, budget, threads, true, &ex);
+      EXPECT_EQ(ex, ex_serial);
+      ASSERT_EQ(batch.size(), serial.size()) << threads << " threads, budget " << budget;
+      for (std::size_t i = 0; i < serial.size(); ++i) {
+        EXPECT_EQ(batch[i].episode, serial[i].episode);
+        EXPECT_EQ(batch[i].loss, serial[i].loss) << "episode " << i << ", " << threads << " threads";
+        EXPECT_EQ(batch[i].best_loss, serial[i].best_loss);
+      }
+    }
+  }
+  bool ex = false;
+  EXPECT_EQ(batch_records(*env, xs, n, 17, 2, true, &ex).size(), 17u);
+  EXPECT_TRUE(ex);
+}
+
+TEST(Budget, BatchWithAFailedEpisodeAndABadPoint) {
+  FragileEnv env;
+  ThreadTeam team(2);
+  BudgetedObjective f(env, 10, nullptr, &team);
+  std::vector<double> out(3);
+  f.values(std::vector<double>{0.0, 0.9, 0.2}, out);
+  EXPECT_DOUBLE_EQ(out[0], 0.04);
+  EXPECT_EQ(out[1], std::numeric_limits<double>::infinity());
+  EXPECT_EQ(out[2], 0.0);
+  EXPECT_EQ(f.failed_episodes(), 1);
+  // a point outside the box: the points before it are recorded, as one-at-a-time would
+  EXPECT_THROW(f.values(std::vector<double>{0.1, 1.5, 0.3}, out), std::logic_error);
+  EXPECT_EQ(f.used(), 4);
+  EXPECT_DOUBLE_EQ(f.evals()[3].loss, (0.1 - 0.2) * (0.1 - 0.2));
+}
+
+TEST(ExecuteRun, RunsAreBitIdenticalForAnyTeamSize) {
+  // cmaes, boleap and random evaluate batches: 1, 2 and 3 threads give the same records
+  for (const std::string opt_name : {"cmaes", "random", "boleap"}) {
+    const auto env = make_env("rosenbrock-10");
+    RunSpec spec{"rosenbrock-10", opt_name, 0, 150, per_run_seed("rosenbrock-10", opt_name, 0)};
+    std::vector<RunResult> results;
+    for (const int threads : {1, 2, 3}) {
+      ThreadTeam team(threads);
+      auto opt = make_optimizer(opt_name);
+      results.push_back(execute_run(spec, *env, *opt, nullptr, &team));
+    }
+    for (const auto& r : results) {
+      ASSERT_EQ(r.status, "done") << opt_name << ": " << r.error;
+      ASSERT_EQ(r.evals.size(), results[0].evals.size());
+      for (std::size_t i = 0; i < r.evals.size(); ++i)
+        ASSERT_EQ(r.evals[i].loss, results[0].evals[i].loss) << opt_name << " episode " << i;
+    }
+  }
 }
 
 }  // namespace

@@ -138,7 +138,7 @@ TEST_F(HarnessCli, GridKilledPartWayAndResumedEqualsTheUninterruptedGrid) {
   int kills = 0;
   for (const char* k : {"150", "400", "300"}) {
     const auto r = harness(kGrid + " --jobs 1 --db " + db("resumed.sqlite"),
-                           std::string("DSB_FAULT_KILL_AFTER_EPISODES=") + k);
+                           std::string("DSB_FAULT_INJECTION=kill-after-episodes DSB_FAULT_KILL_AFTER_EPISODES=") + k);
     kills += r.code == 128 + SIGKILL;
     // the killed run is left 'running' and does not count as done
     EXPECT_EQ(scalar(db("resumed.sqlite"), "SELECT count(*) FROM runs WHERE status='running'"), "1");

@@ -2,7 +2,16 @@
 // The environment contract: a parameter vector x in the normalized box [-1, 1]^dim maps to a
 // scalar loss. Each env owns the affine map from that box to physical units. Differentiable envs
 // also return dLoss/dx in normalized units. RL-capable envs expose a per-step interface with the
-// same dynamics. Envs are immutable after construction; loss() is const and thread-safe.
+// same dynamics.
+//
+// Model and workspace (MuJoCo's mjModel / mjData split): an Env object is the immutable model,
+// shared by every run and thread that uses it (harness: shared_env in registry.hpp). Constructing
+// one is cheap (config and metadata only); anything expensive (particles, meshes, targets, tables)
+// is built lazily on the first rollout (envs/core/lazy_model.hpp). A rollout's mutable buffers
+// live in a Workspace made by make_workspace() and reused across rollouts by one thread at a time,
+// so a rollout allocates nothing in its hot loop. A rollout may use the threads of a ThreadTeam;
+// its loss and gradient are bit-identical for every team size (fixed reduction order,
+// common/parallel.hpp).
 #include <memory>
 #include <span>
 #include <string>
@@ -10,7 +19,19 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/thread_team.hpp"
+
 namespace dsb {
+
+// What listing, grid expansion, sharding, planning and resume need to know, without a model.
+struct EnvInfo {
+  std::string name;
+  int dim = 0;
+  bool differentiable = false;
+  bool rl = false;             // has a per-step interface (make_rl)
+  bool threaded = false;       // a rollout uses the threads of its team
+  double cost_hint_s = 0.0;    // rough seconds of one gradient episode on one core (plans, ETAs)
+};
 
 // Per-step interface for RL (reset / observe / step) over the same dynamics as loss().
 class RlEnv {
@@ -27,22 +48,54 @@ class RlEnv {
   virtual double final_loss() const = 0;
 };
 
+// The mutable buffers of one rollout. Envs derive their own; the base holds nothing.
+class Workspace {
+ public:
+  virtual ~Workspace() = default;
+};
+
 class Env {
  public:
+  explicit Env(EnvInfo info) : info_(std::move(info)) {}
   virtual ~Env() = default;
-  virtual const std::string& name() const = 0;
-  virtual int dim() const = 0;
-  virtual bool differentiable() const = 0;
-  // Loss at x (size dim, inside [-1, 1]); NaN when the simulation blew up.
-  virtual double loss(std::span<const double> x) const = 0;
+  Env(const Env&) = delete;
+  Env& operator=(const Env&) = delete;
+
+  const EnvInfo& info() const { return info_; }
+  const std::string& name() const { return info_.name; }
+  int dim() const { return info_.dim; }
+  bool differentiable() const { return info_.differentiable; }
+  bool supports_rl() const { return info_.rl; }
+
+  // The resolved configuration (every constant that changes the loss), stored with each run.
+  // Cheap: never builds the model.
+  virtual nlohmann::json config() const = 0;
+
+  // Buffers for rollouts of this env (builds the model if it is not built yet).
+  virtual std::unique_ptr<Workspace> make_workspace() const { return std::make_unique<Workspace>(); }
+
+  // Loss at x (size dim, inside [-1, 1]); NaN when the simulation blew up. `ws` must come from
+  // this env's make_workspace(); `team` may be of any size (same bits).
+  double loss(std::span<const double> x, Workspace& ws, ThreadTeam& team) const { return rollout(x, ws, team); }
   // Loss and dLoss/dx (normalized units) at x; grad has size dim. Throws std::logic_error on an
   // env that is not differentiable. NaN loss and gradient when the simulation blew up.
-  virtual double loss_and_grad(std::span<const double> x, std::span<double> grad) const;
-  // The resolved configuration (every constant that changes the loss), stored with each run.
-  virtual nlohmann::json config() const = 0;
+  double loss_and_grad(std::span<const double> x, std::span<double> grad, Workspace& ws, ThreadTeam& team) const {
+    return rollout_with_grad(x, grad, ws, team);
+  }
+  // Convenience forms (tests, one-off commands): a fresh workspace, one thread.
+  double loss(std::span<const double> x) const;
+  double loss_and_grad(std::span<const double> x, std::span<double> grad) const;
+
   // nullptr when the env has no per-step interface
   virtual std::unique_ptr<RlEnv> make_rl() const { return nullptr; }
-  bool supports_rl() const { return make_rl() != nullptr; }
+
+ protected:
+  virtual double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const = 0;
+  virtual double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
+                                   ThreadTeam& team) const;
+
+ private:
+  EnvInfo info_;
 };
 
 }  // namespace dsb

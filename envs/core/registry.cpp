@@ -1,5 +1,8 @@
 #include "envs/core/registry.hpp"
 
+#include <map>
+#include <mutex>
+
 #include "common/error.hpp"
 #include "envs/rigid/bounce_env.hpp"
 #include "envs/rigid/cartpole_env.hpp"
@@ -27,6 +30,22 @@ std::unique_ptr<Env> make_env(const std::string& name) {
   for (const auto& family : env_families())
     if (auto env = family.try_make(name)) return env;
   throw UsageError("unknown env '" + name + "' (see `harness list`)");
+}
+
+std::shared_ptr<const Env> shared_env(const std::string& name) {
+  static std::mutex mutex;
+  static std::map<std::string, std::shared_ptr<const Env>> envs;
+  std::lock_guard lock(mutex);
+  auto& slot = envs[name];
+  if (!slot) {
+    try {
+      slot = make_env(name);
+    } catch (...) {
+      envs.erase(name);
+      throw;
+    }
+  }
+  return slot;
 }
 
 std::vector<std::string> grid_env_names() {

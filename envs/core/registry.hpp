@@ -22,8 +22,13 @@ struct EnvFamily {
 
 const std::vector<EnvFamily>& env_families();
 
-// Throws UsageError "unknown env 'NAME'" when no family knows the name.
+// Throws UsageError "unknown env 'NAME'" when no family knows the name. A new, unshared object
+// (cheap: no model is built until its first rollout).
 std::unique_ptr<Env> make_env(const std::string& name);
+
+// The one object of this name in the process, made on first request: every run and thread that
+// uses the env shares it, and so shares its lazily built model. Thread-safe.
+std::shared_ptr<const Env> shared_env(const std::string& name);
 
 // Every env of the `--all` grid, in registration order.
 std::vector<std::string> grid_env_names();

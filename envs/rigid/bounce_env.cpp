@@ -50,7 +50,28 @@ void bounce_step_adjoint(const BounceModel& m, const BounceStepCache& cache, Bal
   adj.velocity = vbar + k * (cache.df_dv.transpose() * vbar);
 }
 
-BounceEnv::BounceEnv(BounceConfig cfg) : cfg_(std::move(cfg)), model_(BounceModel::build(cfg_)) {}
+namespace {
+
+EnvInfo bounce_info(const BounceConfig& cfg) {
+  cfg.validate();  // at construction, although the model is built on first use
+  EnvInfo info;
+  info.name = "bounce";
+  info.dim = 3;
+  info.differentiable = true;
+  info.cost_hint_s = 5e-5;  // bench_rigid: reverse-pass gradient of bounce, 40 us
+  return info;
+}
+
+}  // namespace
+
+BounceEnv::BounceEnv(BounceConfig cfg)
+    : Env(bounce_info(cfg)), cfg_(std::move(cfg)), model_([c = cfg_] { return BounceModel::build(c); }) {}
+
+std::unique_ptr<Workspace> BounceEnv::make_workspace() const {
+  auto ws = std::make_unique<BounceWorkspace>();
+  ws->caches.resize(model().steps);
+  return ws;
+}
 
 Eigen::Vector3d BounceEnv::initial_velocity(std::span<const double> x) const {
   // affine map of each component: x = -1 -> v_low, x = +1 -> v_high
@@ -74,40 +95,45 @@ double BounceEnv::final_loss(const BallState& s) const {
 }
 
 std::vector<BallState> BounceEnv::trajectory(std::span<const double> x) const {
+  const BounceModel& m = model();
   std::vector<BallState> states;
-  states.reserve(model_.steps + 1);
+  states.reserve(m.steps + 1);
   states.push_back(initial_state(x));
-  for (int t = 0; t < model_.steps; ++t) {
+  for (int t = 0; t < m.steps; ++t) {
     BallState s = states.back();
-    bounce_step(model_, s);
+    bounce_step(m, s);
     states.push_back(s);
   }
   return states;
 }
 
 BounceContactSteps BounceEnv::contact_steps(std::span<const double> x) const {
+  const BounceModel& m = model();
   BounceContactSteps n;
   BallState s = initial_state(x);
   BounceStepCache cache;
-  for (int t = 0; t < model_.steps; ++t) {
-    bounce_step(model_, s, &cache);
+  for (int t = 0; t < m.steps; ++t) {
+    bounce_step(m, s, &cache);
     n.ground += cache.ground;
     n.wall += cache.wall;
   }
   return n;
 }
 
-double BounceEnv::loss(std::span<const double> x) const {
+double BounceEnv::rollout(std::span<const double> x, Workspace&, ThreadTeam&) const {
+  const BounceModel& m = model();
   BallState s = initial_state(x);
-  for (int t = 0; t < model_.steps; ++t) bounce_step(model_, s);
+  for (int t = 0; t < m.steps; ++t) bounce_step(m, s);
   return final_loss(s);
 }
 
-double BounceEnv::loss_and_grad(std::span<const double> x, std::span<double> grad) const {
+double BounceEnv::rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& workspace,
+                                    ThreadTeam&) const {
+  const BounceModel& m = model();
   // forward pass, keeping what the reverse of every step needs
-  std::vector<BounceStepCache> caches(model_.steps);
+  std::vector<BounceStepCache>& caches = static_cast<BounceWorkspace&>(workspace).caches;
   BallState s = initial_state(x);
-  for (int t = 0; t < model_.steps; ++t) bounce_step(model_, s, &caches[t]);
+  for (int t = 0; t < m.steps; ++t) bounce_step(m, s, &caches[t]);
   const double loss = final_loss(s);
   if (!std::isfinite(loss)) {
     std::fill(grad.begin(), grad.end(), std::numeric_limits<double>::quiet_NaN());
@@ -119,7 +145,7 @@ double BounceEnv::loss_and_grad(std::span<const double> x, std::span<double> gra
   adj.position = loss > 0.0 ? Eigen::Vector3d(d / loss) : Eigen::Vector3d::Zero();
   adj.velocity.setZero();
   // reverse pass through the steps
-  for (int t = model_.steps - 1; t >= 0; --t) bounce_step_adjoint(model_, caches[t], adj);
+  for (int t = m.steps - 1; t >= 0; --t) bounce_step_adjoint(m, caches[t], adj);
   // chain rule through the affine map v0 = v_low + (x + 1) / 2 (v_high - v_low)
   for (int i = 0; i < 3; ++i) grad[i] = adj.velocity(i) * 0.5 * (cfg_.v_high[i] - cfg_.v_low[i]);
   return loss;

@@ -12,6 +12,7 @@
 #include <Eigen/Dense>
 
 #include "envs/core/env.hpp"
+#include "envs/core/lazy_model.hpp"
 #include "envs/core/registry.hpp"
 #include "envs/rigid/bounce_config.hpp"
 
@@ -56,18 +57,19 @@ struct BounceContactSteps {
   bool operator==(const BounceContactSteps&) const = default;
 };
 
+// buffers of one rollout: what each step's reverse needs
+struct BounceWorkspace : Workspace {
+  std::vector<BounceStepCache> caches;  // steps
+};
+
 class BounceEnv : public Env {
  public:
   explicit BounceEnv(BounceConfig cfg = {});
-  const std::string& name() const override { return name_; }
-  int dim() const override { return 3; }
-  bool differentiable() const override { return true; }
-  double loss(std::span<const double> x) const override;
-  double loss_and_grad(std::span<const double> x, std::span<double> grad) const override;
   nlohmann::json config() const override { return cfg_.to_json(); }
+  std::unique_ptr<Workspace> make_workspace() const override;
 
   const BounceConfig& bounce_config() const { return cfg_; }
-  const BounceModel& model() const { return model_; }
+  const BounceModel& model() const { return model_.get(); }
   // physical initial velocity (m/s) for the normalized parameters x (size 3)
   Eigen::Vector3d initial_velocity(std::span<const double> x) const;
   BallState initial_state(std::span<const double> x) const;
@@ -77,10 +79,14 @@ class BounceEnv : public Env {
   // loss of a final state (NaN when it is not finite)
   double final_loss(const BallState& s) const;
 
+ protected:
+  double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override;
+  double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
+                           ThreadTeam& team) const override;
+
  private:
-  std::string name_ = "bounce";
   BounceConfig cfg_;
-  BounceModel model_;
+  LazyModel<BounceModel> model_;
 };
 
 // family entry for the registry: `bounce`

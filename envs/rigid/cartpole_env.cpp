@@ -5,8 +5,31 @@
 
 namespace dsb {
 
+namespace {
+
+EnvInfo cartpole_info(std::string name, const CartpoleConfig& cfg) {
+  cfg.validate();  // at construction, although the model is built on first use
+  EnvInfo info;
+  info.name = std::move(name);
+  info.dim = cfg.steps * (1 + cfg.links);
+  info.differentiable = true;
+  info.rl = true;
+  info.cost_hint_s = 3e-5;  // bench_cartpole: forward + gradient of cartpole3, 26 us
+  return info;
+}
+
+}  // namespace
+
 CartpoleEnv::CartpoleEnv(std::string name, CartpoleConfig cfg)
-    : name_(std::move(name)), cfg_(std::move(cfg)), model_(CartpoleModel::build(cfg_)) {}
+    : Env(cartpole_info(std::move(name), cfg)), cfg_(std::move(cfg)),
+      model_([c = cfg_] { return CartpoleModel::build(c); }) {}
+
+std::unique_ptr<Workspace> CartpoleEnv::make_workspace() const {
+  auto ws = std::make_unique<CartpoleWorkspace>();
+  ws->states.resize(cfg_.steps + 1);
+  ws->caches.resize(cfg_.steps);
+  return ws;
+}
 
 namespace {
 
@@ -32,41 +55,45 @@ bool finite_state(const CartpoleState& s) {
 
 double CartpoleEnv::final_loss(const CartpoleState& s) const {
   if (!finite_state(s)) return std::numeric_limits<double>::quiet_NaN();
-  const Eigen::Vector2d d = cartpole_tip(model_, s) - Eigen::Vector2d(cfg_.target[0], cfg_.target[1]);
+  const Eigen::Vector2d d = cartpole_tip(model(), s) - Eigen::Vector2d(cfg_.target[0], cfg_.target[1]);
   return d.norm();
 }
 
 std::vector<CartpoleState> CartpoleEnv::trajectory(std::span<const double> x) const {
   std::vector<CartpoleState> states;
   states.reserve(cfg_.steps + 1);
-  states.push_back(cartpole_initial_state(model_, cfg_));
+  states.push_back(cartpole_initial_state(model(), cfg_));
   for (int t = 0; t < cfg_.steps; ++t) {
     const StepControl c = control_at(cfg_, x, t);
     CartpoleState s = states.back();
-    cartpole_step(model_, s, c.u, c.tau);
+    cartpole_step(model(), s, c.u, c.tau);
     states.push_back(s);
   }
   return states;
 }
 
-double CartpoleEnv::loss(std::span<const double> x) const {
-  CartpoleState s = cartpole_initial_state(model_, cfg_);
+double CartpoleEnv::rollout(std::span<const double> x, Workspace&, ThreadTeam&) const {
+  const CartpoleModel& m = model();
+  CartpoleState s = cartpole_initial_state(m, cfg_);
   for (int t = 0; t < cfg_.steps; ++t) {
     const StepControl c = control_at(cfg_, x, t);
-    cartpole_step(model_, s, c.u, c.tau);
+    cartpole_step(m, s, c.u, c.tau);
   }
   return final_loss(s);
 }
 
-double CartpoleEnv::loss_and_grad(std::span<const double> x, std::span<double> grad) const {
+double CartpoleEnv::rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& workspace,
+                                      ThreadTeam&) const {
+  const CartpoleModel& m = model();
+  auto& ws = static_cast<CartpoleWorkspace&>(workspace);
   // forward pass, keeping the state before every step and what its reverse needs
-  std::vector<CartpoleState> states(cfg_.steps + 1);
-  std::vector<CartpoleStepCache> caches(cfg_.steps);
-  states[0] = cartpole_initial_state(model_, cfg_);
+  std::vector<CartpoleState>& states = ws.states;
+  std::vector<CartpoleStepCache>& caches = ws.caches;
+  states[0] = cartpole_initial_state(m, cfg_);
   for (int t = 0; t < cfg_.steps; ++t) {
     const StepControl c = control_at(cfg_, x, t);
     states[t + 1] = states[t];
-    cartpole_step(model_, states[t + 1], c.u, c.tau, &caches[t]);
+    cartpole_step(m, states[t + 1], c.u, c.tau, &caches[t]);
   }
   const CartpoleState& last = states.back();
   const double loss = final_loss(last);
@@ -75,22 +102,22 @@ double CartpoleEnv::loss_and_grad(std::span<const double> x, std::span<double> g
     return loss;
   }
   // dLoss/d(final state): loss = |tip - target|, tip = (x + L sum sin phi, -L sum cos phi)
-  const Eigen::Vector2d d = cartpole_tip(model_, last) - Eigen::Vector2d(cfg_.target[0], cfg_.target[1]);
+  const Eigen::Vector2d d = cartpole_tip(m, last) - Eigen::Vector2d(cfg_.target[0], cfg_.target[1]);
   const Eigen::Vector2d dir = loss > 0.0 ? Eigen::Vector2d(d / loss) : Eigen::Vector2d::Zero();
   CartpoleAdjoint adj;
   adj.x = dir.x();
   adj.vx = 0.0;
-  adj.phi = LinkVec(model_.n);
-  adj.dphi = LinkVec::Zero(model_.n);
-  for (int i = 0; i < model_.n; ++i)
-    adj.phi(i) = model_.length * (dir.x() * std::cos(last.phi(i)) + dir.y() * std::sin(last.phi(i)));
+  adj.phi = LinkVec(m.n);
+  adj.dphi = LinkVec::Zero(m.n);
+  for (int i = 0; i < m.n; ++i)
+    adj.phi(i) = m.length * (dir.x() * std::cos(last.phi(i)) + dir.y() * std::sin(last.phi(i)));
 
   // reverse pass through the steps; gradient in normalized units (chain rule through the scales)
   const int stride = 1 + cfg_.links;
   for (int t = cfg_.steps - 1; t >= 0; --t) {
     double u_bar = 0.0;
     double tau_bar[kMaxLinks];
-    cartpole_step_adjoint(model_, states[t], caches[t], adj, &u_bar, tau_bar);
+    cartpole_step_adjoint(m, states[t], caches[t], adj, &u_bar, tau_bar);
     grad[t * stride] = cfg_.max_cart_speed * u_bar;
     for (int j = 0; j < cfg_.links; ++j) grad[t * stride + 1 + j] = cfg_.max_torque * tau_bar[j];
   }

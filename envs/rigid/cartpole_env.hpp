@@ -8,34 +8,41 @@
 #include <string>
 
 #include "envs/core/env.hpp"
+#include "envs/core/lazy_model.hpp"
 #include "envs/core/registry.hpp"
 #include "envs/rigid/cartpole_config.hpp"
 #include "envs/rigid/cartpole_dynamics.hpp"
 
 namespace dsb {
 
+// buffers of one rollout: the states before every step and what each step's reverse needs
+struct CartpoleWorkspace : Workspace {
+  std::vector<CartpoleState> states;       // steps + 1
+  std::vector<CartpoleStepCache> caches;   // steps
+};
+
 class CartpoleEnv : public Env {
  public:
   CartpoleEnv(std::string name, CartpoleConfig cfg);
-  const std::string& name() const override { return name_; }
-  int dim() const override { return cfg_.steps * (1 + cfg_.links); }
-  bool differentiable() const override { return true; }
-  double loss(std::span<const double> x) const override;
-  double loss_and_grad(std::span<const double> x, std::span<double> grad) const override;
   nlohmann::json config() const override { return cfg_.to_json(); }
+  std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
 
   const CartpoleConfig& cartpole_config() const { return cfg_; }
-  const CartpoleModel& model() const { return model_; }
+  const CartpoleModel& model() const { return model_.get(); }
   // the trajectory of states (steps + 1) for the parameters x: used by tests and references
   std::vector<CartpoleState> trajectory(std::span<const double> x) const;
   // loss of a final state (NaN when it is not finite)
   double final_loss(const CartpoleState& s) const;
 
+ protected:
+  double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override;
+  double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
+                           ThreadTeam& team) const override;
+
  private:
-  std::string name_;
   CartpoleConfig cfg_;
-  CartpoleModel model_;
+  LazyModel<CartpoleModel> model_;
 };
 
 // family entry for the registry: links = 1 gives `cartpole1`, 3 gives `cartpole3`

@@ -105,18 +105,42 @@ void pinball_step_adjoint(const PinballModel& m, const PinballStepCache& cache,
     angle_bar[contacts[i].paddle] += k * contacts[i].df_dangle.dot(vbar);
 }
 
+namespace {
+
+EnvInfo pinball_info(std::string name, const PinballConfig& cfg) {
+  cfg.validate();  // at construction, although the model is built on first use
+  EnvInfo info;
+  info.name = std::move(name);
+  info.dim = cfg.rows * cfg.cols;
+  info.differentiable = true;
+  info.cost_hint_s = 2e-4;  // 1,920 steps against up to 16 paddles, forward + reverse
+  return info;
+}
+
+}  // namespace
+
 PinballEnv::PinballEnv(std::string name, PinballConfig cfg)
-    : name_(std::move(name)), cfg_(std::move(cfg)), model_(PinballModel::build(cfg_)) {}
+    : Env(pinball_info(std::move(name), cfg)), cfg_(std::move(cfg)),
+      model_([c = cfg_] { return PinballModel::build(c); }) {}
+
+std::unique_ptr<Workspace> PinballEnv::make_workspace() const {
+  auto ws = std::make_unique<PinballWorkspace>();
+  ws->caches.resize(model().steps);
+  ws->contacts.reserve(model().steps);
+  return ws;
+}
 
 std::vector<double> PinballEnv::paddle_angles(std::span<const double> x) const {
-  std::vector<double> a(model_.paddles);
-  for (int k = 0; k < model_.paddles; ++k) a[k] = cfg_.max_angle * x[k];
+  const PinballModel& m = model();
+  std::vector<double> a(m.paddles);
+  for (int k = 0; k < m.paddles; ++k) a[k] = cfg_.max_angle * x[k];
   return a;
 }
 
 PaddleAxes PinballEnv::axes(std::span<const double> x) const {
+  const PinballModel& m = model();
   PaddleAxes ax;
-  for (int k = 0; k < model_.paddles; ++k) {
+  for (int k = 0; k < m.paddles; ++k) {
     const double a = cfg_.max_angle * x[k];
     ax.axis[k] = Eigen::Vector2d(std::cos(a), std::sin(a));
   }
@@ -137,27 +161,29 @@ double PinballEnv::final_loss(const Ball2State& s) const {
 }
 
 std::vector<Ball2State> PinballEnv::trajectory(std::span<const double> x) const {
+  const PinballModel& m = model();
   const PaddleAxes ax = axes(x);
   std::vector<Ball2State> states;
-  states.reserve(model_.steps + 1);
+  states.reserve(m.steps + 1);
   states.push_back(initial_state());
-  for (int t = 0; t < model_.steps; ++t) {
+  for (int t = 0; t < m.steps; ++t) {
     Ball2State s = states.back();
-    pinball_step(model_, ax, s);
+    pinball_step(m, ax, s);
     states.push_back(s);
   }
   return states;
 }
 
 PinballContactSteps PinballEnv::contact_steps(std::span<const double> x) const {
+  const PinballModel& m = model();
   const PaddleAxes ax = axes(x);
   PinballContactSteps n;
-  n.paddles.assign(model_.paddles, 0);
+  n.paddles.assign(m.paddles, 0);
   Ball2State s = initial_state();
   PinballStepCache cache;
   std::array<PaddleContactGrad, kMaxPaddles> buf;
-  for (int t = 0; t < model_.steps; ++t) {
-    pinball_step(model_, ax, s, &cache, buf.data());
+  for (int t = 0; t < m.steps; ++t) {
+    pinball_step(m, ax, s, &cache, buf.data());
     n.left_wall += (cache.walls & 1) != 0;
     n.right_wall += (cache.walls & 2) != 0;
     n.floor += (cache.walls & 4) != 0;
@@ -166,23 +192,27 @@ PinballContactSteps PinballEnv::contact_steps(std::span<const double> x) const {
   return n;
 }
 
-double PinballEnv::loss(std::span<const double> x) const {
+double PinballEnv::rollout(std::span<const double> x, Workspace&, ThreadTeam&) const {
+  const PinballModel& m = model();
   const PaddleAxes ax = axes(x);
   Ball2State s = initial_state();
-  for (int t = 0; t < model_.steps; ++t) pinball_step(model_, ax, s);
+  for (int t = 0; t < m.steps; ++t) pinball_step(m, ax, s);
   return final_loss(s);
 }
 
-double PinballEnv::loss_and_grad(std::span<const double> x, std::span<double> grad) const {
+double PinballEnv::rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& workspace,
+                                     ThreadTeam&) const {
+  const PinballModel& m = model();
+  auto& ws = static_cast<PinballWorkspace&>(workspace);
   const PaddleAxes ax = axes(x);
   // forward pass: per-step caches, and the active paddle contacts of all steps in one list
-  std::vector<PinballStepCache> caches(model_.steps);
-  std::vector<PaddleContactGrad> contacts;
-  contacts.reserve(model_.steps);
+  std::vector<PinballStepCache>& caches = ws.caches;
+  std::vector<PaddleContactGrad>& contacts = ws.contacts;
+  contacts.clear();
   std::array<PaddleContactGrad, kMaxPaddles> buf;
   Ball2State s = initial_state();
-  for (int t = 0; t < model_.steps; ++t) {
-    pinball_step(model_, ax, s, &caches[t], buf.data());
+  for (int t = 0; t < m.steps; ++t) {
+    pinball_step(m, ax, s, &caches[t], buf.data());
     contacts.insert(contacts.end(), buf.begin(), buf.begin() + caches[t].paddle_contacts);
   }
   const double loss = final_loss(s);
@@ -198,13 +228,13 @@ double PinballEnv::loss_and_grad(std::span<const double> x, std::span<double> gr
   // reverse pass through the steps; each step's contacts end where the next step's begin
   std::array<double, kMaxPaddles> angle_bar{};
   std::size_t end = contacts.size();
-  for (int t = model_.steps - 1; t >= 0; --t) {
+  for (int t = m.steps - 1; t >= 0; --t) {
     const std::size_t begin = end - caches[t].paddle_contacts;
-    pinball_step_adjoint(model_, caches[t], contacts.data() + begin, adj, angle_bar.data());
+    pinball_step_adjoint(m, caches[t], contacts.data() + begin, adj, angle_bar.data());
     end = begin;
   }
   // chain rule through angle = max_angle x
-  for (int k = 0; k < model_.paddles; ++k) grad[k] = cfg_.max_angle * angle_bar[k];
+  for (int k = 0; k < m.paddles; ++k) grad[k] = cfg_.max_angle * angle_bar[k];
   return loss;
 }
 

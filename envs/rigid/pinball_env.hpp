@@ -18,6 +18,7 @@
 #include <Eigen/Dense>
 
 #include "envs/core/env.hpp"
+#include "envs/core/lazy_model.hpp"
 #include "envs/core/registry.hpp"
 #include "envs/rigid/pinball_config.hpp"
 
@@ -86,18 +87,20 @@ struct PinballContactSteps {
   bool operator==(const PinballContactSteps&) const = default;
 };
 
+// buffers of one rollout: per-step caches and the active paddle contacts of all steps
+struct PinballWorkspace : Workspace {
+  std::vector<PinballStepCache> caches;     // steps
+  std::vector<PaddleContactGrad> contacts;  // grows to the most contacts seen, then reused
+};
+
 class PinballEnv : public Env {
  public:
   PinballEnv(std::string name, PinballConfig cfg);
-  const std::string& name() const override { return name_; }
-  int dim() const override { return cfg_.rows * cfg_.cols; }
-  bool differentiable() const override { return true; }
-  double loss(std::span<const double> x) const override;
-  double loss_and_grad(std::span<const double> x, std::span<double> grad) const override;
   nlohmann::json config() const override { return cfg_.to_json(); }
+  std::unique_ptr<Workspace> make_workspace() const override;
 
   const PinballConfig& pinball_config() const { return cfg_; }
-  const PinballModel& model() const { return model_; }
+  const PinballModel& model() const { return model_.get(); }
   // physical paddle angles (rad, row-major) for the normalized parameters x
   std::vector<double> paddle_angles(std::span<const double> x) const;
   Ball2State initial_state() const;
@@ -107,11 +110,15 @@ class PinballEnv : public Env {
   // loss of a final state (NaN when it is not finite)
   double final_loss(const Ball2State& s) const;
 
+ protected:
+  double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override;
+  double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
+                           ThreadTeam& team) const override;
+
  private:
   PaddleAxes axes(std::span<const double> x) const;
-  std::string name_;
   PinballConfig cfg_;
-  PinballModel model_;
+  LazyModel<PinballModel> model_;
 };
 
 // family entry for the registry: `pinball-RxC` (1x2 and 4x4 are the grid's members)

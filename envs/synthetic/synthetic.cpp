@@ -9,71 +9,95 @@
 #include <utility>
 
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 
 namespace dsb {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// f(z) and, when g is not empty, df/dz into g (size of z). Physical units throughout.
-using Function = double (*)(std::span<const double> z, std::span<double> g);
+// f(z) and, when g is not empty, df/dz into g (size of z). Physical units throughout. The sums
+// of the scalable functions run on the team in blocks of kGrain coordinates (common/parallel.hpp):
+// the same bits for every team size, and for D <= kGrain exactly the serial loop.
+using Function = double (*)(std::span<const double> z, std::span<double> g, ThreadTeam& team);
+constexpr std::int64_t kGrain = 4096;
+
+std::int64_t size_of(std::span<const double> z) { return static_cast<std::int64_t>(z.size()); }
 
 // sphere: f = sum z_i^2. Minimum 0 at z = 0.
-double sphere(std::span<const double> z, std::span<double> g) {
-  double f = 0.0;
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    f += z[i] * z[i];
-    if (!g.empty()) g[i] = 2.0 * z[i];
-  }
-  return f;
+double sphere(std::span<const double> z, std::span<double> g, ThreadTeam& team) {
+  return parallel_sum(team, size_of(z), kGrain, 0.0, [&](std::int64_t begin, std::int64_t end, double f) {
+    for (std::int64_t i = begin; i < end; ++i) {
+      f += z[i] * z[i];
+      if (!g.empty()) g[i] = 2.0 * z[i];
+    }
+    return f;
+  });
 }
 
 // rosenbrock: f = sum_{i < D-1} 100 (z_{i+1} - z_i^2)^2 + (1 - z_i)^2. Minimum 0 at z = 1.
-double rosenbrock(std::span<const double> z, std::span<double> g) {
-  if (!g.empty())
-    for (double& gi : g) gi = 0.0;
-  double f = 0.0;
-  for (std::size_t i = 0; i + 1 < z.size(); ++i) {
-    const double t = z[i + 1] - z[i] * z[i];
-    const double u = 1.0 - z[i];
-    f += 100.0 * t * t + u * u;
-    if (!g.empty()) {
-      g[i] += -400.0 * z[i] * t - 2.0 * u;
-      g[i + 1] += 200.0 * t;
+// df/dz_i = 200 t_{i-1} + (-400 z_i t_i - 2 u_i), t_i = z_{i+1} - z_i^2, u_i = 1 - z_i, each
+// coordinate written by its own index (terms in the order the serial accumulation adds them).
+double rosenbrock(std::span<const double> z, std::span<double> g, ThreadTeam& team) {
+  const std::int64_t n = size_of(z);
+  return parallel_sum(team, n, kGrain, 0.0, [&](std::int64_t begin, std::int64_t end, double f) {
+    for (std::int64_t i = begin; i < end; ++i) {
+      const bool has_term = i + 1 < n;
+      const double t = has_term ? z[i + 1] - z[i] * z[i] : 0.0;
+      const double u = 1.0 - z[i];
+      if (has_term) f += 100.0 * t * t + u * u;
+      if (!g.empty()) {
+        double gi = 0.0;
+        if (i > 0) gi += 200.0 * (z[i] - z[i - 1] * z[i - 1]);
+        if (has_term) gi += -400.0 * z[i] * t - 2.0 * u;
+        g[i] = gi;
+      }
     }
-  }
-  return f;
+    return f;
+  });
 }
 
 // rastrigin: f = 10 D + sum (z_i^2 - 10 cos(2 pi z_i)). Minimum 0 at z = 0.
-double rastrigin(std::span<const double> z, std::span<double> g) {
-  double f = 10.0 * static_cast<double>(z.size());
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    f += z[i] * z[i] - 10.0 * std::cos(2.0 * kPi * z[i]);
-    if (!g.empty()) g[i] = 2.0 * z[i] + 20.0 * kPi * std::sin(2.0 * kPi * z[i]);
-  }
-  return f;
+double rastrigin(std::span<const double> z, std::span<double> g, ThreadTeam& team) {
+  const double init = 10.0 * static_cast<double>(z.size());
+  return parallel_sum(team, size_of(z), kGrain, init, [&](std::int64_t begin, std::int64_t end, double f) {
+    for (std::int64_t i = begin; i < end; ++i) {
+      f += z[i] * z[i] - 10.0 * std::cos(2.0 * kPi * z[i]);
+      if (!g.empty()) g[i] = 2.0 * z[i] + 20.0 * kPi * std::sin(2.0 * kPi * z[i]);
+    }
+    return f;
+  });
 }
 
 // ackley: f = -20 exp(-0.2 r) - exp(sum cos(2 pi z_i) / D) + 20 + e, r = sqrt(sum z_i^2 / D),
 // evaluated as 20 (1 - exp(-0.2 r)) + (e - exp(...)) so that f(0) is exactly 0. Minimum 0 at
 // z = 0. The first term is a cone in r, so the gradient is undefined at exactly z = 0; there it
 // is returned as 0 (the second term's gradient vanishes at 0 too).
-double ackley(std::span<const double> z, std::span<double> g) {
+double ackley(std::span<const double> z, std::span<double> g, ThreadTeam& team) {
   const double d = static_cast<double>(z.size());
-  double sum_sq = 0.0, sum_cos = 0.0;
-  for (double zi : z) {
-    sum_sq += zi * zi;
-    sum_cos += std::cos(2.0 * kPi * zi);
-  }
-  const double r = std::sqrt(sum_sq / d);
+  struct Sums {
+    double sq = 0.0, cos = 0.0;
+  };
+  const Sums sums = parallel_reduce<Sums>(
+      team, size_of(z), kGrain, Sums{}, Sums{},
+      [&](std::int64_t begin, std::int64_t end, Sums acc) {
+        for (std::int64_t i = begin; i < end; ++i) {
+          acc.sq += z[i] * z[i];
+          acc.cos += std::cos(2.0 * kPi * z[i]);
+        }
+        return acc;
+      },
+      [](Sums a, Sums b) { return Sums{a.sq + b.sq, a.cos + b.cos}; });
+  const double r = std::sqrt(sums.sq / d);
   const double e_r = std::exp(-0.2 * r);
-  const double e_cos = std::exp(sum_cos / d);
+  const double e_cos = std::exp(sums.cos / d);
   if (!g.empty()) {
     // d/dz_i of the first term: 4 exp(-0.2 r) z_i / (D r); of the second: (2 pi / D) e_cos sin
     const double radial = r > 0.0 ? 4.0 * e_r / (d * r) : 0.0;
-    for (std::size_t i = 0; i < z.size(); ++i)
-      g[i] = radial * z[i] + 2.0 * kPi / d * e_cos * std::sin(2.0 * kPi * z[i]);
+    parallel_for(team, size_of(z), kGrain, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t i = begin; i < end; ++i)
+        g[i] = radial * z[i] + 2.0 * kPi / d * e_cos * std::sin(2.0 * kPi * z[i]);
+    });
   }
   return 20.0 * (1.0 - e_r) + (std::numbers::e - e_cos);
 }
@@ -83,21 +107,22 @@ double ackley(std::span<const double> z, std::span<double> g) {
 constexpr double kStyblinskiArgmin = -2.903534027771178;
 constexpr double kStyblinskiMinPerDim = -39.16616570377142;
 
-double styblinski(std::span<const double> z, std::span<double> g) {
-  double f = 0.0;
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    const double zi = z[i], z2 = zi * zi;
-    f += 0.5 * (z2 * z2 - 16.0 * z2 + 5.0 * zi);
-    if (!g.empty()) g[i] = 0.5 * (4.0 * z2 * zi - 32.0 * zi + 5.0);
-  }
-  return f;
+double styblinski(std::span<const double> z, std::span<double> g, ThreadTeam& team) {
+  return parallel_sum(team, size_of(z), kGrain, 0.0, [&](std::int64_t begin, std::int64_t end, double f) {
+    for (std::int64_t i = begin; i < end; ++i) {
+      const double zi = z[i], z2 = zi * zi;
+      f += 0.5 * (z2 * z2 - 16.0 * z2 + 5.0 * zi);
+      if (!g.empty()) g[i] = 0.5 * (4.0 * z2 * zi - 32.0 * zi + 5.0);
+    }
+    return f;
+  });
 }
 
 // branin: f = a (z2 - b z1^2 + c z1 - r)^2 + s (1 - t) cos z1 + s with a = 1,
 // b = 5.1 / (4 pi^2), c = 5 / pi, r = 6, s = 10, t = 1 / (8 pi). Minimum s t = 5 / (4 pi)
 // = 0.397887357729738 at (-pi, 12.275), (pi, 2.275) and (3 pi, 2.475) (where the square is 0
 // and cos z1 = -1).
-double branin(std::span<const double> z, std::span<double> g) {
+double branin(std::span<const double> z, std::span<double> g, ThreadTeam&) {
   const double a = 1.0, b = 5.1 / (4.0 * kPi * kPi), c = 5.0 / kPi, r = 6.0, s = 10.0,
                t = 1.0 / (8.0 * kPi);
   const double u = z[1] - b * z[0] * z[0] + c * z[0] - r;
@@ -121,7 +146,7 @@ constexpr int kHartmannP[4][6] = {{1312, 1696, 5569, 124, 8283, 5886},
                                   {2348, 1451, 3522, 2883, 3047, 6650},
                                   {4047, 8828, 8732, 5743, 1091, 381}};
 
-double hartmann6(std::span<const double> z, std::span<double> g) {
+double hartmann6(std::span<const double> z, std::span<double> g, ThreadTeam&) {
   if (!g.empty())
     for (double& gi : g) gi = 0.0;
   double f = 0.0;
@@ -209,10 +234,25 @@ std::optional<SyntheticConfig> parse_name(const Spec& spec, const std::string& n
   return standard_config(spec, dim);
 }
 
+// buffers of one rollout: the physical point z (D)
+struct SyntheticWorkspace : Workspace {
+  std::vector<double> z;
+};
+
+EnvInfo synthetic_info(std::string name, const SyntheticConfig& config) {
+  EnvInfo info;
+  info.name = std::move(name);
+  info.dim = config.dim;
+  info.differentiable = true;
+  info.threaded = config.dim > kGrain;
+  info.cost_hint_s = 1e-8 * config.dim + 1e-7;
+  return info;
+}
+
 class SyntheticEnv final : public Env {
  public:
   SyntheticEnv(std::string name, SyntheticConfig config, Function function)
-      : name_(std::move(name)), config_(std::move(config)), function_(function) {
+      : Env(synthetic_info(std::move(name), config)), config_(std::move(config)), function_(function) {
     config_.validate();
     for (int i = 0; i < config_.dim; ++i) {
       centre_.push_back(0.5 * (config_.lower[i] + config_.upper[i]));
@@ -220,33 +260,40 @@ class SyntheticEnv final : public Env {
     }
   }
 
-  const std::string& name() const override { return name_; }
-  int dim() const override { return config_.dim; }
-  bool differentiable() const override { return true; }
-  double loss(std::span<const double> x) const override { return evaluate(x, {}); }
-  double loss_and_grad(std::span<const double> x, std::span<double> grad) const override {
+  nlohmann::json config() const override { return config_.to_json(); }
+  std::unique_ptr<Workspace> make_workspace() const override {
+    auto ws = std::make_unique<SyntheticWorkspace>();
+    ws->z.resize(config_.dim);
+    return ws;
+  }
+
+ protected:
+  double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override {
+    return evaluate(x, {}, ws, team);
+  }
+  double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
+                           ThreadTeam& team) const override {
     if (static_cast<int>(grad.size()) != config_.dim)
-      throw std::invalid_argument("env '" + name_ + "': gradient has size " +
+      throw std::invalid_argument("env '" + name() + "': gradient has size " +
                                   std::to_string(grad.size()) + ", expected " +
                                   std::to_string(config_.dim));
-    return evaluate(x, grad);
+    return evaluate(x, grad, ws, team);
   }
-  nlohmann::json config() const override { return config_.to_json(); }
 
  private:
   // f at z = centre + halfwidth * x; df/dx = df/dz * halfwidth into grad unless it is empty
-  double evaluate(std::span<const double> x, std::span<double> grad) const {
+  double evaluate(std::span<const double> x, std::span<double> grad, Workspace& workspace,
+                  ThreadTeam& team) const {
     if (static_cast<int>(x.size()) != config_.dim)
-      throw std::invalid_argument("env '" + name_ + "': x has size " + std::to_string(x.size()) +
+      throw std::invalid_argument("env '" + name() + "': x has size " + std::to_string(x.size()) +
                                   ", expected " + std::to_string(config_.dim));
-    std::vector<double> z(x.size());
+    std::vector<double>& z = static_cast<SyntheticWorkspace&>(workspace).z;
     for (std::size_t i = 0; i < x.size(); ++i) z[i] = centre_[i] + halfwidth_[i] * x[i];
-    const double f = function_(z, grad);
+    const double f = function_(z, grad, team);
     for (std::size_t i = 0; i < grad.size(); ++i) grad[i] *= halfwidth_[i];
     return f;
   }
 
-  std::string name_;
   SyntheticConfig config_;
   Function function_;
   std::vector<double> centre_, halfwidth_;

@@ -24,6 +24,16 @@ class Objective {
   // One episode with dLoss/dx (normalized units). A failed episode returns +infinity and a zero
   // gradient. Only when has_gradient().
   virtual double value_and_grad(std::span<const double> x, std::span<double> grad) = 0;
+  // A batch of episodes (a population): xs holds out.size() points of dim() values each, row
+  // after row; out receives what value() would return for each. They are recorded as consecutive
+  // episodes in row order, exactly as out.size() calls of value() would be, so the records do
+  // not depend on whether or how the implementation evaluates them in parallel. When the budget
+  // runs out inside the batch, the points that fit are evaluated and recorded, then
+  // BudgetExhausted is thrown. This default evaluates them one at a time.
+  virtual void values(std::span<const double> xs, std::span<double> out) {
+    const std::size_t d = static_cast<std::size_t>(dim());
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = value(xs.subspan(i * d, d));
+  }
 };
 
 }  // namespace dsb

@@ -1,0 +1,143 @@
+#pragma once
+// A fixed team of threads for the work inside one rollout (or one batch of rollouts). The caller
+// is thread 0; size() - 1 workers wait on a condition variable between jobs, so a job costs a
+// wake-up, not a thread start. A job is a number of tasks taken dynamically: which thread runs a
+// task is not deterministic, so callers that need bit-identical results write each task's result
+// to that task's own slot and combine slots in task order (common/parallel.hpp does exactly that).
+// A job started from inside a task of a team (a nested parallel loop) runs serially on the calling
+// thread: a batch spread over the team evaluates each rollout serially, with the same bits.
+// Chosen over TBB: tbb::parallel_reduce's split points depend on the number of threads and on
+// stealing; its deterministic variant fixes the splits but ties them to the grain and range only,
+// which is what we do here in a hundred lines with no dependency.
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <exception>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace dsb {
+
+// A non-owning reference to a callable void(int): no allocation, unlike std::function.
+class TaskRef {
+ public:
+  template <class F>
+  TaskRef(F& f) : object_(static_cast<void*>(&f)), call_([](void* o, int i) { (*static_cast<F*>(o))(i); }) {}
+  void operator()(int i) const { call_(object_, i); }
+
+ private:
+  void* object_;
+  void (*call_)(void*, int);
+};
+
+class ThreadTeam {
+ public:
+  // threads >= 1 (1: everything runs on the calling thread, no worker is started)
+  explicit ThreadTeam(int threads) {
+    if (threads < 1) throw std::invalid_argument("ThreadTeam: threads must be >= 1, got " + std::to_string(threads));
+    workers_.reserve(static_cast<std::size_t>(threads - 1));
+    for (int t = 1; t < threads; ++t) workers_.emplace_back([this] { worker_loop(); });
+  }
+  ~ThreadTeam() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    start_.notify_all();
+    for (auto& w : workers_) w.join();
+  }
+  ThreadTeam(const ThreadTeam&) = delete;
+  ThreadTeam& operator=(const ThreadTeam&) = delete;
+
+  int size() const { return static_cast<int>(workers_.size()) + 1; }
+
+  // Runs task(i) for every i in [0, tasks) and returns when all are done. The first exception
+  // thrown by a task is rethrown here (the remaining tasks are skipped).
+  template <class F>
+  void run(int tasks, F&& task) {
+    if (tasks <= 0) return;
+    if (workers_.empty() || tasks == 1 || inside_task()) {
+      for (int i = 0; i < tasks; ++i) task(i);
+      return;
+    }
+    auto& f = task;
+    TaskRef ref(f);
+    {
+      std::lock_guard lock(mutex_);
+      job_ = &ref;
+      tasks_ = tasks;
+      next_.store(0, std::memory_order_relaxed);
+      busy_ = static_cast<int>(workers_.size());
+      error_ = nullptr;
+      ++generation_;
+    }
+    start_.notify_all();
+    work(ref, tasks);
+    std::unique_lock lock(mutex_);
+    done_.wait(lock, [this] { return busy_ == 0; });
+    job_ = nullptr;
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+  }
+
+ private:
+  static bool& inside_task() {
+    thread_local bool inside = false;
+    return inside;
+  }
+
+  // takes tasks until none is left
+  void work(const TaskRef& job, int tasks) {
+    inside_task() = true;
+    for (int i; (i = next_.fetch_add(1, std::memory_order_relaxed)) < tasks;) {
+      try {
+        job(i);
+      } catch (...) {
+        std::lock_guard lock(mutex_);
+        if (!error_) error_ = std::current_exception();
+        next_.store(tasks, std::memory_order_relaxed);
+      }
+    }
+    inside_task() = false;
+  }
+
+  void worker_loop() {
+    std::uint64_t seen = 0;
+    for (;;) {
+      const TaskRef* job;
+      int tasks;
+      {
+        std::unique_lock lock(mutex_);
+        start_.wait(lock, [&] { return stop_ || generation_ != seen; });
+        if (stop_) return;
+        seen = generation_;
+        job = job_;
+        tasks = tasks_;
+      }
+      work(*job, tasks);
+      {
+        std::lock_guard lock(mutex_);
+        --busy_;
+      }
+      done_.notify_one();
+    }
+  }
+
+  std::vector<std::thread> workers_;
+  std::mutex mutex_;
+  std::condition_variable start_, done_;
+  const TaskRef* job_ = nullptr;
+  int tasks_ = 0;
+  std::atomic<int> next_{0};
+  int busy_ = 0;
+  std::uint64_t generation_ = 0;
+  bool stop_ = false;
+  std::exception_ptr error_;
+};
+
+}  // namespace dsb

@@ -1,0 +1,99 @@
+// The deterministic thread team and loops of common/: every task runs exactly once, errors come
+// back to the caller, nested loops run serially, and reductions give the same bits for every team
+// size (and the serial loop's bits when the range fits one block).
+#include <atomic>
+#include <cmath>
+#include <thread>
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "common/parallel.hpp"
+#include "common/rng.hpp"
+#include "common/usable_cpus.hpp"
+
+namespace dsb {
+namespace {
+
+TEST(ThreadTeam, RunsEveryTaskExactlyOnce) {
+  for (const int threads : {1, 2, 4}) {
+    ThreadTeam team(threads);
+    EXPECT_EQ(team.size(), threads);
+    for (int round = 0; round < 50; ++round) {  // many jobs on the same workers
+      std::vector<std::atomic<int>> hits(137);
+      team.run(137, [&](int i) { hits[i].fetch_add(1); });
+      for (const auto& h : hits) ASSERT_EQ(h.load(), 1);
+    }
+  }
+}
+
+TEST(ThreadTeam, RethrowsATaskErrorAndStaysUsable) {
+  ThreadTeam team(3);
+  EXPECT_THROW(team.run(40, [](int i) { if (i == 17) throw std::runtime_error("task 17"); }), std::runtime_error);
+  std::atomic<int> n{0};
+  team.run(40, [&](int) { n.fetch_add(1); });
+  EXPECT_EQ(n.load(), 40);
+  EXPECT_THROW(ThreadTeam(0), std::invalid_argument);
+}
+
+TEST(ThreadTeam, NestedJobsRunSeriallyOnTheCallingThread) {
+  ThreadTeam team(2);
+  std::vector<std::atomic<int>> inner_threads(8);
+  team.run(8, [&](int i) {
+    const auto me = std::this_thread::get_id();
+    bool same = true;
+    team.run(5, [&](int) { same = same && std::this_thread::get_id() == me; });
+    inner_threads[i] = same ? 1 : 0;
+  });
+  for (const auto& v : inner_threads) EXPECT_EQ(v.load(), 1);
+}
+
+double serial_sum(const std::vector<double>& v, double init) {
+  double acc = init;
+  for (double x : v) acc += x * x;
+  return acc;
+}
+
+TEST(ParallelReduce, SameBitsForEveryTeamSize) {
+  Rng rng(11);
+  std::vector<double> v(100003);
+  for (double& x : v) x = rng.normal() * std::pow(10.0, rng.uniform(-8.0, 8.0));  // rounding matters
+  auto fold = [&](std::int64_t b, std::int64_t e, double acc) {
+    for (std::int64_t i = b; i < e; ++i) acc += v[i] * v[i];
+    return acc;
+  };
+  const double one = parallel_sum(serial_team(), static_cast<std::int64_t>(v.size()), 1000, 3.0, fold);
+  for (const int threads : {2, 3, 4}) {
+    ThreadTeam team(threads);
+    for (int rep = 0; rep < 5; ++rep)
+      EXPECT_EQ(parallel_sum(team, static_cast<std::int64_t>(v.size()), 1000, 3.0, fold), one) << threads;
+  }
+  // the blocked order is a different rounding from the serial loop here (the test can tell them apart)
+  EXPECT_NE(one, serial_sum(v, 3.0));
+  // a range within one block is exactly the serial loop
+  std::vector<double> small(v.begin(), v.begin() + 900);
+  ThreadTeam team(2);
+  EXPECT_EQ(parallel_sum(team, 900, 1000, 3.0, fold), serial_sum(small, 3.0));
+  // more than 64 blocks (heap slots) and an empty range
+  EXPECT_EQ(parallel_sum(team, static_cast<std::int64_t>(v.size()), 100, 3.0, fold),
+            parallel_sum(serial_team(), static_cast<std::int64_t>(v.size()), 100, 3.0, fold));
+  EXPECT_EQ(parallel_sum(team, 0, 100, 3.0, fold), 3.0);
+}
+
+TEST(ParallelFor, CoversTheRangeInBlocks) {
+  ThreadTeam team(3);
+  std::vector<int> seen(1001, 0);
+  parallel_for(team, 1001, 64, [&](std::int64_t b, std::int64_t e) {
+    EXPECT_EQ(b % 64, 0);
+    EXPECT_LE(e - b, 64);
+    for (std::int64_t i = b; i < e; ++i) ++seen[i];
+  });
+  for (int s : seen) ASSERT_EQ(s, 1);
+}
+
+TEST(UsableCpus, AtLeastOne) { EXPECT_GE(usable_cpus(), 1); }
+
+}  // namespace
+}  // namespace dsb
