@@ -52,9 +52,9 @@ void print_table(const std::string& env_name, int dim, const GradientSurveyOptio
                            n, percent(s.agreeing, n));
   std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient exactly zero", s.exactly_zero, n,
                            percent(s.exactly_zero, n));
-  std::cout << fmt::format("  {:<42} {:>6} of {:<6}\n", "non-finite loss, gradient or difference", s.non_finite, n);
-  std::cout << fmt::format("  {:<42} {:>6} of {:<6}\n", "loss() != loss_and_grad() at x", s.value_mismatches, n);
-  std::cout << fmt::format("  {:<42} {:>6} of {:<6}\n", "gradient bit-equal to central differences",
+  std::cout << fmt::format("  {:<42} {:>6} of {}\n", "non-finite loss, gradient or difference", s.non_finite, n);
+  std::cout << fmt::format("  {:<42} {:>6} of {}\n", "loss() != loss_and_grad() at x", s.value_mismatches, n);
+  std::cout << fmt::format("  {:<42} {:>6} of {}\n", "gradient bit-equal to central differences",
                            s.bit_equal_to_differences, n);
   const auto& q = s.gradient_norm;
   std::cout << fmt::format("  {:<42} min {:.4e}  q1 {:.4e}  median {:.4e}  q3 {:.4e}  max {:.4e}\n", "|grad|",
