@@ -119,16 +119,16 @@ int harness_main(int argc, char** argv) {
   eval->add_flag("--grad", eval_grad, "also print dLoss/dx (normalized units)");
 
   std::string gc_env;
-  int gc_points = 3;
-  std::uint64_t gc_seed = 0;
-  double gc_amplitude = 0.5, gc_step = 1e-6, gc_tol = 1e-4;
-  auto* gradcheck = app.add_subcommand("gradcheck", "analytic gradient vs central differences");
+  GradientSurveyOptions gc;
+  bool gc_json = false;
+  auto* gradcheck = app.add_subcommand("gradcheck", "analytic gradient vs central differences, with statistics");
   gradcheck->add_option("--env", gc_env, "env name")->required();
-  gradcheck->add_option("--points", gc_points, "number of seeded random points (default 3)");
-  gradcheck->add_option("--seed", gc_seed, "seed of the points (default 0)");
-  gradcheck->add_option("--amplitude", gc_amplitude, "points uniform in [-a, a]^d (default 0.5)");
-  gradcheck->add_option("--step", gc_step, "central-difference step (default 1e-6)");
-  gradcheck->add_option("--tol", gc_tol, "largest accepted relative error (default 1e-4)");
+  gradcheck->add_option("--points", gc.points, "number of seeded random points (default 3)");
+  gradcheck->add_option("--seed", gc.seed, "seed of the points (default 0)");
+  gradcheck->add_option("--amplitude", gc.amplitude, "points uniform in [-a, a]^d (default 0.5)");
+  gradcheck->add_option("--step", gc.check.step, "central-difference step (default 1e-6)");
+  gradcheck->add_option("--tol", gc.check.tolerance, "largest accepted relative error (default 1e-4)");
+  gradcheck->add_flag("--json", gc_json, "one JSON object (per-point worst errors and the summary)");
 
   std::string ls_env, ls_dims, ls_center, ls_out;
   int ls_res = 0;
@@ -181,7 +181,7 @@ int harness_main(int argc, char** argv) {
     if (report->parsed()) return command_report(report_db, report_out, report_landscapes);
     if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
     if (gradcheck->parsed())
-      return command_gradcheck(gc_env, gc_points, gc_seed, gc_amplitude, gc_step, gc_tol);
+      return command_gradcheck(gc_env, gc, gc_json);
     return command_run(run->parsed() ? run_args : main_args);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "harness: error: %s\n", one_line(e.what()).c_str());

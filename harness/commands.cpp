@@ -10,7 +10,6 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.hpp"
-#include "common/rng.hpp"
 #include "envs/core/registry.hpp"
 #include "optimizers/core/registry.hpp"
 
@@ -94,61 +93,6 @@ int command_eval(const std::string& env_name, const std::string& x_text, bool wi
   }
   std::cout << out.dump() << "\n";
   return 0;
-}
-
-int command_gradcheck(const std::string& env_name, int points, std::uint64_t seed, double amplitude,
-                      double step, double tolerance) {
-  const auto env = make_env(env_name);
-  if (!env->differentiable()) throw UsageError("env '" + env_name + "' is not differentiable");
-  if (points < 1) throw UsageError("--points must be >= 1, got " + std::to_string(points));
-  if (!(amplitude > 0.0 && amplitude <= 1.0))
-    throw UsageError(fmt::format("--amplitude must be in (0, 1], got {}", amplitude));
-  if (!(step > 0.0 && step < 0.1)) throw UsageError(fmt::format("--step must be in (0, 0.1), got {}", step));
-  const int n = env->dim();
-  Rng rng(seed);
-  double worst = 0.0;
-  std::cout << fmt::format("gradcheck {} (dim {}): central differences with step {}, points uniform in "
-                           "[-{}, {}]^{}, seed {}\n",
-                           env_name, n, step, amplitude, amplitude, n, seed);
-  std::cout << fmt::format("{:>5} {:>14} {:>12} {:>12} {:>12} {:>6}\n", "point", "loss", "max|fd|",
-                           "max abs err", "max rel err", "coord");
-  for (int p = 0; p < points; ++p) {
-    std::vector<double> x(n), grad(n), fd(n);
-    for (auto& xi : x) xi = amplitude * rng.uniform(-1.0, 1.0);
-    const double loss = env->loss_and_grad(x, grad);
-    double scale = 0.0;
-    for (int i = 0; i < n; ++i) {
-      // central difference, clipped at the box edge to a one-sided window of the same width
-      const double xi = x[i];
-      const double hi = std::min(1.0, xi + step), lo = std::max(-1.0, xi - step);
-      x[i] = hi;
-      const double fp = env->loss(x);
-      x[i] = lo;
-      const double fm = env->loss(x);
-      x[i] = xi;
-      fd[i] = (fp - fm) / (hi - lo);
-      scale = std::max(scale, std::abs(fd[i]));
-    }
-    double max_abs = 0.0, max_rel = 0.0;
-    int worst_i = 0;
-    for (int i = 0; i < n; ++i) {
-      const double err = std::abs(grad[i] - fd[i]);
-      // relative to the component, with a floor of 1e-3 of the largest component
-      const double rel = err / (std::abs(fd[i]) + 1e-3 * scale + 1e-300);
-      max_abs = std::max(max_abs, err);
-      if (!(rel <= max_rel)) {
-        max_rel = rel;
-        worst_i = i;
-      }
-    }
-    worst = std::max(worst, std::isnan(max_rel) ? HUGE_VAL : max_rel);
-    std::cout << fmt::format("{:>5} {:>14.6e} {:>12.4e} {:>12.4e} {:>12.4e} {:>6}\n", p, loss, scale,
-                             max_abs, max_rel, worst_i);
-  }
-  const bool pass = worst <= tolerance;
-  std::cout << fmt::format("gradcheck {}: {} points, worst relative error {:.3e} (tolerance {:.1e}): {}\n",
-                           env_name, points, worst, tolerance, pass ? "PASS" : "FAIL");
-  return pass ? 0 : 1;
 }
 
 int command_landscape(const std::string& env_name, const std::string& dims, int resolution,

@@ -1,15 +1,20 @@
 #pragma once
-// The harness's commands other than `run`: list, eval, gradcheck. Each returns the exit code.
+// The harness's commands other than `run`: list, eval, gradcheck, landscape, check, export,
+// report. Each returns the exit code.
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "envs/core/gradient_check.hpp"
 
 namespace dsb {
 
 int command_list();
 int command_eval(const std::string& env_name, const std::string& x_text, bool with_grad);
-int command_gradcheck(const std::string& env_name, int points, std::uint64_t seed, double amplitude,
-                      double step, double tolerance);
+// Analytic gradient vs central differences at seeded random points (harness/gradcheck_command.cpp):
+// a per-point table and the survey's summary, or one JSON object with json. 0 when every point
+// passes, 1 when any fails (gradient disagrees, loss() and loss_and_grad() disagree, non-finite).
+int command_gradcheck(const std::string& env_name, const GradientSurveyOptions& options, bool json);
 
 // Loss and the two gradient components on an N x N grid over a 2-D slice of the normalized box
 // (dims I, J from -1 to 1; other coordinates at the centre, default 0). CSV with header

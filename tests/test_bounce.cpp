@@ -8,9 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/support/finite_differences.hpp"
-
 #include "common/rng.hpp"
+#include "envs/core/gradient_check.hpp"
 #include "envs/core/registry.hpp"
 #include "envs/rigid/bounce_env.hpp"
 #include "envs/rigid/contact.hpp"
@@ -30,9 +29,6 @@ std::vector<int> contact_pattern(const BounceEnv& env, std::span<const double> x
   return flags;
 }
 
-using testing::Differences;
-using testing::differences;
-
 // A point is smooth at scale h when no contact begins or ends within +-h along any coordinate
 // (same per-step contact pattern) and the one-sided differences agree.
 bool smooth_at(const BounceEnv& env, const std::vector<double>& x, double h) {
@@ -43,7 +39,7 @@ bool smooth_at(const BounceEnv& env, const std::vector<double>& x, double h) {
       y[i] += s;
       if (contact_pattern(env, y) != pattern) return false;
     }
-    const Differences d = differences(env, x, i, h);
+    const Differences d = finite_differences(env, x, i, h);
     if (std::abs(d.right - d.left) > 1e-2 * (std::abs(d.central) + 1.0)) return false;
   }
   return true;
@@ -53,7 +49,13 @@ bool smooth_at(const BounceEnv& env, const std::vector<double>& x, double h) {
 // relative error (|analytic - central| / (|central| + 1))
 double expect_gradient_matches(const BounceEnv& env, std::uint64_t seed, int points,
                                int* contact_steps_seen = nullptr) {
-  const double h = 1e-7;
+  // |analytic - central| <= 1e-5 (|central| + 1): a relative tolerance with an absolute floor;
+  // loss() and loss_and_grad() bit-equal
+  GradientCheckOptions options;
+  options.step = 1e-7;
+  options.tolerance = 1e-5;
+  options.relative_floor = 0.0;
+  options.absolute_floor = 1.0;
   Rng rng(seed);
   double worst = 0.0;
   int accepted = 0, tried = 0;
@@ -61,21 +63,20 @@ double expect_gradient_matches(const BounceEnv& env, std::uint64_t seed, int poi
     ++tried;
     std::vector<double> x(3);
     for (auto& xi : x) xi = rng.uniform(-1.0, 1.0);
-    if (!smooth_at(env, x, h)) continue;
+    if (!smooth_at(env, x, options.step)) continue;
     ++accepted;
-    std::vector<double> grad(3);
-    const double loss = env.loss_and_grad(x, grad);
-    EXPECT_EQ(loss, env.loss(x)) << "loss_and_grad and loss disagree";
+    const auto r = check_gradient(env, x, options);
+    EXPECT_TRUE(r.value_agrees) << "loss_and_grad and loss disagree";
     if (contact_steps_seen) {
       const auto c = env.contact_steps(x);
       *contact_steps_seen += c.ground + c.wall;
     }
     for (int i = 0; i < 3; ++i) {
-      const double fd = differences(env, x, i, h).central;
-      // relative tolerance with an absolute floor
-      EXPECT_NEAR(grad[i], fd, 1e-5 * std::abs(fd) + 1e-5)
-          << "seed " << seed << " point (" << x[0] << ", " << x[1] << ", " << x[2] << ") coordinate " << i;
-      worst = std::max(worst, std::abs(grad[i] - fd) / (std::abs(fd) + 1.0));
+      const auto& c = r.coordinates[i];
+      EXPECT_LE(c.relative_error, options.tolerance)
+          << "seed " << seed << " point (" << x[0] << ", " << x[1] << ", " << x[2] << ") coordinate " << i
+          << ": analytic " << c.analytic << ", central " << c.differences.central;
+      worst = std::max(worst, c.relative_error);
     }
   }
   EXPECT_EQ(accepted, points) << "too few smooth points among " << tried;
@@ -171,7 +172,7 @@ TEST(BounceGradient, ContactFreeEpisodeMatchesClosedForm) {
     for (int i = 0; i < 3; ++i) {
       const double expected = 24 * cfg.dt * d(i) / loss * 0.5 * (cfg.v_high[i] - cfg.v_low[i]);
       EXPECT_NEAR(grad[i], expected, 1e-12 * std::abs(expected) + 1e-14);
-      EXPECT_NEAR(grad[i], differences(env, x, i, 1e-6).central, 1e-7);
+      EXPECT_NEAR(grad[i], finite_differences(env, x, i, 1e-6).central, 1e-7);
     }
   }
 }

@@ -6,9 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/support/finite_differences.hpp"
-
 #include "common/rng.hpp"
+#include "envs/core/gradient_check.hpp"
 #include "envs/core/registry.hpp"
 #include "envs/rigid/cartpole_env.hpp"
 
@@ -21,26 +20,26 @@ std::vector<double> random_point(Rng& rng, int dim, double amplitude) {
   return x;
 }
 
-using testing::central_differences;
-
 void expect_gradient_matches(const std::string& name, double amplitude, std::uint64_t seed) {
   const auto env = make_env(name);
+  // |analytic - central| <= 1e-6 (|central| + 0.1 max_j |central_j|): a relative tolerance with
+  // an absolute floor scaled by the largest component; loss() and loss_and_grad() bit-equal
+  GradientCheckOptions options;
+  options.step = 1e-6;
+  options.tolerance = 1e-6;
+  options.relative_floor = 0.1;
   Rng rng(seed);
   for (int point = 0; point < 3; ++point) {
     const auto x = random_point(rng, env->dim(), amplitude);
-    std::vector<double> grad(env->dim());
-    const double loss = env->loss_and_grad(x, grad);
-    ASSERT_TRUE(std::isfinite(loss));
-    EXPECT_EQ(loss, env->loss(x)) << "loss_and_grad and loss disagree";
-    const auto fd = central_differences(*env, x, 1e-6);
-    double max_abs_grad = 0.0;
-    for (double g : fd) max_abs_grad = std::max(max_abs_grad, std::abs(g));
-    ASSERT_GT(max_abs_grad, 1e-3) << "degenerate test point";
-    for (std::size_t i = 0; i < grad.size(); ++i) {
-      // relative tolerance with an absolute floor scaled by the largest component
-      EXPECT_NEAR(grad[i], fd[i], 1e-6 * std::abs(fd[i]) + 1e-7 * max_abs_grad)
-          << name << " point " << point << " coordinate " << i;
-    }
+    const auto r = check_gradient(*env, x, options);
+    ASSERT_TRUE(std::isfinite(r.loss));
+    EXPECT_TRUE(r.value_agrees) << "loss_and_grad and loss disagree";
+    ASSERT_GT(r.max_abs_central, 1e-3) << "degenerate test point";
+    for (std::size_t i = 0; i < r.coordinates.size(); ++i)
+      EXPECT_LE(r.coordinates[i].relative_error, options.tolerance)
+          << name << " point " << point << " coordinate " << i << ": analytic " << r.coordinates[i].analytic
+          << ", central " << r.coordinates[i].differences.central;
+    EXPECT_TRUE(r.passed) << name << " point " << point << ": worst coordinate " << r.worst_coordinate;
   }
 }
 

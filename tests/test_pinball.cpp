@@ -9,9 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/support/finite_differences.hpp"
-
 #include "common/rng.hpp"
+#include "envs/core/gradient_check.hpp"
 #include "envs/core/registry.hpp"
 #include "envs/rigid/contact.hpp"
 #include "envs/rigid/pinball_env.hpp"
@@ -20,9 +19,6 @@ namespace dsb {
 namespace {
 
 const PinballEnv& as_pinball(const Env& env) { return dynamic_cast<const PinballEnv&>(env); }
-
-using testing::Differences;
-using testing::differences;
 
 // Smooth at scale h: the contact-step counts of every surface are the same at x +- h along every
 // coordinate, and the one-sided differences agree. The ball often bounces many times on rounded
@@ -36,7 +32,7 @@ bool smooth_at(const PinballEnv& env, const std::vector<double>& x, double h) {
       y[i] += s;
       if (!(env.contact_steps(y) == counts)) return false;
     }
-    const Differences d = differences(env, x, i, h);
+    const Differences d = finite_differences(env, x, i, h);
     if (std::abs(d.right - d.left) > 1e-3 * (std::abs(d.central) + 1.0)) return false;
   }
   return true;
@@ -46,7 +42,13 @@ bool smooth_at(const PinballEnv& env, const std::vector<double>& x, double h) {
 void expect_gradient_matches(const std::string& name, std::uint64_t seed, int points, int max_tries) {
   const auto env = make_env(name);
   const auto& pinball = as_pinball(*env);
-  const double h = 1e-7;
+  // |analytic - central| <= 1e-5 (|central| + 1): a relative tolerance with an absolute floor;
+  // loss() and loss_and_grad() bit-equal
+  GradientCheckOptions options;
+  options.step = 1e-7;
+  options.tolerance = 1e-5;
+  options.relative_floor = 0.0;
+  options.absolute_floor = 1.0;
   Rng rng(seed);
   double worst = 0.0, largest = 0.0;
   int accepted = 0, tried = 0;
@@ -59,14 +61,17 @@ void expect_gradient_matches(const std::string& name, std::uint64_t seed, int po
     ASSERT_TRUE(std::isfinite(loss));
     EXPECT_EQ(loss, env->loss(x)) << "loss_and_grad and loss disagree";
     if (std::all_of(grad.begin(), grad.end(), [](double g) { return g == 0.0; })) continue;
-    if (!smooth_at(pinball, x, h)) continue;
+    if (!smooth_at(pinball, x, options.step)) continue;
     ++accepted;
+    const auto r = check_gradient(*env, x, options);
+    EXPECT_TRUE(r.value_agrees) << "loss_and_grad and loss disagree";
     for (int i = 0; i < env->dim(); ++i) {
-      const double fd = differences(*env, x, i, h).central;
-      // relative tolerance with an absolute floor
-      EXPECT_NEAR(grad[i], fd, 1e-5 * std::abs(fd) + 1e-5) << name << " try " << tried << " coordinate " << i;
-      worst = std::max(worst, std::abs(grad[i] - fd) / (std::abs(fd) + 1.0));
-      largest = std::max(largest, std::abs(grad[i]));
+      const auto& c = r.coordinates[i];
+      EXPECT_LE(c.relative_error, options.tolerance)
+          << name << " try " << tried << " coordinate " << i << ": analytic " << c.analytic << ", central "
+          << c.differences.central;
+      worst = std::max(worst, c.relative_error);
+      largest = std::max(largest, std::abs(c.analytic));
     }
   }
   EXPECT_EQ(accepted, points) << name << ": too few smooth points among " << tried;

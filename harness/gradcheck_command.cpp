@@ -1,0 +1,142 @@
+// `harness gradcheck`: the gradient survey of envs/core/gradient_check.hpp as a per-point table and
+// a summary, or as one JSON object.
+#include <cmath>
+#include <iostream>
+#include <string>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "common/error.hpp"
+#include "envs/core/registry.hpp"
+#include "harness/commands.hpp"
+
+namespace dsb {
+namespace {
+
+// JSON number, or null for NaN/Inf (JSON has neither)
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+// what went wrong at a point, then what is notable; "ok" first when nothing went wrong
+std::string status(const GradientCheckResult& r) {
+  std::string s = r.passed ? "ok" : "FAIL";
+  if (!r.finite) s += " non-finite";
+  if (!r.value_agrees) s += " value-mismatch";
+  if (r.finite && !r.gradient_agrees) s += " disagrees";
+  if (r.exactly_zero) s += " zero";
+  if (r.bit_equal_to_differences) s += " bit-equal-to-fd";
+  return s;
+}
+
+std::string percent(int count, int total) { return fmt::format("{:5.1f}%", 100.0 * count / total); }
+
+void print_table(const std::string& env_name, int dim, const GradientSurveyOptions& o,
+                 const GradientSurvey& s) {
+  const auto& c = o.check;
+  std::cout << fmt::format("gradcheck {} (dim {}): central differences with step {}, points uniform in "
+                           "[-{}, {}]^{}, seed {}\n",
+                           env_name, dim, c.step, o.amplitude, o.amplitude, dim, o.seed);
+  std::cout << fmt::format("{:>5} {:>14} {:>12} {:>12} {:>12} {:>12} {:>6}  {}\n", "point", "loss", "|grad|",
+                           "max|fd|", "max abs err", "max rel err", "coord", "status");
+  for (int p = 0; p < s.points; ++p) {
+    const auto& r = s.checks[p];
+    std::cout << fmt::format("{:>5} {:>14.6e} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e} {:>6}  {}\n", p, r.loss,
+                             r.gradient_norm, r.max_abs_central, r.worst_absolute_error, r.worst_relative_error,
+                             r.worst_coordinate, status(r));
+  }
+  const int n = s.points;
+  std::cout << fmt::format("\nsummary over {} points (relative error |grad - fd| / (|fd| + {} max|fd| + {}), "
+                           "tolerance {:.1e}):\n",
+                           n, c.relative_floor, c.absolute_floor, c.tolerance);
+  std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient agrees with central differences", s.agreeing,
+                           n, percent(s.agreeing, n));
+  std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient exactly zero", s.exactly_zero, n,
+                           percent(s.exactly_zero, n));
+  std::cout << fmt::format("  {:<42} {:>6} of {}\n", "non-finite loss, gradient or difference", s.non_finite, n);
+  std::cout << fmt::format("  {:<42} {:>6} of {}\n", "loss() != loss_and_grad() at x", s.value_mismatches, n);
+  std::cout << fmt::format("  {:<42} {:>6} of {}\n", "gradient bit-equal to central differences",
+                           s.bit_equal_to_differences, n);
+  const auto& q = s.gradient_norm;
+  std::cout << fmt::format("  {:<42} min {:.4e}  q1 {:.4e}  median {:.4e}  q3 {:.4e}  max {:.4e}\n", "|grad|",
+                           q.min, q.q1, q.median, q.q3, q.max);
+  std::cout << fmt::format("  {:<42} loss() {:.3e} s, loss_and_grad() {:.3e} s (ratio {:.2f})\n",
+                           "time per call", s.seconds_per_loss, s.seconds_per_loss_and_grad,
+                           s.seconds_per_loss / s.seconds_per_loss_and_grad);
+  std::cout << fmt::format("gradcheck {}: {} points, worst relative error {:.3e} at point {} coordinate {} "
+                           "(tolerance {:.1e}): {}\n",
+                           env_name, n, s.worst_relative_error, s.worst_point, s.worst_coordinate, c.tolerance,
+                           s.passed ? "PASS" : "FAIL");
+}
+
+nlohmann::json to_json(const std::string& env_name, int dim, const GradientSurveyOptions& o,
+                       const GradientSurvey& s) {
+  const auto& c = o.check;
+  nlohmann::json points = nlohmann::json::array();
+  for (int p = 0; p < s.points; ++p) {
+    const auto& r = s.checks[p];
+    points.push_back({{"index", p},
+                      {"x", s.x[p]},
+                      {"loss", number(r.loss)},
+                      {"value_path_loss", number(r.value_path_loss)},
+                      {"value_agrees", r.value_agrees},
+                      {"gradient_norm", number(r.gradient_norm)},
+                      {"max_abs_central", number(r.max_abs_central)},
+                      {"worst_absolute_error", number(r.worst_absolute_error)},
+                      {"worst_relative_error", number(r.worst_relative_error)},
+                      {"worst_coordinate", r.worst_coordinate},
+                      {"finite", r.finite},
+                      {"exactly_zero", r.exactly_zero},
+                      {"bit_equal_to_differences", r.bit_equal_to_differences},
+                      {"gradient_agrees", r.gradient_agrees},
+                      {"passed", r.passed}});
+  }
+  const auto& q = s.gradient_norm;
+  const int n = s.points;
+  nlohmann::json summary = {
+      {"points", n},
+      {"agreeing", s.agreeing},
+      {"agreeing_fraction", static_cast<double>(s.agreeing) / n},
+      {"exactly_zero", s.exactly_zero},
+      {"exactly_zero_fraction", static_cast<double>(s.exactly_zero) / n},
+      {"non_finite", s.non_finite},
+      {"value_mismatches", s.value_mismatches},
+      {"bit_equal_to_differences", s.bit_equal_to_differences},
+      {"gradient_norm",
+       {{"min", number(q.min)}, {"q1", number(q.q1)}, {"median", number(q.median)}, {"q3", number(q.q3)},
+        {"max", number(q.max)}}},
+      {"worst_relative_error", number(s.worst_relative_error)},
+      {"worst_point", s.worst_point},
+      {"worst_coordinate", s.worst_coordinate},
+      {"seconds_per_loss", s.seconds_per_loss},
+      {"seconds_per_loss_and_grad", s.seconds_per_loss_and_grad},
+      {"passed", s.passed}};
+  return {{"env", env_name},
+          {"dim", dim},
+          {"options",
+           {{"points", o.points},
+            {"seed", o.seed},
+            {"amplitude", o.amplitude},
+            {"step", c.step},
+            {"tolerance", c.tolerance},
+            {"relative_floor", c.relative_floor},
+            {"absolute_floor", c.absolute_floor},
+            {"value_tolerance", c.value_tolerance}}},
+          {"points", points},
+          {"summary", summary}};
+}
+
+}  // namespace
+
+int command_gradcheck(const std::string& env_name, const GradientSurveyOptions& options, bool json) {
+  const auto env = make_env(env_name);
+  if (!env->differentiable()) throw UsageError("env '" + env_name + "' is not differentiable");
+  options.validate();
+  const auto survey = survey_gradient(*env, options);
+  if (json)
+    std::cout << to_json(env_name, env->dim(), options, survey).dump() << "\n";
+  else
+    print_table(env_name, env->dim(), options, survey);
+  return survey.passed ? 0 : 1;
+}
+
+}  // namespace dsb
