@@ -33,28 +33,29 @@ class FunctionEnv final : public Env {
   using Value = std::function<double(std::span<const double>)>;
   using ValueAndGrad = std::function<double(std::span<const double>, std::span<double>)>;
   FunctionEnv(int dim, Value value, ValueAndGrad value_and_grad)
-      : dim_(dim), value_(std::move(value)), value_and_grad_(std::move(value_and_grad)) {}
+      : Env(EnvInfo{"test-function", dim, static_cast<bool>(value_and_grad), false, false, 0.0}),
+        dim_(dim), value_(std::move(value)), value_and_grad_(std::move(value_and_grad)) {}
 
-  const std::string& name() const override { return name_; }
-  int dim() const override { return dim_; }
-  bool differentiable() const override { return static_cast<bool>(value_and_grad_); }
-  double loss(std::span<const double> x) const override {
+  nlohmann::json config() const override { return {{"dim", dim_}}; }
+
+ protected:
+  double rollout(std::span<const double> x, Workspace&, ThreadTeam&) const override {
     ++value_calls;
     seen.emplace_back(x.begin(), x.end());
     return value_(x);
   }
-  double loss_and_grad(std::span<const double> x, std::span<double> grad) const override {
-    if (!value_and_grad_) return Env::loss_and_grad(x, grad);
+  double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
+                           ThreadTeam& team) const override {
+    if (!value_and_grad_) return Env::rollout_with_grad(x, grad, ws, team);
     ++gradient_calls;
     return value_and_grad_(x, grad);
   }
-  nlohmann::json config() const override { return {{"dim", dim_}}; }
 
+ public:
   mutable int value_calls = 0, gradient_calls = 0;
   mutable std::vector<std::vector<double>> seen;
 
  private:
-  std::string name_ = "test-function";
   int dim_;
   Value value_;
   ValueAndGrad value_and_grad_;
