@@ -135,7 +135,7 @@ struct CmaesRunStats {
   std::vector<CmaStop> stops;    // why each finished instance stopped
   std::int64_t generations = 0;  // generations told, over all instances
   std::vector<std::int64_t> instance_generations;  // generations told, per instance
-  double final_sigma = 0.0;      // sigma of the latest instance after its latest tell
+  double final_sigma = 0.0;      // sigma of the latest instance (sigma0 until its first tell)
   int restarts() const { return populations.empty() ? 0 : static_cast<int>(populations.size()) - 1; }
 };
 
