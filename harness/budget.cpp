@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/parallel.hpp"
+#include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
 namespace {
@@ -71,6 +72,12 @@ double BudgetedObjective::value_and_grad(std::span<const double> x, std::span<do
   bool finite = std::isfinite(loss);
   for (double g : grad) finite = finite && std::isfinite(g);
   if (!finite) std::fill(grad.begin(), grad.end(), 0.0);
+  // |g| = sqrt(sum g_i^2), summed in index order
+  if (finite) {
+    double sq = 0.0;
+    for (double g : grad) sq += g * g;
+    grad_norms_.push_back(std::sqrt(sq));
+  }
   return record(x, finite ? loss : std::numeric_limits<double>::quiet_NaN(), true, seconds_since(start));
 }
 
@@ -120,6 +127,19 @@ void BudgetedObjective::values(std::span<const double> xs, std::span<double> out
   }
   if (bad_point) std::rethrow_exception(bad_point);
   if (n < out.size()) throw BudgetExhausted{};
+}
+
+nlohmann::json BudgetedObjective::diagnostics() const {
+  std::int64_t grad_episodes = 0;
+  for (const auto& e : evals_) grad_episodes += e.used_grad ? 1 : 0;
+  std::int64_t zero = 0;
+  for (double g : grad_norms_) zero += g == 0.0 ? 1 : 0;
+  nlohmann::json norms = summarize(grad_norms_);
+  norms["zero"] = zero;
+  return {{"episodes", used()},
+          {"failed_episodes", failed_},
+          {"grad_episodes", grad_episodes},
+          {"grad_norms", std::move(norms)}};
 }
 
 }  // namespace dsb

@@ -10,6 +10,8 @@
 #include <memory>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "common/thread_team.hpp"
 #include "envs/core/env.hpp"
 #include "harness/run_spec.hpp"
@@ -36,6 +38,11 @@ class BudgetedObjective : public Objective {
   double best_loss() const { return best_; }  // NaN while no episode succeeded
   const std::vector<double>& best_x() const { return best_x_; }
   std::int64_t failed_episodes() const { return failed_; }
+  // What the objective side saw (the "objective" half of runs.diagnostics): {"episodes",
+  // "failed_episodes", "grad_episodes" (episodes with a gradient, failed ones included),
+  // "grad_norms": summary of the Euclidean norms of the finite gradients (failed episodes have
+  // none) with "zero" (how many were exactly 0)}.
+  nlohmann::json diagnostics() const;
 
  private:
   void check_point(std::span<const double> x) const;
@@ -51,6 +58,7 @@ class BudgetedObjective : public Objective {
   double best_;
   std::vector<double> best_x_;
   std::int64_t failed_ = 0;
+  std::vector<double> grad_norms_;  // |dLoss/dx| of every gradient episode that did not fail
 };
 
 }  // namespace dsb

@@ -1,8 +1,11 @@
 #pragma once
 // One cell of the grid and what a finished run produced.
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 namespace dsb {
 
@@ -23,6 +26,7 @@ struct EvalRecord {
   double best_loss = 0.0;    // best finite loss so far (NaN while none)
   bool used_grad = false;
   double wall_s = 0.0;
+  double metric = std::numeric_limits<double>::quiet_NaN();  // optional second metric (NULL when NaN)
 };
 
 struct RunResult {
@@ -34,6 +38,9 @@ struct RunResult {
   double wall_s = 0.0;
   std::string error;
   std::vector<EvalRecord> evals;
+  // {"optimizer": Optimizer::diagnostics(), "objective": BudgetedObjective::diagnostics()};
+  // stored as runs.diagnostics (JSON); deterministic, no timings
+  nlohmann::json diagnostics;
 };
 
 }  // namespace dsb

@@ -36,6 +36,7 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
   result.best_loss = objective.best_loss();
   result.best_x = objective.best_x();
   result.evals = objective.evals();
+  result.diagnostics = {{"optimizer", optimizer.diagnostics()}, {"objective", objective.diagnostics()}};
   return result;
 }
 

@@ -18,73 +18,9 @@ std::string utc_now() {
   return buf;
 }
 
-namespace {
-
-const char* kSchema = R"sql(
-CREATE TABLE IF NOT EXISTS meta(
-  key TEXT PRIMARY KEY,
-  value TEXT NOT NULL);
-CREATE TABLE IF NOT EXISTS configs(
-  hash TEXT PRIMARY KEY,
-  kind TEXT NOT NULL,           -- 'env' or 'optimizer'
-  json TEXT NOT NULL);          -- resolved config, canonical JSON
-CREATE TABLE IF NOT EXISTS runs(
-  run_id INTEGER PRIMARY KEY,
-  env TEXT NOT NULL,
-  optimizer TEXT NOT NULL,
-  seed INTEGER NOT NULL,        -- seed index 0..seeds-1
-  budget INTEGER NOT NULL,      -- episodes
-  env_config_hash TEXT NOT NULL REFERENCES configs(hash),
-  opt_config_hash TEXT NOT NULL REFERENCES configs(hash),
-  rng_seed TEXT NOT NULL,       -- per-run 64-bit seed, hex
-  status TEXT NOT NULL CHECK(status IN ('done', 'failed', 'running')),
-  episodes INTEGER NOT NULL DEFAULT 0,
-  failed_episodes INTEGER NOT NULL DEFAULT 0,
-  best_loss REAL,               -- NULL when no episode succeeded
-  best_x TEXT,                  -- JSON array, normalized units
-  wall_s REAL,
-  error TEXT,
-  started_at TEXT,
-  finished_at TEXT,
-  harness_version TEXT,
-  git_sha TEXT,
-  host TEXT,
-  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash));
-CREATE TABLE IF NOT EXISTS evals(
-  run_id INTEGER NOT NULL REFERENCES runs(run_id),
-  episode INTEGER NOT NULL,     -- 0-based
-  loss REAL,                    -- NULL for a failed episode (simulation blew up)
-  best_loss REAL,               -- best finite loss so far
-  used_grad INTEGER NOT NULL,
-  wall_s REAL NOT NULL,
-  failed INTEGER NOT NULL DEFAULT 0,
-  PRIMARY KEY(run_id, episode)) WITHOUT ROWID;
-)sql";
-
-}  // namespace
-
 Store::Store(const std::string& path, Provenance provenance)
     : db_(path), provenance_(std::move(provenance)) {
-  // refuse a foreign or newer database before changing anything in it
-  {
-    Statement q(db_.handle(),
-                "SELECT count(*) FROM sqlite_master WHERE type='table' AND name='meta'");
-    q.step();
-    if (q.column_int(0) == 1) {
-      Statement v(db_.handle(), "SELECT value FROM meta WHERE key='schema_version'");
-      if (v.step() && v.column_text(0) != std::to_string(kSchemaVersion))
-        throw StoreError("database '" + path + "' has schema_version " + v.column_text(0) +
-                         ", this harness writes " + std::to_string(kSchemaVersion));
-    }
-  }
-  db_.exec("PRAGMA journal_mode=WAL");
-  db_.exec("PRAGMA synchronous=NORMAL");
-  db_.exec("PRAGMA foreign_keys=ON");
-  Transaction tx(db_);
-  db_.exec(kSchema);
-  Statement meta(db_.handle(), "INSERT OR IGNORE INTO meta(key, value) VALUES ('schema_version', ?)");
-  meta.bind(1, std::to_string(kSchemaVersion)).run();
-  tx.commit();
+  prepare_schema(db_);
 }
 
 std::set<RunKey> Store::done_keys() {
@@ -115,7 +51,7 @@ std::int64_t Store::begin_run(const RunKey& key, std::uint64_t rng_seed,
     VALUES (?, ?, ?, ?, ?, ?, ?, 'running', ?, ?, ?, ?)
     ON CONFLICT(env, optimizer, seed, budget, env_config_hash, opt_config_hash) DO UPDATE SET
       status='running', episodes=0, failed_episodes=0, best_loss=NULL, best_x=NULL, wall_s=NULL,
-      error=NULL, started_at=excluded.started_at, finished_at=NULL,
+      error=NULL, diagnostics=NULL, started_at=excluded.started_at, finished_at=NULL,
       harness_version=excluded.harness_version, git_sha=excluded.git_sha, host=excluded.host
     RETURNING run_id)sql");
   up.bind(1, key.env).bind(2, key.optimizer).bind(3, static_cast<std::int64_t>(key.seed))
@@ -135,17 +71,17 @@ void Store::finish_run(std::int64_t run_id, const RunResult& r) {
   Statement del(db_.handle(), "DELETE FROM evals WHERE run_id=?");
   del.bind(1, run_id).run();
   Statement ins(db_.handle(),
-                "INSERT INTO evals(run_id, episode, loss, best_loss, used_grad, wall_s, failed) "
-                "VALUES (?, ?, ?, ?, ?, ?, ?)");
+                "INSERT INTO evals(run_id, episode, loss, best_loss, used_grad, wall_s, failed, metric) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
   for (const auto& e : r.evals) {
     ins.bind(1, run_id).bind(2, e.episode).bind(3, e.loss).bind(4, e.best_loss)
         .bind(5, static_cast<std::int64_t>(e.used_grad)).bind(6, e.wall_s)
-        .bind(7, static_cast<std::int64_t>(std::isnan(e.loss)));
+        .bind(7, static_cast<std::int64_t>(std::isnan(e.loss))).bind(8, e.metric);
     ins.run();
   }
   Statement upd(db_.handle(), R"sql(
     UPDATE runs SET status=?, episodes=?, failed_episodes=?, best_loss=?, best_x=?, wall_s=?,
-                    error=?, finished_at=? WHERE run_id=?)sql");
+                    error=?, finished_at=?, diagnostics=? WHERE run_id=?)sql");
   upd.bind(1, r.status).bind(2, r.episodes).bind(3, r.failed_episodes).bind(4, r.best_loss);
   if (r.best_x.empty())
     upd.bind_null(5);
@@ -156,7 +92,12 @@ void Store::finish_run(std::int64_t run_id, const RunResult& r) {
     upd.bind_null(7);
   else
     upd.bind(7, r.error);
-  upd.bind(8, utc_now()).bind(9, run_id);
+  upd.bind(8, utc_now());
+  if (r.diagnostics.is_null())
+    upd.bind_null(9);
+  else
+    upd.bind(9, r.diagnostics.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  upd.bind(10, run_id);
   upd.run();
   tx.commit();
 }

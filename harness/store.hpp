@@ -1,5 +1,6 @@
 #pragma once
-// The results database (schema of design.md): runs, evals, configs, meta. WAL mode, one writer.
+// The results database (schema of design.md and harness/schema.hpp): runs, evals, configs, meta.
+// WAL mode, one writer. Opening refuses a foreign or newer file and migrates an older one.
 // A run row is inserted as 'running' when it starts; its evals and final status are committed
 // together in one transaction when it ends, so a killed harness leaves no run that counts as done.
 #include <cstdint>
@@ -12,11 +13,10 @@
 #include <nlohmann/json.hpp>
 
 #include "harness/run_spec.hpp"
+#include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
 
 namespace dsb {
-
-inline constexpr int kSchemaVersion = 1;
 
 // the UNIQUE key of a run
 struct RunKey {
@@ -34,7 +34,8 @@ struct Provenance {
 
 class Store {
  public:
-  // Opens or creates the database, creates the schema, checks schema_version. Throws StoreError.
+  // Opens or creates the database and brings it to kSchemaVersion (prepare_schema: a foreign or
+  // newer file is refused before anything is written, an older one migrated). Throws StoreError.
   Store(const std::string& path, Provenance provenance);
 
   // keys of runs whose status is 'done'
@@ -44,7 +45,7 @@ class Store {
   std::int64_t begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohmann::json& env_config,
                          const nlohmann::json& opt_config);
 
-  // Replaces the run's evals and sets its final status, in one transaction.
+  // Replaces the run's evals and sets its final status and diagnostics, in one transaction.
   void finish_run(std::int64_t run_id, const RunResult& result);
 
   Database& db() { return db_; }

@@ -8,6 +8,7 @@
 
 #include "common/error.hpp"
 #include "optimizers/bo/sobol.hpp"
+#include "optimizers/core/diagnostics.hpp"
 #include "optimizers/cmaes.hpp"
 
 namespace dsb {
@@ -67,6 +68,7 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
     // global level: BO picks the start of the next leap
     model.refit(rng);
     stats_.gp_points = model.size();
+    stats_.gp = model.diagnostics();
     const Eigen::VectorXd start = model.propose(rng);
     ++stats_.leaps;
     stats_.leap_episodes.push_back(0);
@@ -87,20 +89,21 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
       // one batch (evaluation and deferred GP insertion draw nothing from rng: same records); when
       // the budget ends inside it, the points that fit still reach the GP, as one at a time
       const std::int64_t used_before = f.used();
+      bool exhausted = false;
       try {
         f.values(flat, fs);
       } catch (const BudgetExhausted&) {
-        for (int k = 0; k < static_cast<int>(f.used() - used_before); ++k) {
-          ++stats_.episodes_seen;
-          model.add(xs[k], fs[k], rng, /*defer_fit=*/true);
-        }
-        ++stats_.episodes_seen;  // the refused request, counted as simulate() counts it
-        throw;
+        exhausted = true;
       }
-      for (int k = 0; k < K; ++k) {
+      const int evaluated = static_cast<int>(f.used() - used_before);
+      for (int k = 0; k < evaluated; ++k) {
         ++stats_.episodes_seen;
         model.add(xs[k], fs[k], rng, /*defer_fit=*/true);
         ++spent;
+      }
+      if (exhausted) {
+        ++stats_.episodes_seen;  // the refused request, counted as simulate() counts it
+        throw BudgetExhausted{};
       }
       // 2. the mean of the best half starts the descent
       std::vector<int> order(K);
@@ -116,13 +119,18 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
       int stale = 0;
       stats_.descent_lengths.push_back(0);
       stats_.stale_stops.push_back(0);
+      stats_.descent_leap.push_back(stats_.leaps - 1);
+      stats_.descent_first_loss.push_back(std::numeric_limits<double>::quiet_NaN());
+      stats_.descent_best_loss.push_back(std::numeric_limits<double>::quiet_NaN());
       int& steps = stats_.descent_lengths.back();
       while (steps < cfg_.max_descent_steps && spent < cfg_.episodes_per_leap) {
         const double loss = simulate_with_grad(s);
         ++spent;
         ++steps;
+        if (steps == 1) stats_.descent_first_loss.back() = loss;
         if (loss < best) {
           best = loss;
+          stats_.descent_best_loss.back() = best;
           stale = 0;
         } else if (++stale >= cfg_.patience) {
           stats_.stale_stops.back() = 1;
@@ -136,7 +144,49 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
       cma.tell(xs, fs, &s);
       if (cma.should_stop()) break;  // the search distribution collapsed: back to BO early
     }
+    stats_.leap_stops.push_back(cma.stop_reason());
   }
+}
+
+nlohmann::json BoLeap::diagnostics() const {
+  const auto& s = stats_;
+  // a descent whose first episode the budget refused never ran: not counted
+  int stale = 0;
+  std::vector<int> lengths;
+  for (std::size_t i = 0; i < s.descent_lengths.size(); ++i) {
+    if (s.descent_lengths[i] == 0) continue;
+    stale += s.stale_stops[i];
+    lengths.push_back(s.descent_lengths[i]);
+  }
+  nlohmann::json d = {{"leaps", s.leaps},
+                      {"descents", lengths.size()},
+                      {"stale_stops", stale},
+                      {"descent_steps", summarize(lengths)},
+                      {"gp", s.gp.is_null() ? nlohmann::json::object() : s.gp}};
+  // per leap: its descents are the contiguous run of descent_leap == leap
+  std::vector<int> leap_ids(static_cast<std::size_t>(s.leaps));
+  std::iota(leap_ids.begin(), leap_ids.end(), 0);
+  put_capped(d, "leap_list", leap_ids, [&](int leap, std::size_t) {
+    int descents = 0, steps = 0, stale_in_leap = 0;
+    double first = std::numeric_limits<double>::quiet_NaN(), end = first, best = first;
+    for (std::size_t i = 0; i < s.descent_leap.size(); ++i) {
+      if (s.descent_leap[i] != leap || s.descent_lengths[i] == 0) continue;
+      if (descents++ == 0) first = s.descent_first_loss[i];
+      steps += s.descent_lengths[i];
+      stale_in_leap += s.stale_stops[i];
+      end = s.descent_best_loss[i];
+      if (!std::isnan(end) && (std::isnan(best) || end < best)) best = end;
+    }
+    const auto l = static_cast<std::size_t>(leap);
+    std::string ended = "budget";
+    if (l < s.leap_stops.size())
+      ended = s.leap_stops[l] == CmaStop::none ? "episode_cap" : std::string("cma:") + to_string(s.leap_stops[l]);
+    return nlohmann::json{{"episodes", s.leap_episodes[l]}, {"descents", descents},
+                          {"descent_steps", steps},         {"stale_stops", stale_in_leap},
+                          {"first_loss", first},            {"best_loss", best},
+                          {"end_loss", end},                {"ended", ended}};
+  });
+  return d;
 }
 
 std::unique_ptr<Optimizer> make_boleap(const BoLeapConfig& cfg) {

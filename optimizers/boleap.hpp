@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "optimizers/bo/bo.hpp"
+#include "optimizers/cmaes.hpp"
 #include "optimizers/core/adam.hpp"
 #include "optimizers/core/optimizer.hpp"
 
@@ -35,8 +36,15 @@ struct BoLeapStats {
   std::vector<int> leap_episodes;      // episodes spent in each leap
   std::vector<int> descent_lengths;    // steps of each descent
   std::vector<int> stale_stops;        // 1 when a descent ended by patience, 0 by J or budget
+  std::vector<int> descent_leap;       // the leap (0-based) each descent belongs to
+  std::vector<double> descent_first_loss;  // loss at each descent's start (its first step)
+  std::vector<double> descent_best_loss;   // best loss along each descent
+  std::vector<CmaStop> leap_stops;     // per finished leap: the CMA-ES stop that ended it, or
+                                       // none when its episode cap did (the last leap, still
+                                       // running when the budget ended, has no entry)
   int gp_points = 0;                   // points in the GP at the last BO proposal
   int episodes_seen = 0;               // episodes this optimizer asked for
+  nlohmann::json gp;                   // BoSurrogate::diagnostics() after the last refit
 };
 
 class BoLeap : public Optimizer {
@@ -47,6 +55,12 @@ class BoLeap : public Optimizer {
   nlohmann::json config() const override { return cfg_.to_json(); }
   void minimize(Objective& f, Rng& rng) override;
   const BoLeapStats& last_run() const { return stats_; }
+  // {"leaps", "descents", "stale_stops", "descent_steps" (summary), "gp" (the GP after the last
+  // refit), "leap_list": [{"episodes", "descents", "descent_steps", "stale_stops", "first_loss"
+  // (where the leap's first descent started), "best_loss" (best along its descents),
+  // "end_loss" (best of its last descent), "ended" ("episode_cap", "cma:<stop>" or "budget")}]
+  // (capped), "leap_list_truncated"}; losses of failed episodes are null.
+  nlohmann::json diagnostics() const override;
 
  private:
   std::string name_ = "boleap";

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "common/error.hpp"
+#include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
 
@@ -357,6 +358,8 @@ void Cmaes::minimize(Objective& f, Rng& rng) {
   for (;;) {
     CmaState es(mean, cfg_.sigma0, lambda, cfg_);
     stats_.populations.push_back(lambda);
+    stats_.instance_generations.push_back(0);
+    stats_.final_sigma = es.sigma();
     for (;;) {
       xs.clear();
       for (int k = 0; k < lambda; ++k) xs.push_back(es.ask(rng));
@@ -370,6 +373,8 @@ void Cmaes::minimize(Objective& f, Rng& rng) {
         if (std::isnan(v)) v = std::numeric_limits<double>::infinity();  // failed episode = worst
       es.tell(xs, fs);
       ++stats_.generations;
+      ++stats_.instance_generations.back();
+      stats_.final_sigma = es.sigma();
       if (es.should_stop()) break;
     }
     stats_.stops.push_back(es.stop_reason());
@@ -379,6 +384,19 @@ void Cmaes::minimize(Objective& f, Rng& rng) {
     lambda = next >= kMaxPopulation ? kMaxPopulation : static_cast<int>(next);
     for (int i = 0; i < n; ++i) mean[i] = rng.uniform(-1.0, 1.0);
   }
+}
+
+nlohmann::json Cmaes::diagnostics() const {
+  nlohmann::json d = {{"restarts", stats_.restarts()},
+                      {"generations", stats_.generations},
+                      {"final_sigma", stats_.final_sigma}};
+  put_capped(d, "instances", stats_.populations, [&](int lambda, std::size_t i) {
+    const bool stopped = i < stats_.stops.size();
+    return nlohmann::json{{"population", lambda},
+                          {"generations", stats_.instance_generations[i]},
+                          {"stop", stopped ? to_string(stats_.stops[i]) : "budget"}};
+  });
+  return d;
 }
 
 std::unique_ptr<Optimizer> make_cmaes(const CmaesConfig& cfg) { return std::make_unique<Cmaes>(cfg); }

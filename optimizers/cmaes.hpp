@@ -134,6 +134,8 @@ struct CmaesRunStats {
   std::vector<int> populations;  // lambda of each CMA-ES instance, in order (first = initial run)
   std::vector<CmaStop> stops;    // why each finished instance stopped
   std::int64_t generations = 0;  // generations told, over all instances
+  std::vector<std::int64_t> instance_generations;  // generations told, per instance
+  double final_sigma = 0.0;      // sigma of the latest instance (sigma0 until its first tell)
   int restarts() const { return populations.empty() ? 0 : static_cast<int>(populations.size()) - 1; }
 };
 
@@ -147,6 +149,10 @@ class Cmaes : public Optimizer {
   // single instance stops.
   void minimize(Objective& f, Rng& rng) override;
   const CmaesRunStats& last_run() const { return stats_; }
+  // {"restarts", "generations", "final_sigma", "instances": [{"population", "generations",
+  // "stop"}] (capped), "instances_truncated"}; the stop of an instance still running when the
+  // budget ended is "budget".
+  nlohmann::json diagnostics() const override;
 
  private:
   std::string name_ = "cmaes";

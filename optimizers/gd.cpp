@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
 
@@ -34,6 +35,24 @@ DescentConfig rand_descents_defaults() {
 
 namespace {
 
+// why a descent ended; "budget" while it was still running when the budget ended
+enum class DescentStop { budget, patience, max_steps, no_finite_point };
+
+const char* to_string(DescentStop s) {
+  switch (s) {
+    case DescentStop::budget: return "budget";
+    case DescentStop::patience: return "patience";
+    case DescentStop::max_steps: return "max_steps";
+    case DescentStop::no_finite_point: return "no_finite_point";
+  }
+  return "?";
+}
+
+struct DescentRecord {
+  int steps = 0;  // episodes of this descent
+  DescentStop stop = DescentStop::budget;
+};
+
 class Descents : public Optimizer {
  public:
   Descents(std::string name, DescentConfig cfg) : name_(std::move(name)), cfg_(cfg) {
@@ -44,6 +63,8 @@ class Descents : public Optimizer {
   nlohmann::json config() const override { return cfg_.to_json(); }
 
   void minimize(Objective& f, Rng& rng) override {
+    descents_.clear();
+    recoveries_ = 0;
     const int n = f.dim();
     std::vector<double> x(n), grad(n), best_x(n), best_grad(n);
     for (;;) {
@@ -54,6 +75,28 @@ class Descents : public Optimizer {
     }
   }
 
+  // {"descents", "steps" (summary of descent lengths), "stops": {reason: count}, "recoveries"
+  // (failed episodes that sent a descent back to its best point), "descent_list": [{"steps",
+  // "stop"}] (capped), "descent_list_truncated"}
+  nlohmann::json diagnostics() const override {
+    // a descent whose first episode the budget refused never ran: not counted
+    std::vector<DescentRecord> ran;
+    for (const auto& d : descents_)
+      if (d.steps > 0) ran.push_back(d);
+    std::vector<int> steps;
+    nlohmann::json stops = {{"budget", 0}, {"patience", 0}, {"max_steps", 0}, {"no_finite_point", 0}};
+    for (const auto& d : ran) {
+      steps.push_back(d.steps);
+      stops[to_string(d.stop)] = stops[to_string(d.stop)].get<int>() + 1;
+    }
+    nlohmann::json out = {{"descents", ran.size()}, {"steps", summarize(steps)},
+                          {"stops", std::move(stops)}, {"recoveries", recoveries_}};
+    put_capped(out, "descent_list", ran, [](const DescentRecord& d, std::size_t) {
+      return nlohmann::json{{"steps", d.steps}, {"stop", to_string(d.stop)}};
+    });
+    return out;
+  }
+
  private:
   void descend(Objective& f, std::vector<double>& x, std::vector<double>& grad,
                std::vector<double>& best_x, std::vector<double>& best_grad) {
@@ -61,11 +104,18 @@ class Descents : public Optimizer {
     Adam adam(adam_cfg, f.dim());
     double best = std::numeric_limits<double>::infinity();
     int stale = 0;
+    descents_.emplace_back();
+    DescentRecord& record = descents_.back();
     for (int step = 0; cfg_.max_steps == 0 || step < cfg_.max_steps; ++step) {
       const double loss = f.value_and_grad(x, grad);
+      ++record.steps;
       if (!std::isfinite(loss)) {
         // failed episode: back to the best point, half the step size, fresh moments
-        if (!std::isfinite(best)) return;  // nothing to go back to: give up this descent
+        if (!std::isfinite(best)) {  // nothing to go back to: give up this descent
+          record.stop = DescentStop::no_finite_point;
+          return;
+        }
+        ++recoveries_;
         adam_cfg.lr *= 0.5;
         adam = Adam(adam_cfg, f.dim());
         x = best_x;
@@ -75,6 +125,7 @@ class Descents : public Optimizer {
       if (!std::isfinite(best) || loss < best - cfg_.min_improvement * std::abs(best)) {
         stale = 0;
       } else if (cfg_.patience > 0 && ++stale >= cfg_.patience) {
+        record.stop = DescentStop::patience;
         return;
       }
       if (loss < best) {
@@ -84,10 +135,13 @@ class Descents : public Optimizer {
       }
       adam.step(x, grad);
     }
+    record.stop = DescentStop::max_steps;
   }
 
   std::string name_;
   DescentConfig cfg_;
+  std::vector<DescentRecord> descents_;
+  int recoveries_ = 0;
 };
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <nlopt.hpp>
 
 #include "common/error.hpp"
+#include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
 
@@ -280,6 +281,39 @@ void NloptOptimizer::minimize(Objective& f, Rng& rng) {
       idle = 0;
     }
   }
+}
+
+std::string nlopt_result_name(int code) {
+  switch (code) {
+    case NLOPT_FAILURE: return "NLOPT_FAILURE";
+    case NLOPT_INVALID_ARGS: return "NLOPT_INVALID_ARGS";
+    case NLOPT_OUT_OF_MEMORY: return "NLOPT_OUT_OF_MEMORY";
+    case NLOPT_ROUNDOFF_LIMITED: return "NLOPT_ROUNDOFF_LIMITED";
+    case NLOPT_FORCED_STOP: return "NLOPT_FORCED_STOP";
+    case NLOPT_SUCCESS: return "NLOPT_SUCCESS";
+    case NLOPT_STOPVAL_REACHED: return "NLOPT_STOPVAL_REACHED";
+    case NLOPT_FTOL_REACHED: return "NLOPT_FTOL_REACHED";
+    case NLOPT_XTOL_REACHED: return "NLOPT_XTOL_REACHED";
+    case NLOPT_MAXEVAL_REACHED: return "NLOPT_MAXEVAL_REACHED";
+    case NLOPT_MAXTIME_REACHED: return "NLOPT_MAXTIME_REACHED";
+  }
+  return "NLOPT_UNKNOWN_" + std::to_string(code);
+}
+
+nlohmann::json NloptOptimizer::diagnostics() const {
+  nlohmann::json results = nlohmann::json::object();
+  for (const auto& s : stats_.starts) {
+    const std::string name = nlopt_result_name(s.result);
+    results[name] = results.value(name, 0) + 1;
+  }
+  nlohmann::json d = {{"starts", stats_.starts.size()},
+                      {"results", std::move(results)},
+                      {"early_return", stats_.early_return.empty() ? nlohmann::json(nullptr)
+                                                                   : nlohmann::json(stats_.early_return)}};
+  put_capped(d, "start_list", stats_.starts, [](const NloptStart& s, std::size_t) {
+    return nlohmann::json{{"result", nlopt_result_name(s.result)}, {"episodes", s.episodes}};
+  });
+  return d;
 }
 
 std::unique_ptr<Optimizer> make_nlopt(const NloptConfig& cfg) {

@@ -102,6 +102,10 @@ struct NloptStart {
   std::vector<double> x0;            // its start point
 };
 
+// NLopt's name of an nlopt_result code ("NLOPT_MAXEVAL_REACHED", "NLOPT_FORCED_STOP" ...);
+// "NLOPT_UNKNOWN_<code>" for a code NLopt 2.7 does not define.
+std::string nlopt_result_name(int code);
+
 // What the last minimize() did (kept when it ends by an exception).
 struct NloptRunStats {
   std::vector<NloptStart> starts;
@@ -119,6 +123,10 @@ class NloptOptimizer : public Optimizer {
   // or one of the early returns above.
   void minimize(Objective& f, Rng& rng) override;
   const NloptRunStats& last_run() const { return stats_; }
+  // {"starts", "results": {name: count} (over all starts), "early_return" (or null),
+  // "start_list": [{"result" (e.g. "NLOPT_MAXEVAL_REACHED"), "episodes"}] (capped),
+  // "start_list_truncated"}
+  nlohmann::json diagnostics() const override;
 
  private:
   NloptConfig cfg_;

@@ -1,8 +1,12 @@
-// The SQLite store on real files: schema, WAL, run lifecycle, NaN as NULL, resume keys, refusal
-// of a foreign schema without touching the file.
+// The SQLite store on real files: schema, WAL, run lifecycle, NaN as NULL, resume keys, run
+// diagnostics, the in-place migration of a version-1 file, refusal of a foreign or newer file
+// without touching it.
+#include <bit>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -55,7 +59,7 @@ class StoreTest : public ::testing::Test {
 TEST_F(StoreTest, CreatesTheSchemaInWalModeWithItsVersion) {
   Store store(path_, {"0.1.0", "abc", "host"});
   EXPECT_EQ(query("PRAGMA journal_mode"), "wal;");
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "1;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "2;");
   EXPECT_EQ(query("SELECT name FROM sqlite_master WHERE type='table' ORDER BY name"),
             "configs;evals;meta;runs;");
 }
@@ -106,14 +110,247 @@ std::string file_bytes(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-TEST_F(StoreTest, RefusesAnotherSchemaVersionWithoutTouchingTheFile) {
+TEST_F(StoreTest, RefusesANewerSchemaVersionWithoutTouchingTheFile) {
   {
     Store store(path_, {"0.1.0", "abc", "host"});
-    store.db().exec("UPDATE meta SET value='99' WHERE key='schema_version'");
+    store.db().exec("UPDATE meta SET value='3' WHERE key='schema_version'");
   }
   const std::string before = file_bytes(path_);
-  EXPECT_THROW(Store(path_, {"0.1.0", "abc", "host"}), StoreError);
+  try {
+    Store again(path_, {"0.1.0", "abc", "host"});
+    FAIL() << "a schema_version 3 file was opened";
+  } catch (const StoreError& e) {
+    EXPECT_NE(std::string(e.what()).find("schema_version 3, newer than this harness (2)"), std::string::npos)
+        << e.what();
+  }
   EXPECT_EQ(file_bytes(path_), before);
+}
+
+TEST_F(StoreTest, StoresTheRunDiagnosticsAsJsonAndTheMetricAsNull) {
+  Store store(path_, {"0.1.0", "abc", "host"});
+  const auto id = store.begin_run(key(0), 1, {}, {});
+  RunResult r = result();
+  r.evals[2].metric = 0.75;
+  r.diagnostics = {{"optimizer", {{"restarts", 2}}}, {"objective", {{"episodes", 3}}}};
+  store.finish_run(id, r);
+  EXPECT_EQ(query("SELECT diagnostics FROM runs"), R"({"objective":{"episodes":3},"optimizer":{"restarts":2}};)");
+  EXPECT_EQ(query("SELECT metric FROM evals ORDER BY episode"), "NULL;NULL;0.75;");
+  // redoing the run clears the diagnostics until it finishes again
+  store.begin_run(key(0), 1, {}, {});
+  EXPECT_EQ(query("SELECT diagnostics FROM runs"), "NULL;");
+}
+
+// ---------------------------------------------------------------------------------------------
+// version 1 files
+
+// Version 1's schema, frozen: harness/store.cpp as of commit 7ec3474 (the first release). A
+// version-1 database is this SQL plus meta.schema_version = '1'.
+const char* kSchemaV1 = R"sql(
+CREATE TABLE IF NOT EXISTS meta(
+  key TEXT PRIMARY KEY,
+  value TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS configs(
+  hash TEXT PRIMARY KEY,
+  kind TEXT NOT NULL,           -- 'env' or 'optimizer'
+  json TEXT NOT NULL);          -- resolved config, canonical JSON
+CREATE TABLE IF NOT EXISTS runs(
+  run_id INTEGER PRIMARY KEY,
+  env TEXT NOT NULL,
+  optimizer TEXT NOT NULL,
+  seed INTEGER NOT NULL,        -- seed index 0..seeds-1
+  budget INTEGER NOT NULL,      -- episodes
+  env_config_hash TEXT NOT NULL REFERENCES configs(hash),
+  opt_config_hash TEXT NOT NULL REFERENCES configs(hash),
+  rng_seed TEXT NOT NULL,       -- per-run 64-bit seed, hex
+  status TEXT NOT NULL CHECK(status IN ('done', 'failed', 'running')),
+  episodes INTEGER NOT NULL DEFAULT 0,
+  failed_episodes INTEGER NOT NULL DEFAULT 0,
+  best_loss REAL,               -- NULL when no episode succeeded
+  best_x TEXT,                  -- JSON array, normalized units
+  wall_s REAL,
+  error TEXT,
+  started_at TEXT,
+  finished_at TEXT,
+  harness_version TEXT,
+  git_sha TEXT,
+  host TEXT,
+  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash));
+CREATE TABLE IF NOT EXISTS evals(
+  run_id INTEGER NOT NULL REFERENCES runs(run_id),
+  episode INTEGER NOT NULL,     -- 0-based
+  loss REAL,                    -- NULL for a failed episode (simulation blew up)
+  best_loss REAL,               -- best finite loss so far
+  used_grad INTEGER NOT NULL,
+  wall_s REAL NOT NULL,
+  failed INTEGER NOT NULL DEFAULT 0,
+  PRIMARY KEY(run_id, episode)) WITHOUT ROWID;
+)sql";
+
+const char* kRunsV1Columns =
+    "run_id, env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, "
+    "failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, harness_version, git_sha, host";
+const char* kEvalsV1Columns = "run_id, episode, loss, best_loss, used_grad, wall_s, failed";
+
+// every value of a query, exactly: integers as integers, reals by their 64 bits, texts, NULLs
+std::string exact_rows(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* q = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(db, sql.c_str(), -1, &q, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+  std::ostringstream out;
+  while (sqlite3_step(q) == SQLITE_ROW) {
+    for (int c = 0; c < sqlite3_column_count(q); ++c) {
+      switch (sqlite3_column_type(q, c)) {
+        case SQLITE_INTEGER: out << "i" << sqlite3_column_int64(q, c); break;
+        case SQLITE_FLOAT: {
+          char hex[32];
+          std::snprintf(hex, sizeof hex, "%016llx",
+                        static_cast<unsigned long long>(std::bit_cast<std::uint64_t>(sqlite3_column_double(q, c))));
+          out << "f" << hex;
+          break;
+        }
+        case SQLITE_TEXT: out << "t" << reinterpret_cast<const char*>(sqlite3_column_text(q, c)); break;
+        case SQLITE_NULL: out << "n"; break;
+        default: out << "b" << sqlite3_column_bytes(q, c); break;
+      }
+      out << "|";
+    }
+    out << "\n";
+  }
+  sqlite3_finalize(q);
+  sqlite3_close(db);
+  return out.str();
+}
+
+// A version-1 file as the version-1 harness left it (WAL), with awkward values: a failed episode
+// (NULL loss), a subnormal, 0.1, a huge loss, a 'running' run without evals, a failed run.
+void write_version1_file(const std::string& path) {
+  Database db(path);
+  db.exec("PRAGMA journal_mode=WAL");
+  db.exec(kSchemaV1);
+  db.exec(R"sql(
+    INSERT INTO meta VALUES ('schema_version', '1');
+    INSERT INTO configs VALUES ('e1', 'env', '{"dim":2}'), ('o1', 'optimizer', '{"sigma0":0.5}');
+    INSERT INTO runs VALUES
+      (1, 'sphere-2', 'cmaes', 0, 3, 'e1', 'o1', '00000000deadbeef', 'done', 3, 1, 4.9406564584124654e-324,
+       '[0.1,-0.30000000000000004]', 0.012345678901234567, NULL, '2024-01-01T00:00:00Z', '2024-01-01T00:00:01Z',
+       '0.1.0', 'abc123', 'node-1'),
+      (2, 'sphere-2', 'cmaes', 1, 3, 'e1', 'o1', '0000000000000002', 'running', 0, 0, NULL, NULL, NULL, NULL,
+       '2024-01-01T00:00:02Z', NULL, '0.1.0', 'abc123', 'node-1'),
+      (3, 'branin', 'gd', 0, 2, 'e1', 'o1', 'ffffffffffffffff', 'failed', 2, 0, 0.1, '[1,-1]', 1e-3,
+       'cmaes: eigendecomposition of C failed', '2024-01-01T00:00:03Z', '2024-01-01T00:00:04Z', '0.1.0', 'abc123',
+       'node-2');
+    INSERT INTO evals VALUES
+      (1, 0, 1.7976931348623157e308, 1.7976931348623157e308, 0, 1e-6, 0),
+      (1, 1, NULL, 1.7976931348623157e308, 1, 2e-6, 1),
+      (1, 2, 4.9406564584124654e-324, 4.9406564584124654e-324, 0, 3e-6, 0),
+      (3, 0, 0.30000000000000004, 0.30000000000000004, 1, 0.5, 0),
+      (3, 1, 0.1, 0.1, 1, 0.25, 0);
+  )sql");
+}
+
+TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
+  write_version1_file(path_);
+  const std::string runs_sql = std::string("SELECT ") + kRunsV1Columns + " FROM runs ORDER BY run_id";
+  const std::string evals_sql = std::string("SELECT ") + kEvalsV1Columns + " FROM evals ORDER BY run_id, episode";
+  const std::string configs_sql = "SELECT hash, kind, json FROM configs ORDER BY hash";
+  const std::string runs_before = exact_rows(path_, runs_sql), evals_before = exact_rows(path_, evals_sql),
+                    configs_before = exact_rows(path_, configs_sql);
+  ASSERT_EQ(query("SELECT count(*) FROM evals"), "5;");
+  ASSERT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "1;");
+
+  {
+    Store store(path_, {"0.2.0", "def", "host"});
+    // what was done stays done: the migrated file resumes like any other
+    EXPECT_EQ(store.done_keys().size(), 1u);
+  }
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "2;");
+  EXPECT_EQ(exact_rows(path_, runs_sql), runs_before);
+  EXPECT_EQ(exact_rows(path_, evals_sql), evals_before);
+  EXPECT_EQ(exact_rows(path_, configs_sql), configs_before);
+  // the new columns, after the old ones, NULL in old rows
+  EXPECT_EQ(query("SELECT name FROM pragma_table_info('runs') WHERE cid >= 20"), "diagnostics;");
+  EXPECT_EQ(query("SELECT name FROM pragma_table_info('evals') WHERE cid >= 7"), "metric;");
+  EXPECT_EQ(query("SELECT count(*) FROM runs WHERE diagnostics IS NULL"), "3;");
+  EXPECT_EQ(query("SELECT count(*) FROM evals WHERE metric IS NULL"), "5;");
+  // a migrated file has the columns of a new one, in the same order
+  const std::string fresh = (dir_ / "fresh.sqlite").string();
+  { Store store(fresh, {}); }
+  for (const char* table : {"meta", "configs", "runs", "evals"}) {
+    const std::string cols = std::string("SELECT name, type, \"notnull\", pk FROM pragma_table_info('") + table + "')";
+    EXPECT_EQ(exact_rows(path_, cols), exact_rows(fresh, cols)) << table;
+  }
+
+  // and it takes new runs with diagnostics; opening it again changes nothing
+  {
+    Store store(path_, {"0.2.0", "def", "host"});
+    const auto id = store.begin_run(key(5), 5, {}, {});
+    RunResult r = result();
+    r.diagnostics = {{"optimizer", nlohmann::json::object()}, {"objective", {{"episodes", 3}}}};
+    store.finish_run(id, r);
+  }
+  EXPECT_EQ(query("SELECT count(*) FROM runs WHERE diagnostics IS NOT NULL"), "1;");
+  EXPECT_EQ(exact_rows(path_, evals_sql + " LIMIT 5"), evals_before);
+}
+
+TEST_F(StoreTest, AFailedMigrationStepRollsBackTheWholeChain) {
+  write_version1_file(path_);
+  // a version-1 file that already has a column named like version 2's evals.metric (extra
+  // columns are allowed): the second statement of the step fails after the first one succeeded
+  { Database db(path_); db.exec("ALTER TABLE evals ADD COLUMN metric TEXT"); }
+  EXPECT_THROW(Store(path_, {}), StoreError);
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "1;");
+  EXPECT_EQ(query("SELECT count(*) FROM pragma_table_info('runs') WHERE name='diagnostics'"), "0;");
+}
+
+// ---------------------------------------------------------------------------------------------
+// files that are not harness databases: refused before anything is written
+
+TEST_F(StoreTest, ForeignDatabasesAreRefusedAndLeftAlone) {
+  struct Case {
+    const char* name;
+    const char* sql;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"tables of our names, no meta", "CREATE TABLE runs(id INTEGER, name TEXT); CREATE TABLE evals(x REAL);",
+       "no 'meta' table"},
+      {"an unrelated table", "CREATE TABLE users(id INTEGER PRIMARY KEY, email TEXT);", "no 'meta' table"},
+      {"meta without schema_version", "CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT); INSERT INTO meta VALUES ('owner', 'x');",
+       "no meta.schema_version"},
+      {"meta of another shape", "CREATE TABLE meta(name TEXT, version INTEGER);", "table 'meta' has no column 'key'"},
+      {"a version that is not a number",
+       "CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT); INSERT INTO meta VALUES ('schema_version', 'v2');",
+       "meta.schema_version is 'v2'"},
+      {"our version, other runs columns",
+       "CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT); INSERT INTO meta VALUES ('schema_version', '2');"
+       "CREATE TABLE configs(hash, kind, json); CREATE TABLE runs(run_id INTEGER PRIMARY KEY, title TEXT);"
+       "CREATE TABLE evals(run_id, episode, loss, best_loss, used_grad, wall_s, failed, metric);",
+       "table 'runs' has no column 'env'"},
+      {"version 1 without evals",
+       "CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT); INSERT INTO meta VALUES ('schema_version', '1');",
+       "no table 'configs'"},
+  };
+  for (const auto& c : cases) {
+    const std::string path = (dir_ / (std::string(c.name) + ".sqlite")).string();
+    { Database db(path); db.exec(c.sql); }
+    const std::string before = file_bytes(path);
+    try {
+      Store store(path, {});
+      ADD_FAILURE() << c.name << ": opened";
+    } catch (const StoreError& e) {
+      EXPECT_NE(std::string(e.what()).find("is not a harness database"), std::string::npos) << c.name << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << c.name << ": " << e.what();
+    }
+    EXPECT_EQ(file_bytes(path), before) << c.name;
+    EXPECT_FALSE(fs::exists(path + "-wal") && fs::file_size(path + "-wal") > 0) << c.name;
+  }
+}
+
+TEST_F(StoreTest, AnEmptyFileBecomesANewDatabase) {
+  { std::ofstream touch(path_); }
+  Store store(path_, {});
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "2;");
 }
 
 TEST_F(StoreTest, UnwritablePathThrowsNamingIt) {

@@ -6,6 +6,7 @@
 
 #include "common/error.hpp"
 #include "optimizers/bo/sobol.hpp"
+#include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
 
@@ -70,6 +71,19 @@ void BoSurrogate::add(const Eigen::VectorXd& x, double loss, Rng& rng, bool defe
   }
 }
 
+nlohmann::json BoSurrogate::diagnostics() const {
+  const GpHyperparameters& h = gp_.hyperparameters();
+  const std::vector<double> lengthscales(h.lengthscales.data(), h.lengthscales.data() + h.lengthscales.size());
+  nlohmann::json hyper = {{"outputscale", h.outputscale}, {"noise", h.noise}, {"mean", h.mean}};
+  put_capped(hyper, "lengthscales", lengthscales, [](double l, std::size_t) { return l; });
+  return {{"points", size()},
+          {"failed_points", failed_.size()},
+          {"gp_fits", fits_},
+          {"gp_fit_failures", gp_.fit_failures()},
+          {"jitter", gp_.jitter()},
+          {"hyperparameters", std::move(hyper)}};
+}
+
 Eigen::VectorXd BoSurrogate::propose(Rng& rng) {
   const Eigen::VectorXd u = minimize_lcb(gp_, cfg_.lcb, rng);
   return (2.0 * u.array() - 1.0).cwiseMax(-1.0).cwiseMin(1.0);
@@ -85,8 +99,22 @@ class BayesOpt : public Optimizer {
   nlohmann::json config() const override { return cfg_.to_json(); }
 
   void minimize(Objective& f, Rng& rng) override {
+    diagnostics_ = nlohmann::json::object();
+    BoSurrogate model(f.dim(), cfg_);
+    try {
+      search(f, rng, model);
+    } catch (...) {
+      // the normal end (BudgetExhausted) or a failure: keep what the model knows
+      diagnostics_ = model.diagnostics();
+      throw;
+    }
+    diagnostics_ = model.diagnostics();
+  }
+  nlohmann::json diagnostics() const override { return diagnostics_; }
+
+ private:
+  void search(Objective& f, Rng& rng, BoSurrogate& model) {
     const int d = f.dim();
-    BoSurrogate model(d, cfg_);
     // space-filling initial design: scrambled Sobol in the unit box
     const int n_init = cfg_.initial_points_for(d);
     SobolSequence sobol(d, &rng);
@@ -103,9 +131,9 @@ class BayesOpt : public Optimizer {
     }
   }
 
- private:
   std::string name_ = "bo";
   BoConfig cfg_;
+  nlohmann::json diagnostics_ = nlohmann::json::object();
 };
 
 }  // namespace

@@ -39,6 +39,10 @@ class BoSurrogate {
   int size() const { return static_cast<int>(y_.size()); }
   int fits() const { return fits_; }
   const GaussianProcess& gp() const { return gp_; }
+  // {"points", "failed_points", "gp_fits", "gp_fit_failures", "jitter", "hyperparameters":
+  // {"lengthscales" (unit-box inputs; capped), "lengthscales_truncated", "outputscale", "noise",
+  // "mean" (standardized outputs)}}: the GP as it is now (after the latest fit or extension)
+  nlohmann::json diagnostics() const;
 
  private:
   BoConfig cfg_;

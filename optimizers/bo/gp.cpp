@@ -564,7 +564,10 @@ void GaussianProcess::fit(Rng& rng) {
       best = theta;
     }
   }
-  if (best.size() > 0) hyper_ = hyper_of(best);
+  if (best.size() > 0)
+    hyper_ = hyper_of(best);
+  else
+    ++fit_failures_;
   rescale_inputs();
   refactor();
 }

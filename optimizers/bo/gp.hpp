@@ -60,6 +60,10 @@ class GaussianProcess {
   // Cholesky factorization fails. rng draws: per start, the prior sample (not for the first),
   // then one nlopt::srand seed. Without data it does nothing.
   void fit(Rng& rng);
+  // fit() calls so far in which no start reached a finite objective (the hyperparameters were kept)
+  int fit_failures() const { return fit_failures_; }
+  // diagonal jitter of the current factor (0 when the plain Cholesky factorization worked)
+  double jitter() const { return jitter_; }
 
   // Objective of the fit on the current (standardized) data at log-parameters
   // theta = (log lengthscales (d), log outputscale, log(noise - noise_floor), mean):
@@ -99,6 +103,7 @@ class GaussianProcess {
   Eigen::VectorXd alpha_;  // (K + noise I)^-1 (y_std - mean) = L^-T z (n)
   double jitter_ = 0.0;    // diagonal jitter of the current factor (0 when the plain one worked)
   int n_ = 0;
+  int fit_failures_ = 0;
   void standardize();   // y_mean_, y_scale_, y_std_ from y_raw_
   void rescale_inputs();  // Xs_ from X_ and the lengthscales
   void refactor();      // factor, jitter_, z_, alpha_ from Xs_, y_std_ and hyper_ (jitter ladder)

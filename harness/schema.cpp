@@ -1,0 +1,170 @@
+#include "harness/schema.hpp"
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <vector>
+
+namespace dsb {
+
+namespace {
+
+// The newest schema, for a new file. Columns added by migrations come last in their table, so a
+// migrated file and a new one have the same column order.
+const char* kCreateSchema = R"sql(
+CREATE TABLE meta(
+  key TEXT PRIMARY KEY,
+  value TEXT NOT NULL);
+CREATE TABLE configs(
+  hash TEXT PRIMARY KEY,
+  kind TEXT NOT NULL,           -- 'env' or 'optimizer'
+  json TEXT NOT NULL);          -- resolved config, canonical JSON
+CREATE TABLE runs(
+  run_id INTEGER PRIMARY KEY,
+  env TEXT NOT NULL,
+  optimizer TEXT NOT NULL,
+  seed INTEGER NOT NULL,        -- seed index 0..seeds-1
+  budget INTEGER NOT NULL,      -- episodes
+  env_config_hash TEXT NOT NULL REFERENCES configs(hash),
+  opt_config_hash TEXT NOT NULL REFERENCES configs(hash),
+  rng_seed TEXT NOT NULL,       -- per-run 64-bit seed, hex
+  status TEXT NOT NULL CHECK(status IN ('done', 'failed', 'running')),
+  episodes INTEGER NOT NULL DEFAULT 0,
+  failed_episodes INTEGER NOT NULL DEFAULT 0,
+  best_loss REAL,               -- NULL when no episode succeeded
+  best_x TEXT,                  -- JSON array, normalized units
+  wall_s REAL,
+  error TEXT,
+  started_at TEXT,
+  finished_at TEXT,
+  harness_version TEXT,
+  git_sha TEXT,
+  host TEXT,
+  diagnostics TEXT,             -- JSON {"optimizer": {...}, "objective": {...}} (version 2)
+  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash));
+CREATE TABLE evals(
+  run_id INTEGER NOT NULL REFERENCES runs(run_id),
+  episode INTEGER NOT NULL,     -- 0-based
+  loss REAL,                    -- NULL for a failed episode (simulation blew up)
+  best_loss REAL,               -- best finite loss so far
+  used_grad INTEGER NOT NULL,
+  wall_s REAL NOT NULL,
+  failed INTEGER NOT NULL DEFAULT 0,
+  metric REAL,                  -- optional second per-episode metric, NULL when none (version 2)
+  PRIMARY KEY(run_id, episode)) WITHOUT ROWID;
+)sql";
+
+// One step of the chain: SQL that takes a database of version `from` to version from + 1.
+struct Migration {
+  int from;
+  const char* sql;
+};
+
+const Migration kMigrations[] = {
+    {1, "ALTER TABLE runs ADD COLUMN diagnostics TEXT;"
+        "ALTER TABLE evals ADD COLUMN metric REAL;"},
+};
+
+// The columns every table must have at a version (a file may have more).
+std::map<std::string, std::vector<std::string>> required_columns(int version) {
+  std::map<std::string, std::vector<std::string>> cols = {
+      {"meta", {"key", "value"}},
+      {"configs", {"hash", "kind", "json"}},
+      {"runs", {"run_id", "env", "optimizer", "seed", "budget", "env_config_hash", "opt_config_hash",
+                "rng_seed", "status", "episodes", "failed_episodes", "best_loss", "best_x", "wall_s",
+                "error", "started_at", "finished_at", "harness_version", "git_sha", "host"}},
+      {"evals", {"run_id", "episode", "loss", "best_loss", "used_grad", "wall_s", "failed"}},
+  };
+  if (version >= 2) {
+    cols["runs"].push_back("diagnostics");
+    cols["evals"].push_back("metric");
+  }
+  return cols;
+}
+
+std::set<std::string> table_names(Database& db) {
+  Statement q(db.handle(), "SELECT name FROM sqlite_master WHERE type='table' AND name NOT LIKE 'sqlite\\_%' ESCAPE '\\'");
+  std::set<std::string> names;
+  while (q.step()) names.insert(q.column_text(0));
+  return names;
+}
+
+std::set<std::string> column_names(Database& db, const std::string& table) {
+  Statement q(db.handle(), "SELECT name FROM pragma_table_info(?)");
+  q.bind(1, table);
+  std::set<std::string> names;
+  while (q.step()) names.insert(q.column_text(0));
+  return names;
+}
+
+[[noreturn]] void not_ours(Database& db, const std::string& why) {
+  throw StoreError("database '" + db.path() + "' is not a harness database (" + why + "); nothing was written");
+}
+
+// the first required column of `table` missing at `version`, or empty
+std::string missing_column(Database& db, const std::string& table, int version) {
+  const auto have = column_names(db, table);
+  const auto required = required_columns(version);
+  for (const auto& c : required.at(table))
+    if (!have.count(c)) return c;
+  return {};
+}
+
+}  // namespace
+
+int check_schema(Database& db) {
+  const auto tables = table_names(db);
+  if (tables.empty()) return 0;
+  if (!tables.count("meta")) not_ours(db, "it has tables but no 'meta' table");
+  if (const auto c = missing_column(db, "meta", 1); !c.empty())
+    not_ours(db, "table 'meta' has no column '" + c + "'");
+
+  Statement q(db.handle(), "SELECT value FROM meta WHERE key='schema_version'");
+  if (!q.step()) not_ours(db, "no meta.schema_version");
+  const std::string text = q.column_text(0);
+  const bool digits = !text.empty() && text.size() < 9 &&
+                      std::all_of(text.begin(), text.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
+  const int version = digits ? std::stoi(text) : 0;
+  if (version < 1) not_ours(db, "meta.schema_version is '" + text + "', not a version number");
+  if (version > kSchemaVersion)
+    throw StoreError("database '" + db.path() + "' has schema_version " + text +
+                     ", newer than this harness (" + std::to_string(kSchemaVersion) +
+                     "): use a newer harness; nothing was written");
+
+  for (const auto& [table, cols] : required_columns(version)) {
+    if (!tables.count(table)) not_ours(db, "schema_version " + text + " but no table '" + table + "'");
+    if (const auto c = missing_column(db, table, version); !c.empty())
+      not_ours(db, "table '" + table + "' has no column '" + c + "' of schema_version " + text);
+  }
+  return version;
+}
+
+void prepare_schema(Database& db) {
+  check_schema(db);  // refuse a foreign or newer file before the first write
+  db.exec("PRAGMA journal_mode=WAL");
+  db.exec("PRAGMA synchronous=NORMAL");
+  db.exec("PRAGMA foreign_keys=ON");
+  Transaction tx(db);
+  // again under the write lock: another process may have created or migrated the file meanwhile
+  int version = check_schema(db);
+  if (version == 0) {
+    db.exec(kCreateSchema);
+    Statement meta(db.handle(), "INSERT INTO meta(key, value) VALUES ('schema_version', ?)");
+    meta.bind(1, std::to_string(kSchemaVersion)).run();
+  } else if (version < kSchemaVersion) {
+    // the chain of steps, in order, all in this transaction
+    while (version < kSchemaVersion) {
+      const auto* step = std::find_if(std::begin(kMigrations), std::end(kMigrations),
+                                      [&](const Migration& m) { return m.from == version; });
+      if (step == std::end(kMigrations))
+        throw StoreError("no migration from schema_version " + std::to_string(version));
+      db.exec(step->sql);
+      ++version;
+    }
+    Statement meta(db.handle(), "UPDATE meta SET value=? WHERE key='schema_version'");
+    meta.bind(1, std::to_string(kSchemaVersion)).run();
+  }
+  tx.commit();
+}
+
+}  // namespace dsb

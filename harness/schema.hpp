@@ -1,0 +1,30 @@
+#pragma once
+// The database schema (design.md "Database"): its version, the SQL of the newest version, and the
+// chain of in-place migrations that brings an older harness database up to it.
+//
+// Versions:
+//   1  runs, evals, configs, meta (the first release)
+//   2  + runs.diagnostics (JSON: what the optimizer and the objective saw during the run)
+//      + evals.metric (REAL, NULL: an optional second per-episode metric)
+// A later version adds one migration step (from = kSchemaVersion - 1) and bumps kSchemaVersion.
+#include <string>
+
+#include "harness/sqlite_db.hpp"
+
+namespace dsb {
+
+inline constexpr int kSchemaVersion = 2;
+
+// The schema_version of an opened file: 0 for an empty database (no tables at all). Throws
+// StoreError naming the file when it is not a harness database (tables but no meta table, no
+// meta.schema_version, a version that is not a number >= 1, tables of our names without the
+// columns of that version) or when its version is newer than kSchemaVersion. Reads only.
+int check_schema(Database& db);
+
+// Makes `db` a harness database of version kSchemaVersion: checks it (check_schema, so a
+// foreign or newer file is refused before anything is written), switches it to WAL, then in one
+// transaction creates the schema (empty file) or applies the migration steps from its version on.
+// Throws StoreError; a failed migration is rolled back and leaves the file as it was.
+void prepare_schema(Database& db);
+
+}  // namespace dsb
