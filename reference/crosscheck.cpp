@@ -259,7 +259,7 @@ Rollout CrosscheckScene::ours(std::span<const double> x) const {
 Rollout CrosscheckScene::mujoco(std::span<const double> x) {
   if (const auto* c = impl_->cartpole) {
     if (!impl_->mj_cartpole) impl_->mj_cartpole.emplace(c->cartpole_config());
-    return tip_rollout("mujoco", impl_->mj_cartpole->tip_trajectory(x), c->cartpole_config());
+    return tip_rollout("mujoco", impl_->mj_cartpole->tip_trajectory(*c, x), c->cartpole_config());
   }
   if (const auto* b = impl_->bounce) {
     if (!impl_->mj_bounce) impl_->mj_bounce.emplace(b->bounce_config());
@@ -276,7 +276,7 @@ Rollout CrosscheckScene::mujoco(std::span<const double> x) {
 Rollout CrosscheckScene::bullet(std::span<const double> x) {
   if (const auto* c = impl_->cartpole) {
     if (!impl_->bt_cartpole) impl_->bt_cartpole = std::make_unique<BulletCartpole>(c->cartpole_config());
-    return tip_rollout("bullet", impl_->bt_cartpole->tip_trajectory(x), c->cartpole_config());
+    return tip_rollout("bullet", impl_->bt_cartpole->tip_trajectory(*c, x), c->cartpole_config());
   }
   if (const auto* b = impl_->bounce) {
     if (!impl_->bt_bounce) impl_->bt_bounce = std::make_unique<BulletBounce>(b->bounce_config());

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "common/error.hpp"
+#include "common/rng.hpp"
 #include "envs/rigid/bounce_env.hpp"
 #include "envs/rigid/cartpole_env.hpp"
 #include "envs/rigid/pinball_env.hpp"
@@ -202,6 +203,40 @@ TEST(ReferenceBullet, CartpoleStateReadsBackInOurConventions) {
       ASSERT_NEAR(s.dphi(i), ours.dphi(i), 1e-10) << t;
     }
     ASSERT_NEAR((bt.tip() - cartpole_tip(model, ours)).norm(), 0.0, 1e-10) << t;
+  }
+}
+
+// ---------------------------------- cartpoles: the parameter map ---------------------------
+
+// the engines take each step's controls from the env's own map (CartpoleEnv::controls), here a
+// map other than the default one, and refuse an env whose config their model was not built from
+TEST(ReferenceCartpole, EnginesFollowTheEnvsParameterMap) {
+  if (!mujoco_available() && !bullet_available()) GTEST_SKIP() << "built without MuJoCo and Bullet";
+  CartpoleConfig cfg = CartpoleConfig::one_link();
+  cfg.max_cart_speed = 2.0;
+  cfg.max_torque = 7.0;
+  const CartpoleEnv env("cartpole1", cfg);
+  const CartpoleEnv other("cartpole1", CartpoleConfig::one_link());
+  Rng rng(11);
+  std::vector<double> x(env.dim());
+  for (auto& xi : x) xi = rng.uniform(-1.0, 1.0);
+  std::vector<Eigen::Vector2d> ours;
+  for (const auto& s : env.trajectory(x)) ours.push_back(cartpole_tip(env.model(), s));
+  auto worst = [&](const std::vector<Eigen::Vector2d>& tips) {
+    EXPECT_EQ(tips.size(), ours.size());
+    double w = 0.0;
+    for (std::size_t t = 0; t < tips.size() && t < ours.size(); ++t) w = std::max(w, (tips[t] - ours[t]).norm());
+    return w;
+  };
+  if (mujoco_available()) {
+    MujocoCartpole mj(cfg);
+    EXPECT_LE(worst(mj.tip_trajectory(env, x)), 1e-6);
+    EXPECT_THROW(mj.tip_trajectory(other, x), std::invalid_argument);
+  }
+  if (bullet_available()) {
+    BulletCartpole bt(cfg);
+    EXPECT_LE(worst(bt.tip_trajectory(env, x)), 1e-9);
+    EXPECT_THROW(bt.tip_trajectory(other, x), std::invalid_argument);
   }
 }
 
