@@ -217,19 +217,21 @@ Eigen::Vector2d BulletCartpole::tip() const {
   return {p.x(), p.y()};
 }
 
-std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(std::span<const double> x) {
+std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(const CartpoleEnv& env,
+                                                            std::span<const double> x) {
   const auto& cfg = impl_->cfg;
-  const int stride = 1 + cfg.links;
-  if (static_cast<int>(x.size()) != cfg.steps * stride)
-    throw std::invalid_argument("BulletCartpole: expected " + std::to_string(cfg.steps * stride) +
+  if (env.cartpole_config().to_json() != cfg.to_json())
+    throw std::invalid_argument("BulletCartpole: env '" + env.name() + "' has another config");
+  if (static_cast<int>(x.size()) != env.dim())
+    throw std::invalid_argument("BulletCartpole: expected " + std::to_string(env.dim()) +
                                 " parameters, got " + std::to_string(x.size()));
   reset();
   std::vector<Eigen::Vector2d> tips{tip()};
   tips.reserve(cfg.steps + 1);
-  double tau[kMaxLinks];
   for (int t = 0; t < cfg.steps; ++t) {
-    for (int j = 0; j < cfg.links; ++j) tau[j] = cfg.max_torque * x[t * stride + 1 + j];
-    step(cfg.max_cart_speed * x[t * stride], tau);
+    // the env's own parameter map
+    const CartpoleControls c = env.controls(x, t);
+    step(c.u, c.tau);
     tips.push_back(tip());
   }
   return tips;
@@ -393,7 +395,9 @@ void BulletCartpole::reset() { missing(); }
 void BulletCartpole::step(double, const double*) { missing(); }
 CartpoleState BulletCartpole::state() const { missing(); }
 Eigen::Vector2d BulletCartpole::tip() const { missing(); }
-std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(std::span<const double>) { missing(); }
+std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(const CartpoleEnv&, std::span<const double>) {
+  missing();
+}
 struct BulletBounce::Impl {};
 BulletBounce::BulletBounce(const BounceConfig&) { missing(); }
 BulletBounce::~BulletBounce() = default;

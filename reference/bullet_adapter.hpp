@@ -28,6 +28,7 @@
 #include "envs/rigid/bounce_env.hpp"
 #include "envs/rigid/cartpole_config.hpp"
 #include "envs/rigid/cartpole_dynamics.hpp"
+#include "envs/rigid/cartpole_env.hpp"
 #include "envs/rigid/pinball_config.hpp"
 #include "envs/rigid/pinball_env.hpp"
 
@@ -59,8 +60,10 @@ class BulletCartpole {
   CartpoleState state() const;
   // tip of the chain from Bullet's link transforms
   Eigen::Vector2d tip() const;
-  // tips of the whole rollout for the env's normalized parameters x (steps + 1 entries)
-  std::vector<Eigen::Vector2d> tip_trajectory(std::span<const double> x);
+  // tips of the whole rollout for the normalized parameters x of `env` (steps + 1 entries), each
+  // step driven by env.controls(x, t); throws std::invalid_argument when env's config is not
+  // the one this model was built from
+  std::vector<Eigen::Vector2d> tip_trajectory(const CartpoleEnv& env, std::span<const double> x);
 
  private:
   struct Impl;

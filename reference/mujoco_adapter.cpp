@@ -301,19 +301,20 @@ Eigen::Vector2d MujocoCartpole::tip() const {
   return ours.head<2>();
 }
 
-std::vector<Eigen::Vector2d> MujocoCartpole::tip_trajectory(std::span<const double> x) {
-  const int stride = 1 + cfg_.links;
-  if (static_cast<int>(x.size()) != cfg_.steps * stride)
-    throw std::invalid_argument("MujocoCartpole: expected " + std::to_string(cfg_.steps * stride) +
+std::vector<Eigen::Vector2d> MujocoCartpole::tip_trajectory(const CartpoleEnv& env,
+                                                            std::span<const double> x) {
+  if (env.cartpole_config().to_json() != cfg_.to_json())
+    throw std::invalid_argument("MujocoCartpole: env '" + env.name() + "' has another config");
+  if (static_cast<int>(x.size()) != env.dim())
+    throw std::invalid_argument("MujocoCartpole: expected " + std::to_string(env.dim()) +
                                 " parameters, got " + std::to_string(x.size()));
   reset();
   std::vector<Eigen::Vector2d> tips{tip()};
   tips.reserve(cfg_.steps + 1);
-  double tau[kMaxLinks];
   for (int t = 0; t < cfg_.steps; ++t) {
-    // the env's affine map: x = +-1 is +-max_cart_speed and +-max_torque
-    for (int j = 0; j < cfg_.links; ++j) tau[j] = cfg_.max_torque * x[t * stride + 1 + j];
-    step(cfg_.max_cart_speed * x[t * stride], tau);
+    // the env's own parameter map
+    const CartpoleControls c = env.controls(x, t);
+    step(c.u, c.tau);
     tips.push_back(tip());
   }
   return tips;
@@ -412,7 +413,9 @@ void MujocoCartpole::reset() { missing(); }
 void MujocoCartpole::step(double, const double*) { missing(); }
 CartpoleState MujocoCartpole::state() const { missing(); }
 Eigen::Vector2d MujocoCartpole::tip() const { missing(); }
-std::vector<Eigen::Vector2d> MujocoCartpole::tip_trajectory(std::span<const double>) { missing(); }
+std::vector<Eigen::Vector2d> MujocoCartpole::tip_trajectory(const CartpoleEnv&, std::span<const double>) {
+  missing();
+}
 MujocoBounce::MujocoBounce(const BounceConfig& cfg) : cfg_(cfg), sim_(std::string()) {}
 std::vector<BallState> MujocoBounce::trajectory(const Eigen::Vector3d&) { missing(); }
 BallState MujocoBounce::final_state(const Eigen::Vector3d&) { missing(); }

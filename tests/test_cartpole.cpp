@@ -114,6 +114,25 @@ TEST(CartpoleDynamics, CartSpeedFollowsTheCommandExactly) {
   EXPECT_NEAR(traj.back().x, 1.0, 1e-12);
 }
 
+// the parameter map (the references drive their engines with it): step-major, cart speed then
+// one torque per joint, x = +-1 at +-5 m/s and +-30 N m
+TEST(CartpoleDynamics, ControlsAreTheDocumentedAffineMap) {
+  const CartpoleEnv env("cartpole3", CartpoleConfig::three_links());
+  std::vector<double> x(env.dim(), 0.0);
+  const double step7[4] = {1.0, -1.0, 0.5, 0.25};
+  for (int k = 0; k < 4; ++k) x[4 * 7 + k] = step7[k];
+  const CartpoleControls c = env.controls(x, 7);
+  EXPECT_EQ(c.u, 5.0);
+  EXPECT_EQ(c.tau[0], -30.0);
+  EXPECT_EQ(c.tau[1], 15.0);
+  EXPECT_EQ(c.tau[2], 7.5);
+  for (int t : {6, 8}) {
+    const CartpoleControls rest = env.controls(x, t);
+    EXPECT_EQ(rest.u, 0.0) << t;
+    for (int j = 0; j < 3; ++j) EXPECT_EQ(rest.tau[j], 0.0) << t;
+  }
+}
+
 TEST(CartpoleRl, StepInterfaceGivesTheSameLossAsTheRollout) {
   const auto env = make_env("cartpole3");
   Rng rng(5);

@@ -1,12 +1,16 @@
 // The `harness` program end to end, as a user runs it: the done-when grid, bit-identical evals
 // whatever --jobs, SIGKILL part-way then resume, bad input (exit 2, one line naming the value,
 // the database unchanged), eval/list/gradcheck output.
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <thread>
 #include <tuple>
 
 #include <gtest/gtest.h>
@@ -93,6 +97,19 @@ std::string scalar(const std::string& path, const std::string& sql) {
   return v;
 }
 
+// Polls `sql` on the database at `path` until it returns `want`; false when the process `pid`
+// exits first or `timeout` passes (a generous bound, not a timing assertion).
+bool wait_until(const std::string& path, const std::string& sql, const std::string& want, pid_t pid,
+                std::chrono::seconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < end) {
+    if (fs::exists(path) && scalar(path, sql) == want) return true;
+    if (::waitpid(pid, nullptr, WNOHANG) != 0) return false;  // exited (and reaped) or no child
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
 void expect_same_evals(const std::map<EvalKey, double>& a, const std::map<EvalKey, double>& b) {
   ASSERT_EQ(a.size(), b.size());
   for (const auto& [k, v] : a) {
@@ -151,11 +168,25 @@ TEST_F(HarnessCli, GridKilledPartWayAndResumedEqualsTheUninterruptedGrid) {
 }
 
 TEST_F(HarnessCli, ExternalSigkillDuringALongRunLeavesNothingHalfDone) {
-  // a run long enough to be killed from outside while it is computing
+  // a run long enough to be killed from outside while it is computing: started in the
+  // background, killed once the database shows its first run 'running' (polled, no sleep that a
+  // loaded machine could outlast)
   const std::string grid = "--env cartpole3 --optimizer cmaes --seeds 3 --budget 20000 --jobs 1 --quiet";
-  const std::string cmd = std::string(DSB_HARNESS_EXE) + " " + grid + " --db " + db("k.sqlite") +
-                          " > /dev/null 2>&1 & pid=$!; sleep 1; kill -9 $pid; wait $pid";
-  std::system(cmd.c_str());
+  const std::string cmd = std::string("exec ") + DSB_HARNESS_EXE + " " + grid + " --db " +
+                          db("k.sqlite") + " > /dev/null 2>&1 < /dev/null";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const bool started = wait_until(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='running'",
+                                  "1", pid, std::chrono::seconds(120));
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(started) << "no run row 'running' appeared (the harness exited or took over 120 s)";
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "the harness ended before the kill";
   const auto done_before = scalar(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='done'");
   EXPECT_EQ(scalar(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='running'"), "1");
   // evals exist only for runs that are done

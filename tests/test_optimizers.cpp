@@ -122,18 +122,27 @@ TEST(RandDescents, RestartsFromRandomStartsAndStopsStaleDescents) {
   EXPECT_NE(f.points()[0], f.points()[patience + 1]);
 }
 
-TEST(RandDescents, EachDescentHasAtMostMaxSteps) {
-  auto f = sphere_objective(2, 450);
-  run("rand-descents", f, 5);
-  // count restarts: a jump that Adam's clipped step (<= lr per coordinate) cannot make
-  int longest = 0, current = 1;
-  for (std::size_t i = 1; i < f.points().size(); ++i) {
-    double jump = 0.0;
-    for (int d = 0; d < 2; ++d) jump = std::max(jump, std::abs(f.points()[i][d] - f.points()[i - 1][d]));
-    current = jump > 0.1 + 1e-12 ? 1 : current + 1;
-    longest = std::max(longest, current);
+TEST(RandDescents, DescentsAreCutAtExactlyMaxSteps) {
+  // patience larger than max_steps and a step too small to reach the minimum: every descent
+  // keeps improving, so only the max_steps cap can end it
+  DescentConfig cfg = rand_descents_defaults();
+  cfg.max_steps = 7;
+  cfg.patience = 50;
+  cfg.adam.lr = 0.01;
+  auto f = sphere_objective(2, 70);
+  auto opt = make_rand_descents(cfg);
+  Rng rng(5);
+  EXPECT_THROW(opt->minimize(f, rng), BudgetExhausted);
+  ASSERT_EQ(f.points().size(), 70u);
+  // the starts are the optimizer's only random draws: descent k starts at the k-th one
+  Rng starts(5);
+  for (int k = 0; k < 10; ++k) {
+    std::vector<double> start(2);
+    for (auto& xi : start) xi = starts.uniform(-1.0, 1.0);
+    EXPECT_EQ(f.points()[7 * k], start) << "descent " << k << " does not start at episode " << 7 * k;
+    for (int j = 1; j < 7; ++j)  // inside a descent: Adam steps, each one improving
+      EXPECT_LT(f.losses()[7 * k + j], f.losses()[7 * k + j - 1]) << "descent " << k << " step " << j;
   }
-  EXPECT_LE(longest, rand_descents_defaults().max_steps);
 }
 
 TEST(OptimizerConfig, ValidationNamesTheField) {

@@ -13,6 +13,8 @@
 #include <gtest/gtest.h>
 
 #include "common/error.hpp"
+#include "common/rng.hpp"
+#include "envs/core/registry.hpp"
 #include "envs/rigid/bounce_env.hpp"
 #include "envs/rigid/cartpole_env.hpp"
 #include "envs/rigid/pinball_env.hpp"
@@ -133,7 +135,8 @@ TEST(ReferenceMujoco, CartpoleMjcfComesFromTheConfig) {
 TEST(ReferenceMujoco, CartpoleTipMatchesOursToOneMicrometre) {
   REQUIRE_MUJOCO();
   for (const std::string env : {"cartpole1", "cartpole3"}) {
-    CrosscheckScene scene(env);
+    const auto owned = make_scene(env);
+    CrosscheckScene& scene = *owned;
     const double worst = worst_deviation(rollouts(scene, "ours"), rollouts(scene, "mujoco"));
     EXPECT_LE(worst, 1e-6) << env;  // the requirement, over the whole 100-step horizon
     EXPECT_EQ(crosscheck_tolerances(env, "ours-mujoco").deviation, 1e-6);
@@ -173,7 +176,8 @@ TEST(ReferenceMujoco, CartpoleStateReadsBackInOurConventions) {
 TEST(ReferenceBullet, CartpoleTipMatchesOurs) {
   REQUIRE_BULLET();
   for (const std::string env : {"cartpole1", "cartpole3"}) {
-    CrosscheckScene scene(env);
+    const auto owned = make_scene(env);
+    CrosscheckScene& scene = *owned;
     const double worst = worst_deviation(rollouts(scene, "ours"), rollouts(scene, "bullet"));
     // measured 1.1e-13 (btMultiBody steps semi-implicit Euler like ours, in double precision)
     EXPECT_LE(worst, crosscheck_tolerances(env, "ours-bullet").deviation) << env;
@@ -202,6 +206,40 @@ TEST(ReferenceBullet, CartpoleStateReadsBackInOurConventions) {
       ASSERT_NEAR(s.dphi(i), ours.dphi(i), 1e-10) << t;
     }
     ASSERT_NEAR((bt.tip() - cartpole_tip(model, ours)).norm(), 0.0, 1e-10) << t;
+  }
+}
+
+// ---------------------------------- cartpoles: the parameter map ---------------------------
+
+// the engines take each step's controls from the env's own map (CartpoleEnv::controls), here a
+// map other than the default one, and refuse an env whose config their model was not built from
+TEST(ReferenceCartpole, EnginesFollowTheEnvsParameterMap) {
+  if (!mujoco_available() && !bullet_available()) GTEST_SKIP() << "built without MuJoCo and Bullet";
+  CartpoleConfig cfg = CartpoleConfig::one_link();
+  cfg.max_cart_speed = 2.0;
+  cfg.max_torque = 7.0;
+  const CartpoleEnv env("cartpole1", cfg);
+  const CartpoleEnv other("cartpole1", CartpoleConfig::one_link());
+  Rng rng(11);
+  std::vector<double> x(env.dim());
+  for (auto& xi : x) xi = rng.uniform(-1.0, 1.0);
+  std::vector<Eigen::Vector2d> ours;
+  for (const auto& s : env.trajectory(x)) ours.push_back(cartpole_tip(env.model(), s));
+  auto worst = [&](const std::vector<Eigen::Vector2d>& tips) {
+    EXPECT_EQ(tips.size(), ours.size());
+    double w = 0.0;
+    for (std::size_t t = 0; t < tips.size() && t < ours.size(); ++t) w = std::max(w, (tips[t] - ours[t]).norm());
+    return w;
+  };
+  if (mujoco_available()) {
+    MujocoCartpole mj(cfg);
+    EXPECT_LE(worst(mj.tip_trajectory(env, x)), 1e-6);
+    EXPECT_THROW(mj.tip_trajectory(other, x), std::invalid_argument);
+  }
+  if (bullet_available()) {
+    BulletCartpole bt(cfg);
+    EXPECT_LE(worst(bt.tip_trajectory(env, x)), 1e-9);
+    EXPECT_THROW(bt.tip_trajectory(other, x), std::invalid_argument);
   }
 }
 
@@ -294,7 +332,8 @@ TEST(ReferenceContact, MujocoPinballPaddlesAreTheConfigsCapsules) {
 // before the first impact every engine runs the same semi-implicit Euler recursion
 TEST(ReferenceContact, FreeFlightIsExactAndImpactsStartTogether) {
   for (const auto& env : kContactEnvs) {
-    CrosscheckScene scene(env);
+    const auto owned = make_scene(env);
+    CrosscheckScene& scene = *owned;
     const auto ours = rollouts(scene, "ours");
     for (const std::string engine : {"mujoco", "bullet"}) {
       if ((engine == "mujoco" && !mujoco_available()) || (engine == "bullet" && !bullet_available()))
@@ -318,7 +357,8 @@ TEST(ReferenceContact, FreeFlightIsExactAndImpactsStartTogether) {
 // halved) and Bullet's restitution impulse (equivalent_restitution) agree on flat faces
 TEST(ReferenceContact, FirstReboundAgreesOnFlatFaces) {
   for (const auto& env : kContactEnvs) {
-    CrosscheckScene scene(env);
+    const auto owned = make_scene(env);
+    CrosscheckScene& scene = *owned;
     const auto xs = crosscheck_vectors(env);
     int compared = 0;
     for (const auto& x : xs) {
@@ -343,7 +383,8 @@ TEST(ReferenceContact, FirstReboundAgreesOnFlatFaces) {
 // clear throws (not grazing, no bounce at the horizon, no corner): the same number of ground
 // bounces in every engine; Bullet's final position within 0.75 m of ours
 TEST(ReferenceContact, BounceCountsAndFinalPositions) {
-  CrosscheckScene scene("bounce");
+  const auto owned = make_scene("bounce");
+  CrosscheckScene& scene = *owned;
   const auto xs = crosscheck_vectors("bounce");
   ASSERT_EQ(xs.size(), 24u);
   int several = 0, walls = 0;
@@ -404,6 +445,21 @@ TEST(Crosscheck, OneEnvIsDeterministicAndUnknownNamesAreUsageErrors) {
   std::ostringstream c;
   EXPECT_THROW(run_crosscheck({"cartpole2"}, c), UsageError);
   EXPECT_THROW(run_crosscheck({"sphere-10"}, c), UsageError);
+}
+
+// each scene's env is the one the harness runs: the registry's env of that name, same config
+TEST(Crosscheck, EveryScenesEnvIsTheRegistrysEnv) {
+  ASSERT_EQ(crosscheck_envs(), (std::vector<std::string>{"cartpole1", "cartpole3", "bounce",
+                                                          "pinball-1x2", "pinball-4x4"}));
+  for (const auto& name : crosscheck_envs()) {
+    const auto scene = make_scene(name);
+    const auto env = make_env(name);
+    EXPECT_EQ(scene->env(), name);
+    EXPECT_EQ(scene->our_env().name(), name);
+    EXPECT_EQ(scene->our_env().config(), env->config()) << name;
+    EXPECT_EQ(scene->dim(), env->dim()) << name;
+  }
+  EXPECT_THROW(make_scene("sphere-10"), UsageError);
 }
 
 TEST(Crosscheck, TolerancesAreTheDocumentedOnes) {

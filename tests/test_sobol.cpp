@@ -1,6 +1,6 @@
-// Sobol sequence and Latin hypercube: van der Corput first dimension, the known primitive
-// polynomials, 1-D stratification of aligned blocks of 2^k points, the unit box, determinism,
-// 400- and 1111-dimensional sequences, LHS strata, and a lower discrepancy than i.i.d. uniforms.
+// Sobol sequence: van der Corput first dimension, the known primitive polynomials, 1-D
+// stratification of aligned blocks of 2^k points, the unit box, determinism, 400- and
+// 1111-dimensional sequences, and a lower discrepancy than i.i.d. uniforms.
 #include "optimizers/bo/sobol.hpp"
 
 #include <algorithm>
@@ -179,37 +179,6 @@ TEST(Sobol, LowerDiscrepancyThanUniformRandom) {
   EXPECT_LT(ds, 0.005);
   EXPECT_LT(dh, 0.005);
   EXPECT_GT(dr, 2.0 * std::max(ds, dh));
-}
-
-// ---------------------------------------------------------------------------------------------
-// Latin hypercube
-
-TEST(LatinHypercube, OnePointPerStratumOnEveryAxis) {
-  for (int n : {1, 2, 37, 100}) {
-    Rng rng(static_cast<std::uint64_t>(n));
-    const Eigen::MatrixXd P = dsb::latin_hypercube(n, 6, rng);
-    ASSERT_EQ(P.rows(), n);
-    ASSERT_EQ(P.cols(), 6);
-    EXPECT_TRUE(in_unit_box(P));
-    for (int j = 0; j < 6; ++j) {
-      std::vector<int> c(n, 0);
-      for (int i = 0; i < n; ++i) ++c[static_cast<std::size_t>(std::floor(P(i, j) * n))];
-      EXPECT_TRUE(std::all_of(c.begin(), c.end(), [](int x) { return x == 1; })) << "n " << n << " axis " << j;
-    }
-  }
-  Rng rng(1);
-  EXPECT_EQ(dsb::latin_hypercube(0, 3, rng).rows(), 0);
-  EXPECT_THROW(dsb::latin_hypercube(-1, 3, rng), std::invalid_argument);
-}
-
-TEST(LatinHypercube, DeterministicAndNotTheIdentityPermutation) {
-  Rng a(5), b(5);
-  const Eigen::MatrixXd P = dsb::latin_hypercube(50, 3, a), Q = dsb::latin_hypercube(50, 3, b);
-  EXPECT_TRUE((P.array() == Q.array()).all());
-  // the axes are shuffled independently
-  int same = 0;
-  for (int i = 0; i < 50; ++i) same += std::floor(P(i, 0) * 50) == std::floor(P(i, 1) * 50) ? 1 : 0;
-  EXPECT_LT(same, 10);
 }
 
 }  // namespace

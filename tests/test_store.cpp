@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include "common/config_hash.hpp"
 #include "harness/store.hpp"
 
 namespace dsb {
@@ -55,6 +56,20 @@ class StoreTest : public ::testing::Test {
   fs::path dir_;
   std::string path_;
 };
+
+// the canonical text behind config hashes, as common/config_hash.hpp documents it
+TEST(ConfigHash, CanonicalJsonSortsKeysAndPrintsRoundTripDoubles) {
+  const nlohmann::json j = {{"b", 0.1},  {"a", 1.0},      {"c", 1e-9},     {"d", 1.0 / 3.0},
+                            {"k", 5},    {"n", std::nan("")}, {"i", INFINITY}};
+  EXPECT_EQ(canonical_json(j),
+            R"({"a":1.0,"b":0.1,"c":1e-09,"d":0.3333333333333333,"i":null,"k":5,"n":null})");
+  // every double reads back exactly, so neighbouring doubles hash apart
+  const double x = 0.1, next = std::nextafter(x, 1.0);
+  EXPECT_EQ(std::stod(canonical_json(nlohmann::json(next))), next);
+  EXPECT_NE(config_hash({{"lr", x}}), config_hash({{"lr", next}}));
+  EXPECT_NE(config_hash({{"lr", 5}}), config_hash({{"lr", 5.0}}));
+  EXPECT_EQ(config_hash({{"lr", 1.0}}).size(), 16u);
+}
 
 TEST_F(StoreTest, CreatesTheSchemaInWalModeWithItsVersion) {
   Store store(path_, {"0.1.0", "abc", "host"});

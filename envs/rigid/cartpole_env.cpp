@@ -34,10 +34,7 @@ std::unique_ptr<Workspace> CartpoleEnv::make_workspace() const {
 namespace {
 
 // physical controls of step t from the normalized parameters: u (m/s), tau (n, N m)
-struct StepControl {
-  double u;
-  double tau[kMaxLinks];
-};
+using StepControl = CartpoleControls;
 
 StepControl control_at(const CartpoleConfig& cfg, std::span<const double> x, int t) {
   const int stride = 1 + cfg.links;
@@ -52,6 +49,10 @@ bool finite_state(const CartpoleState& s) {
 }
 
 }  // namespace
+
+CartpoleControls CartpoleEnv::controls(std::span<const double> x, int t) const {
+  return control_at(cfg_, x, t);
+}
 
 double CartpoleEnv::final_loss(const CartpoleState& s) const {
   if (!finite_state(s)) return std::numeric_limits<double>::quiet_NaN();

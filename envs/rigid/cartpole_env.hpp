@@ -21,6 +21,12 @@ struct CartpoleWorkspace : Workspace {
   std::vector<CartpoleStepCache> caches;   // steps
 };
 
+// physical controls of one step: cart speed u (m/s) and joint torques tau (N m, links entries)
+struct CartpoleControls {
+  double u = 0.0;
+  double tau[kMaxLinks] = {};
+};
+
 class CartpoleEnv : public Env {
  public:
   CartpoleEnv(std::string name, CartpoleConfig cfg);
@@ -30,6 +36,9 @@ class CartpoleEnv : public Env {
 
   const CartpoleConfig& cartpole_config() const { return cfg_; }
   const CartpoleModel& model() const { return model_.get(); }
+  // the parameter map: physical controls of step t for the normalized parameters x (the
+  // references drive their engines with it)
+  CartpoleControls controls(std::span<const double> x, int t) const;
   // the trajectory of states (steps + 1) for the parameters x: used by tests and references
   std::vector<CartpoleState> trajectory(std::span<const double> x) const;
   // loss of a final state (NaN when it is not finite)

@@ -1,4 +1,4 @@
-// Own Sobol sequence and Latin hypercube. Construction (Bratley and Fox 1988; Joe and Kuo 2003 for
+// Own Sobol sequence. Construction (Bratley and Fox 1988; Joe and Kuo 2003 for
 // the recurrence in 32-bit fixed point), with our own direction numbers:
 // - dimension 1: v_i = 2^-i (van der Corput);
 // - dimension j >= 2: the (j-1)-th primitive polynomial over GF(2), in order of degree then value,
@@ -137,20 +137,6 @@ Eigen::MatrixXd SobolSequence::draw(int n) {
   if (n < 0) throw std::invalid_argument("sobol: draw needs n >= 0");
   Eigen::MatrixXd P(n, dim_);
   for (int i = 0; i < n; ++i) P.row(i) = next().transpose();
-  return P;
-}
-
-Eigen::MatrixXd latin_hypercube(int n, int dim, Rng& rng) {
-  if (n < 0 || dim < 1) throw std::invalid_argument("latin_hypercube: needs n >= 0 and dim >= 1");
-  Eigen::MatrixXd P(n, dim);
-  std::vector<int> perm(n);
-  const double below_one = std::nextafter(1.0, 0.0);
-  for (int j = 0; j < dim; ++j) {
-    // Fisher-Yates shuffle of the strata, then one uniform position inside each
-    for (int i = 0; i < n; ++i) perm[i] = i;
-    for (int i = n - 1; i > 0; --i) std::swap(perm[i], perm[rng.below(static_cast<std::uint64_t>(i) + 1)]);
-    for (int i = 0; i < n; ++i) P(i, j) = std::min((perm[i] + rng.uniform()) / n, below_one);
-  }
   return P;
 }
 

@@ -35,7 +35,4 @@ class SobolSequence {
 // x^3 + x + 1 = 0b1011.
 std::vector<std::uint32_t> primitive_polynomials(int count);
 
-// Latin hypercube of n points in [0, 1)^dim from rng (one stratum per point and axis).
-Eigen::MatrixXd latin_hypercube(int n, int dim, Rng& rng);
-
 }  // namespace dsb

@@ -29,13 +29,18 @@ using namespace dsb::reference;
 
 constexpr int kSteps = 100;  // cartpole3 episode
 
-// physical controls of a seeded cartpole3 episode: per step u then 3 torques
+// physical controls of a seeded cartpole3 episode: normalized parameters uniform in [-0.5, 0.5]
+// through the env's parameter map, per step u then 3 torques
 std::vector<double> cartpole_controls(const CartpoleConfig& cfg) {
+  const CartpoleEnv env("cartpole3", cfg);
   Rng rng(3);
+  std::vector<double> x(env.dim());
+  for (auto& xi : x) xi = rng.uniform(-0.5, 0.5);
   std::vector<double> c;
   for (int t = 0; t < cfg.steps; ++t) {
-    c.push_back(cfg.max_cart_speed * rng.uniform(-0.5, 0.5));
-    for (int j = 0; j < cfg.links; ++j) c.push_back(cfg.max_torque * rng.uniform(-0.5, 0.5));
+    const CartpoleControls step = env.controls(x, t);
+    c.push_back(step.u);
+    c.insert(c.end(), step.tau, step.tau + cfg.links);
   }
   return c;
 }
