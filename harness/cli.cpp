@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
+#include <set>
 #include <iostream>
 #include <thread>
 
@@ -13,6 +15,8 @@
 #include "common/usable_cpus.hpp"
 #include "harness/commands.hpp"
 #include "harness/grid.hpp"
+#include "envs/core/lazy_model.hpp"
+#include "harness/plan.hpp"
 #include "harness/runner.hpp"
 #include "harness/store.hpp"
 #include "reference/crosscheck.hpp"
@@ -53,7 +57,14 @@ std::string host_name() {
   return buf;
 }
 
-int command_run(const RunArgs& a) {
+// the grid and the jobs of run and plan arguments; every name and number is checked here, before
+// any database is opened
+struct CheckedRun {
+  std::vector<RunSpec> grid;
+  int jobs = 1;
+};
+
+CheckedRun check_run_args(const RunArgs& a) {
   GridRequest req;
   req.all = a.all;
   req.envs = a.envs;
@@ -71,9 +82,37 @@ int command_run(const RunArgs& a) {
   if (a.jobs < 0) throw UsageError("--jobs must be >= 1, got " + std::to_string(a.jobs));
   if (a.threads < 1 || a.threads > 1024)
     throw UsageError("--threads must be from 1 to 1024, got " + std::to_string(a.threads));
-  const int jobs = a.jobs > 0 ? a.jobs : std::max(1, usable_cpus() / a.threads);
-  // every name and number is checked before the database is opened
-  const auto grid = expand_grid(req);
+  return {expand_grid(req), a.jobs > 0 ? a.jobs : std::max(1, usable_cpus() / a.threads)};
+}
+
+int command_plan(const RunArgs& a) {
+  const auto start = std::chrono::steady_clock::now();
+  const CheckedRun run = check_run_args(a);
+  std::set<RunKey> done;
+  try {
+    done = done_keys_of_file(a.db);
+  } catch (const StoreError& e) {
+    throw UsageError(std::string("--db: ") + e.what());
+  }
+  const GridPlan plan = plan_grid(run.grid, done);
+  const double planning_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double core_h = plan.pending_core_seconds / 3600.0;
+  const int parallel = std::max(1, std::min<int>(run.jobs, static_cast<int>(plan.pending.size())));
+  std::cout << fmt::format("plan: {} runs in the grid; {} already done in {}; {} to run ({} episodes)\n",
+                           run.grid.size(), plan.skipped, a.db, plan.pending.size(), plan.pending_episodes);
+  std::cout << fmt::format("  simulation: about {:.3g} core-hours from the envs' cost hints (optimizer overhead, "
+                           "e.g. bo's GP, not included)\n", core_h);
+  std::cout << fmt::format("  with --jobs {} --threads {}: about {:.3g} h wall for the simulation\n", run.jobs,
+                           a.threads, core_h / parallel);
+  std::cout << fmt::format("  planned in {:.3f} s; env models built: {} (nothing was written)\n", planning_s,
+                           lazy_model_builds());
+  return 0;
+}
+
+int command_run(const RunArgs& a) {
+  const CheckedRun run = check_run_args(a);
+  const auto& grid = run.grid;
+  const int jobs = run.jobs;
 
   std::unique_ptr<Store> store;
   try {
@@ -110,6 +149,10 @@ int harness_main(int argc, char** argv) {
   add_run_options(*run, run_args);
 
   auto* list = app.add_subcommand("list", "envs (dim, differentiable, rl) and optimizers");
+
+  RunArgs plan_args;
+  auto* plan = app.add_subcommand("plan", "what a grid would run (runs, episodes, core-hours), writing nothing");
+  add_run_options(*plan, plan_args);
 
   std::string eval_env, eval_x;
   bool eval_grad = false;
@@ -170,6 +213,7 @@ int harness_main(int argc, char** argv) {
 
   try {
     if (list->parsed()) return command_list();
+    if (plan->parsed()) return command_plan(plan_args);
     if (landscape->parsed()) return command_landscape(ls_env, ls_dims, ls_res, ls_center, ls_out);
     if (crosscheck->parsed()) {
       if (!crosscheck_available())

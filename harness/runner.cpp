@@ -2,14 +2,13 @@
 
 #include <atomic>
 #include <chrono>
-#include <map>
 #include <mutex>
 #include <thread>
 
-#include "common/config_hash.hpp"
 #include "envs/core/registry.hpp"
 #include "harness/budget.hpp"
 #include "harness/fault_injection.hpp"
+#include "harness/plan.hpp"
 #include "harness/progress.hpp"
 #include "optimizers/core/registry.hpp"
 
@@ -43,44 +42,11 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
 GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs, int threads,
                      std::FILE* progress_out) {
   GridSummary summary;
-  // resolve each distinct env's and optimizer's config once (cheap: no env model is built) and
-  // skip runs already done
-  struct Pending {
-    RunSpec spec;
-    RunKey key;
-    const nlohmann::json* env_config;
-    const nlohmann::json* opt_config;
-  };
-  struct Resolved {
-    nlohmann::json config;
-    std::string hash;
-  };
-  std::map<std::string, Resolved> env_configs, opt_configs;
-  auto resolve = [](std::map<std::string, Resolved>& cache, const std::string& name, auto&& config_of) -> const Resolved& {
-    auto it = cache.find(name);
-    if (it == cache.end()) {
-      nlohmann::json c = config_of(name);
-      std::string h = config_hash(c);
-      it = cache.emplace(name, Resolved{std::move(c), std::move(h)}).first;
-    }
-    return it->second;
-  };
-  std::vector<Pending> pending;
-  const auto done = store.done_keys();
-  for (const auto& spec : grid) {
-    const Resolved& env = resolve(env_configs, spec.env, [](const std::string& n) { return shared_env(n)->config(); });
-    const Resolved& opt = resolve(opt_configs, spec.optimizer, [](const std::string& n) { return make_optimizer(n)->config(); });
-    Pending p{spec, {spec.env, spec.optimizer, spec.seed, spec.budget, env.hash, opt.hash}, &env.config, &opt.config};
-    if (done.count(p.key)) {
-      ++summary.skipped;
-      continue;
-    }
-    pending.push_back(std::move(p));
-  }
+  const GridPlan plan = plan_grid(grid, store.done_keys());
+  const std::vector<PlannedRun>& pending = plan.pending;
+  summary.skipped = plan.skipped;
 
-  std::int64_t total_episodes = 0;
-  for (const auto& p : pending) total_episodes += p.spec.budget;
-  Progress progress(static_cast<std::int64_t>(pending.size()), total_episodes, progress_out);
+  Progress progress(static_cast<std::int64_t>(pending.size()), plan.pending_episodes, progress_out);
   if (progress_out && summary.skipped > 0)
     std::fprintf(progress_out, "resuming: %lld runs already done, %zu to run\n",
                  static_cast<long long>(summary.skipped), pending.size());
@@ -95,9 +61,10 @@ GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs, i
     for (;;) {
       const std::size_t i = next.fetch_add(1);
       if (i >= pending.size()) return;
-      const Pending& p = pending[i];
+      const PlannedRun& p = pending[i];
       try {
-        const std::int64_t run_id = store.begin_run(p.key, p.spec.rng_seed, *p.env_config, *p.opt_config);
+        const std::int64_t run_id =
+            store.begin_run(p.key, p.spec.rng_seed, p.env_config->config, p.opt_config->config);
         const auto env = shared_env(p.spec.env);
         const auto opt = make_optimizer(p.spec.optimizer);
         const RunResult r = execute_run(p.spec, *env, *opt, &progress.episodes(), &team);

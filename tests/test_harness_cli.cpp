@@ -195,6 +195,37 @@ TEST_F(HarnessCli, ExternalSigkillDuringALongRunLeavesNothingHalfDone) {
             std::to_string(std::stoi(done_before) * 20000));
 }
 
+TEST_F(HarnessCli, EvalsAreBitIdenticalWhateverTheNumberOfThreads) {
+  // threads inside each run: cmaes, boleap and random evaluate their batches over the team, and
+  // rastrigin-9000 reduces over blocks of coordinates on it (gd: one rollout at a time, threaded)
+  const std::string batches = "--env cartpole1 --optimizer random,cmaes,boleap --seeds 1 --budget 40 --quiet";
+  const std::string inside = "--env rastrigin-9000 --optimizer gd,random --seeds 1 --budget 20 --quiet";
+  for (const auto& [name, threads] : std::vector<std::pair<std::string, std::string>>{
+           {"t1", "--jobs 1 --threads 1"}, {"t2", "--jobs 1 --threads 2"}, {"t3", "--jobs 2 --threads 3"}}) {
+    ASSERT_EQ(harness(batches + " " + threads + " --db " + db(name + ".sqlite")).code, 0);
+    ASSERT_EQ(harness(inside + " " + threads + " --db " + db(name + ".sqlite")).code, 0);
+  }
+  const auto a = read_evals(db("t1.sqlite"));
+  EXPECT_EQ(a.size(), 3u * 40u + 2u * 20u);
+  expect_same_evals(a, read_evals(db("t2.sqlite")));
+  expect_same_evals(a, read_evals(db("t3.sqlite")));
+}
+
+TEST_F(HarnessCli, PlanCountsTheGridAndWritesNothing) {
+  const auto r = harness("plan --all --seeds 5 --db " + db("plan.sqlite"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("plan: 600 runs in the grid; 0 already done"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("env models built: 0"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(db("plan.sqlite")));
+  // runs already done are counted as such
+  ASSERT_EQ(harness("--env sphere-2,branin --optimizer random --seeds 3 --budget 5 --quiet --db " + db("p.sqlite")).code, 0);
+  const std::string before = read(db("p.sqlite"));
+  const auto p = harness("plan --env sphere-2,branin,bounce --optimizer random --seeds 3 --budget 5 --db " + db("p.sqlite"));
+  EXPECT_NE(p.out.find("9 runs in the grid; 6 already done"), std::string::npos) << p.out;
+  EXPECT_NE(p.out.find("3 to run (15 episodes)"), std::string::npos) << p.out;
+  EXPECT_EQ(read(db("p.sqlite")), before);
+}
+
 TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase) {
   ASSERT_EQ(harness("--env sphere-2 --optimizer random --seeds 1 --budget 5 --quiet --db " + db("keep.sqlite")).code, 0);
   const std::string before = read(db("keep.sqlite"));
@@ -206,6 +237,7 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
       {"--env sphere-2 --optimizer random --budget 1e", "1e"},
       {"--env sphere-2 --optimizer random --seeds 0", "0"},
       {"--env sphere-2 --optimizer random --jobs -3", "-3"},
+      {"--env sphere-2 --optimizer random --threads 0", "0"},
       {"--env sphere-2 --optimizer random --shard 3/2", "3/2"},
       {"--all --bogus-flag", "--bogus-flag"},
   };

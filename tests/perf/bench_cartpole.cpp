@@ -1,12 +1,18 @@
 // cartpole3 rollout: forward only, forward + reverse-pass gradient, and the same gradient by
 // central differences (2 x 400 rollouts), measured in one run and reported as ratios; plus a
-// whole 1,000-episode `gd` run on one core through the budget wrapper.
+// whole 1,000-episode `gd` run on one core through the budget wrapper. Rollouts reuse one
+// workspace as the harness does; heap allocations per rollout are counted (operator new is
+// replaced in this binary) and shown beside a rollout with a fresh workspace.
+#include <atomic>
 #include <cstdio>
+#include <cstdlib>
+#include <new>
 #include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
+#include "common/parallel.hpp"
 #include "common/rng.hpp"
 #include "envs/core/registry.hpp"
 #include "harness/runner.hpp"
@@ -14,6 +20,27 @@
 #include "tests/perf/timing_reporter.hpp"
 
 namespace {
+std::atomic<long long> g_allocations{0};
+}  // namespace
+
+void* operator new(std::size_t n) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace {
+
+// heap allocations per iteration, as a benchmark counter
+struct AllocationCounter {
+  long long start = g_allocations.load();
+  void report(benchmark::State& state) const {
+    state.counters["allocs/rollout"] = benchmark::Counter(
+        static_cast<double>(g_allocations.load() - start) / static_cast<double>(state.iterations()));
+  }
+};
 
 std::vector<double> point(const dsb::Env& env) {
   dsb::Rng rng(1);
@@ -25,7 +52,10 @@ std::vector<double> point(const dsb::Env& env) {
 void BM_Cartpole3Forward(benchmark::State& state) {
   const auto env = dsb::make_env("cartpole3");
   const auto x = point(*env);
-  for (auto _ : state) benchmark::DoNotOptimize(env->loss(x));
+  const auto ws = env->make_workspace();
+  const AllocationCounter allocations;
+  for (auto _ : state) benchmark::DoNotOptimize(env->loss(x, *ws, dsb::serial_team()));
+  allocations.report(state);
 }
 BENCHMARK(BM_Cartpole3Forward);
 
@@ -33,12 +63,30 @@ void BM_Cartpole3ForwardGradient(benchmark::State& state) {
   const auto env = dsb::make_env("cartpole3");
   const auto x = point(*env);
   std::vector<double> g(env->dim());
+  const auto ws = env->make_workspace();
+  const AllocationCounter allocations;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(env->loss_and_grad(x, g, *ws, dsb::serial_team()));
+    benchmark::ClobberMemory();
+  }
+  allocations.report(state);
+}
+BENCHMARK(BM_Cartpole3ForwardGradient);
+
+// the same with a new workspace per rollout (what the pre-workspace env allocated: the state and
+// step-cache histories)
+void BM_Cartpole3ForwardGradientFreshWorkspace(benchmark::State& state) {
+  const auto env = dsb::make_env("cartpole3");
+  const auto x = point(*env);
+  std::vector<double> g(env->dim());
+  const AllocationCounter allocations;
   for (auto _ : state) {
     benchmark::DoNotOptimize(env->loss_and_grad(x, g));
     benchmark::ClobberMemory();
   }
+  allocations.report(state);
 }
-BENCHMARK(BM_Cartpole3ForwardGradient);
+BENCHMARK(BM_Cartpole3ForwardGradientFreshWorkspace);
 
 void BM_Cartpole3CentralDifferences(benchmark::State& state) {
   const auto env = dsb::make_env("cartpole3");
@@ -61,11 +109,13 @@ BENCHMARK(BM_Cartpole3CentralDifferences)->Unit(benchmark::kMillisecond);
 
 void BM_GdRun1000EpisodesCartpole3(benchmark::State& state) {
   const auto env = dsb::make_env("cartpole3");
+  const AllocationCounter allocations;
   for (auto _ : state) {
     auto gd = dsb::make_optimizer("gd");
     const auto r = dsb::execute_run({"cartpole3", "gd", 0, 1000, 1}, *env, *gd);
     benchmark::DoNotOptimize(r.best_loss);
   }
+  allocations.report(state);  // per 1,000-episode run here
 }
 BENCHMARK(BM_GdRun1000EpisodesCartpole3)->Unit(benchmark::kMillisecond);
 
@@ -78,12 +128,14 @@ int main(int argc, char** argv) {
   benchmark::RunSpecifiedBenchmarks(&reporter);
   const double fwd = reporter.seconds("BM_Cartpole3Forward"),
                grad = reporter.seconds("BM_Cartpole3ForwardGradient"),
+               fresh = reporter.seconds("BM_Cartpole3ForwardGradientFreshWorkspace"),
                fd = reporter.seconds("BM_Cartpole3CentralDifferences"),
                gd = reporter.seconds("BM_GdRun1000EpisodesCartpole3");
   if (fwd > 0 && grad > 0 && fd > 0) {
     std::printf("\nratios (same run):\n");
     std::printf("  forward+gradient / forward          = %6.2f   (target <= 3)\n", grad / fwd);
     std::printf("  central differences / reverse pass   = %6.0f   (target >= 100)\n", fd / grad);
+    if (fresh > 0) std::printf("  fresh workspace / reused workspace   = %6.2f\n", fresh / grad);
   }
   if (gd > 0) std::printf("  1000-episode gd run on cartpole3     = %6.3f s (target < 2 s)\n", gd);
   benchmark::Shutdown();

@@ -1,0 +1,61 @@
+#include "harness/plan.hpp"
+
+#include <filesystem>
+
+#include "common/config_hash.hpp"
+#include "envs/core/registry.hpp"
+#include "harness/sqlite_db.hpp"
+#include "optimizers/core/registry.hpp"
+
+namespace dsb {
+namespace {
+
+template <class ConfigOf>
+const ResolvedConfig& resolve(std::map<std::string, ResolvedConfig>& cache, const std::string& name,
+                              ConfigOf&& config_of) {
+  auto it = cache.find(name);
+  if (it == cache.end()) {
+    nlohmann::json c = config_of(name);
+    std::string h = config_hash(c);
+    it = cache.emplace(name, ResolvedConfig{std::move(c), std::move(h)}).first;
+  }
+  return it->second;
+}
+
+}  // namespace
+
+GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done) {
+  GridPlan plan;
+  for (const auto& spec : grid) {
+    const ResolvedConfig& env =
+        resolve(plan.env_configs, spec.env, [](const std::string& n) { return shared_env(n)->config(); });
+    const ResolvedConfig& opt =
+        resolve(plan.opt_configs, spec.optimizer, [](const std::string& n) { return make_optimizer(n)->config(); });
+    RunKey key{spec.env, spec.optimizer, spec.seed, spec.budget, env.hash, opt.hash};
+    if (done.count(key)) {
+      ++plan.skipped;
+      continue;
+    }
+    plan.pending_episodes += spec.budget;
+    plan.pending_core_seconds += static_cast<double>(spec.budget) * shared_env(spec.env)->info().cost_hint_s;
+    plan.pending.push_back({spec, std::move(key), &env, &opt});
+  }
+  return plan;
+}
+
+std::set<RunKey> done_keys_of_file(const std::string& path) {
+  std::set<RunKey> keys;
+  if (!std::filesystem::exists(path)) return keys;
+  Database db(path, Database::Mode::read_only);
+  Statement has_runs(db.handle(), "SELECT count(*) FROM sqlite_master WHERE type='table' AND name='runs'");
+  if (!has_runs.step() || has_runs.column_int(0) == 0) return keys;
+  Statement q(db.handle(),
+              "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash FROM runs "
+              "WHERE status='done'");
+  while (q.step())
+    keys.insert({q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
+                 q.column_text(4), q.column_text(5)});
+  return keys;
+}
+
+}  // namespace dsb

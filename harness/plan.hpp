@@ -1,0 +1,45 @@
+#pragma once
+// What a grid will do before it does it: each run's key (configs resolved once per distinct env
+// and optimizer name, from metadata: no env model is built), the runs already done in the store,
+// and an estimate of the work left from each env's cost hint. Used by run_grid and by
+// `harness plan`, which writes nothing.
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "harness/run_spec.hpp"
+#include "harness/store.hpp"
+
+namespace dsb {
+
+struct ResolvedConfig {
+  nlohmann::json config;
+  std::string hash;
+};
+
+struct PlannedRun {
+  RunSpec spec;
+  RunKey key;
+  const ResolvedConfig* env_config;  // owned by the GridPlan
+  const ResolvedConfig* opt_config;
+};
+
+struct GridPlan {
+  std::vector<PlannedRun> pending;  // grid order, runs not done yet
+  std::int64_t skipped = 0;         // runs already done
+  std::int64_t pending_episodes = 0;
+  double pending_core_seconds = 0.0;  // sum of budget x env cost hint over pending runs
+  std::map<std::string, ResolvedConfig> env_configs, opt_configs;  // by name
+};
+
+GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done);
+
+// keys of the 'done' runs of an existing database, opened read-only (a file that is not a
+// harness database throws StoreError); an empty set when the file does not exist
+std::set<RunKey> done_keys_of_file(const std::string& path);
+
+}  // namespace dsb
