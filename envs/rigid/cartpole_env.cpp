@@ -3,6 +3,8 @@
 #include <cmath>
 #include <limits>
 
+#include "common/det_math.hpp"
+
 namespace dsb {
 
 CartpoleEnv::CartpoleEnv(std::string name, CartpoleConfig cfg)
@@ -83,7 +85,7 @@ double CartpoleEnv::loss_and_grad(std::span<const double> x, std::span<double> g
   adj.phi = LinkVec(model_.n);
   adj.dphi = LinkVec::Zero(model_.n);
   for (int i = 0; i < model_.n; ++i)
-    adj.phi(i) = model_.length * (dir.x() * std::cos(last.phi(i)) + dir.y() * std::sin(last.phi(i)));
+    adj.phi(i) = model_.length * (dir.x() * dm::cos(last.phi(i)) + dir.y() * dm::sin(last.phi(i)));
 
   // reverse pass through the steps; gradient in normalized units (chain rule through the scales)
   const int stride = 1 + cfg_.links;
