@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <string_view>
 
+#include "common/det_math.hpp"
+
 namespace dsb {
 
 // splitmix64 step (Steele, Lea, Flood 2014): advances s and returns a well-mixed 64-bit value
@@ -59,7 +61,7 @@ class Rng {
       v = 2.0 * uniform() - 1.0;
       s = u * u + v * v;
     } while (s >= 1.0 || s == 0.0);
-    const double f = std::sqrt(-2.0 * std::log(s) / s);
+    const double f = std::sqrt(-2.0 * dm::log(s) / s);
     cached_ = u * f;
     has_cached_ = true;
     return v * f;

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/det_math.hpp"
 #include "common/error.hpp"
 #include "optimizers/core/diagnostics.hpp"
 
@@ -79,7 +80,7 @@ const char* to_string(CmaStop s) {
 // lambda = 4 + floor(3 ln n)   (eq. 48)
 int cmaes_default_population(int n) {
   if (n < 1) throw std::invalid_argument("cmaes: dimension must be >= 1");
-  return 4 + static_cast<int>(std::floor(3.0 * std::log(static_cast<double>(n))));
+  return 4 + static_cast<int>(std::floor(3.0 * dm::log(static_cast<double>(n))));
 }
 
 CmaesConstants cmaes_constants(int n, int lambda) {
@@ -92,7 +93,7 @@ CmaesConstants cmaes_constants(int n, int lambda) {
 
   // w'_i = ln((lambda + 1) / 2) - ln i, i = 1..lambda, for all lambda (eq. 49, active CMA)
   std::vector<double> wp(lambda);
-  for (int i = 0; i < lambda; ++i) wp[i] = std::log((lambda + 1) / 2.0) - std::log(i + 1.0);
+  for (int i = 0; i < lambda; ++i) wp[i] = dm::log((lambda + 1) / 2.0) - dm::log(i + 1.0);
 
   // mu_eff over the first mu weights, mu_eff^- over the last lambda - mu   (eq. 49 text, 51)
   auto eff = [&](int lo, int hi) {
@@ -256,11 +257,11 @@ void CmaState::tell(const std::vector<Eigen::VectorXd>& xs, const std::vector<do
   const double norm_p_sigma = p_sigma_.norm();
 
   // 6. sigma <- sigma exp((c_s / d_s)(||p_sigma|| / E||N(0,I)|| - 1))   (eq. 44), capped at 1e32 (library)
-  sigma_ *= std::exp((cs / k_.d_sigma) * (norm_p_sigma / k_.chi_n - 1.0));
+  sigma_ *= dm::exp((cs / k_.d_sigma) * (norm_p_sigma / k_.chi_n - 1.0));
   sigma_ = std::min(sigma_, kSigmaMax);
 
   // 7. h_sigma (text after eq. 47), with the library's exponent 2 (g + 1) on the incremented g
-  const double h_left = norm_p_sigma / std::sqrt(1.0 - std::pow(1.0 - cs, 2.0 * (g_ + 1)));
+  const double h_left = norm_p_sigma / std::sqrt(1.0 - dm::pow(1.0 - cs, 2.0 * (g_ + 1)));
   const double h_right = (1.4 + 2.0 / (n_ + 1.0)) * k_.chi_n;
   const double h_sigma = h_left < h_right ? 1.0 : 0.0;
 

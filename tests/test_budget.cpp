@@ -8,6 +8,7 @@
 #include "common/rng.hpp"
 #include "envs/core/registry.hpp"
 #include "harness/grid.hpp"
+#include "envs/synthetic/synthetic.hpp"
 #include "harness/budget.hpp"
 #include "harness/runner.hpp"
 #include "optimizers/core/registry.hpp"
@@ -33,7 +34,9 @@ class FragileEnv : public Env {
 };
 
 TEST(Budget, RecordsEveryEpisodeAndStopsAtTheBudget) {
-  const auto env = make_env("sphere-3");
+  auto classic = *synthetic_config_from_name("sphere-3");
+  classic.x_opt.assign(3, 0.0);  // unshifted: loss = 25 |x|^2
+  const auto env = make_synthetic_env("sphere-3", classic);
   BudgetedObjective f(*env, 3);
   const std::vector<double> a{0.5, 0.0, 0.0}, b{0.1, 0.0, 0.0}, c{0.3, 0.0, 0.0};
   EXPECT_DOUBLE_EQ(f.value(a), 6.25);

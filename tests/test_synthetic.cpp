@@ -54,6 +54,24 @@ std::vector<double> to_normalized(const std::string& name, const std::vector<dou
   return x;
 }
 
+// the standard env of `name` with x_opt = z* in every coordinate: f itself, unshifted (up to the
+// rounding of (z - z*) + z*)
+std::unique_ptr<dsb::Env> make_unshifted(const std::string& name) {
+  auto config = *dsb::synthetic_config_from_name(name);
+  const double z_star = config.function == "rosenbrock"   ? 1.0
+                        : config.function == "styblinski" ? -2.903534027771178
+                                                          : 0.0;
+  config.x_opt.assign(config.dim, z_star);
+  return dsb::make_synthetic_env(name, config);
+}
+
+// sphere-10's x_opt rounded to 3 decimals, as the README quotes it
+const std::string kSphere10XoptQuoted =
+    "3.645, -0.705, 2.918, 0.974, -3.471, -3.426, 3.353, 3.285, 1.955, 2.000";
+
+const std::vector<std::string> kShifted = {"sphere", "rosenbrock", "rastrigin", "ackley",
+                                           "styblinski"};
+
 double max_abs(const std::vector<double>& v) {
   double m = 0.0;
   for (double e : v) m = std::max(m, std::abs(e));
@@ -173,7 +191,8 @@ TEST(SyntheticNames, WrongSizesAreRejected) {
 // ---------------------------------------------------------------------------------------------
 // values and gradients
 
-// Hand-computed values at simple points (normalized x, so the affine map is exercised too).
+// Hand-computed values of the classic functions at simple points (normalized x, so the affine
+// map is exercised too); the scalable ones through make_unshifted.
 TEST(SyntheticValues, HandComputedPoints) {
   struct Case {
     std::string name;
@@ -201,13 +220,59 @@ TEST(SyntheticValues, HandComputedPoints) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
-    const auto env = make(c.name);
+    const bool fixed = c.name == "branin" || c.name == "hartmann6";
+    const auto env = fixed ? make(c.name) : make_unshifted(c.name);
     std::vector<double> g(c.x.size());
     const double f = env->loss_and_grad(c.x, g);
     EXPECT_NEAR(f, c.loss, 1e-12 * std::max(1.0, std::abs(c.loss)));
     for (std::size_t i = 0; i < c.grad.size(); ++i)
       EXPECT_NEAR(g[i], c.grad[i], 1e-11 * std::max(1.0, std::abs(c.grad[i]))) << "i = " << i;
   }
+}
+
+// The shifted sphere-3 by hand: sum (z_i - x_opt_i)^2, gradient 2 (z_i - x_opt_i) * halfwidth 5.
+TEST(SyntheticValues, ShiftedSphereByHand) {
+  const auto env = make("sphere-3");
+  const auto x_opt = dsb::synthetic_config_from_name("sphere-3")->x_opt;
+  ASSERT_EQ(x_opt.size(), 3u);
+  const std::vector<double> x = {0.1, -0.2, 0.3};
+  double expected = 0.0;
+  std::vector<double> g(3), expected_g(3);
+  for (int i = 0; i < 3; ++i) {
+    const double dz = 5.0 * x[i] - x_opt[i];
+    expected += dz * dz;
+    expected_g[i] = 10.0 * dz;
+  }
+  EXPECT_NEAR(env->loss_and_grad(x, g), expected, 1e-13 * expected);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(g[i], expected_g[i], 1e-12 * std::abs(expected_g[i]));
+}
+
+// Every shifted env is its classic function moved: g(z) = f(z - x_opt + z*) at seeded points,
+// with f evaluated through make_unshifted at the normalized point of z - x_opt + z*.
+TEST(SyntheticValues, ShiftedIsTheClassicFunctionMoved) {
+  for (const std::string& f : kShifted)
+    for (int d : {2, 7}) {
+      const std::string name = f + "-" + std::to_string(d);
+      SCOPED_TRACE(name);
+      const auto shifted = make(name);
+      const auto classic = make_unshifted(name);
+      const auto x_opt = dsb::synthetic_config_from_name(name)->x_opt;
+      const double z_star = f == "rosenbrock" ? 1.0 : f == "styblinski" ? -2.903534027771178 : 0.0;
+      dsb::Rng rng(dsb::fnv1a64(name) + 3);
+      for (int k = 0; k < 20; ++k) {
+        std::vector<double> x(d), y(d);
+        bool inside = true;
+        for (int i = 0; i < d; ++i) {
+          x[i] = rng.uniform(-1.0, 1.0);
+          // the classic env evaluates f at (5 y - z*) + z* = 5 y (rounding aside): w / 5
+          y[i] = (5.0 * x[i] - x_opt[i] + z_star) / 5.0;
+          inside = inside && std::abs(y[i]) <= 1.0;
+        }
+        if (!inside) continue;  // the classic env is defined on the box only
+        const double a = shifted->loss(x), b = classic->loss(y);
+        EXPECT_NEAR(a, b, 1e-12 * std::max(1.0, std::abs(b)));
+      }
+    }
 }
 
 // Analytic gradient (normalized units) vs central differences at seeded random points.
@@ -285,6 +350,58 @@ TEST(SyntheticOptimum, DocumentedValueAndZeroGradient) {
   }
 }
 
+// The shift rule (synthetic.hpp): x_opt has size D, every coordinate in [0.5, 4] in absolute value
+// on the 2^-20 grid of the normalized box (so x_opt / 5 is exact), drawn from a fixed seed (the
+// same every time), different for every (function, D).
+TEST(SyntheticOptimum, ShiftRule) {
+  std::vector<std::vector<double>> seen;
+  for (const std::string& f : kShifted)
+    for (int d : {2, 5, 10, 100, 10000}) {
+      const std::string name = f + "-" + std::to_string(d);
+      SCOPED_TRACE(name);
+      const auto config = dsb::synthetic_config_from_name(name);
+      ASSERT_EQ(static_cast<int>(config->x_opt.size()), d);
+      EXPECT_EQ(config->x_opt, dsb::synthetic_config_from_name(name)->x_opt);
+      double lowest = 4.0, highest = 0.0;
+      for (double v : config->x_opt) {
+        lowest = std::min(lowest, std::abs(v));
+        highest = std::max(highest, std::abs(v));
+        const double steps = v / 5.0 * 1048576.0;
+        ASSERT_EQ(steps, std::round(steps)) << v;
+        ASSERT_EQ(5.0 * (v / 5.0), v);
+      }
+      EXPECT_GE(lowest, 0.5);
+      EXPECT_LE(highest, 4.0);
+      if (d == 10000) {  // the draws fill [0.5, 4]
+        EXPECT_LT(lowest, 0.51);
+        EXPECT_GT(highest, 3.99);
+      }
+      for (const auto& other : seen) EXPECT_NE(config->x_opt, other);
+      seen.push_back(config->x_opt);
+    }
+  // the value quoted in the README (sphere-10, rounded to 3 decimals)
+  const auto sphere10 = dsb::synthetic_config_from_name("sphere-10")->x_opt;
+  std::string quoted;
+  for (double v : sphere10) {
+    char buf[16];
+    std::snprintf(buf, sizeof buf, "%s%.3f", quoted.empty() ? "" : ", ", v);
+    quoted += buf;
+  }
+  std::printf("[ info     ] sphere-10 x_opt = (%s)\n", quoted.c_str());
+  EXPECT_EQ(quoted, kSphere10XoptQuoted);
+}
+
+// The box centre, where gd and the NLopt local methods start, is no longer (near) a minimizer.
+TEST(SyntheticOptimum, CentreIsNotTheOptimum) {
+  for (const std::string& name : covered_names()) {
+    if (name == "branin" || name == "hartmann6") continue;
+    SCOPED_TRACE(name);
+    const auto env = make(name);
+    const double best = dsb::synthetic_known_optimum(name)->value;
+    EXPECT_GT(env->loss(std::vector<double>(env->dim(), 0.0)), best + 0.2);
+  }
+}
+
 TEST(SyntheticOptimum, DocumentedNumbers) {
   const double pi = std::numbers::pi;
   const auto branin = dsb::synthetic_known_optimum("branin");
@@ -297,11 +414,13 @@ TEST(SyntheticOptimum, DocumentedNumbers) {
 
   const auto hartmann = dsb::synthetic_known_optimum("hartmann6");
   EXPECT_EQ(hartmann->value, -3.32236801141551);
-  EXPECT_EQ(dsb::synthetic_known_optimum("sphere-4")->x_physical, std::vector<double>(4, 0.0));
-  EXPECT_EQ(dsb::synthetic_known_optimum("rosenbrock-3")->x_physical,
-            std::vector<double>(3, 1.0));
-  EXPECT_EQ(dsb::synthetic_known_optimum("ackley-2")->value, 0.0);
-  EXPECT_EQ(dsb::synthetic_known_optimum("rastrigin-2")->value, 0.0);
+  // shifted families: the minimizer is the config's x_opt, the value the classic minimum
+  for (const std::string name : {"sphere-4", "rosenbrock-3", "ackley-2", "rastrigin-2"}) {
+    const auto opt = dsb::synthetic_known_optimum(name);
+    EXPECT_EQ(opt->x_physical, dsb::synthetic_config_from_name(name)->x_opt) << name;
+    EXPECT_EQ(opt->value, 0.0) << name;
+    EXPECT_TRUE(opt->other_minimizers.empty()) << name;
+  }
 }
 
 // Styblinski-Tang's constants from the 1-D stationarity condition p(z) = 4 z^3 - 32 z + 5 = 0,
@@ -323,9 +442,10 @@ TEST(SyntheticOptimum, StyblinskiConstantsSolveStationarity) {
   // the root is the global minimizer of the 1-D function on [-5, 5]
   for (int k = 0; k <= 100000; ++k) EXPECT_GE(g1(-5.0 + 1e-4 * k), g1(root) - 1e-12);
   for (int d : {1, 3, 10}) {
-    const auto opt = dsb::synthetic_known_optimum("styblinski-" + std::to_string(d));
+    const std::string name = "styblinski-" + std::to_string(d);
+    const auto opt = dsb::synthetic_known_optimum(name);
     EXPECT_NEAR(opt->value, d * g1(root), 1e-12 * d * 40.0);
-    for (double zi : opt->x_physical) EXPECT_NEAR(zi, root, 1e-14);
+    EXPECT_EQ(opt->x_physical, dsb::synthetic_config_from_name(name)->x_opt);
   }
 }
 
@@ -349,11 +469,14 @@ TEST(SyntheticOptimum, NoRandomPointBelowOptimum) {
   }
 }
 
-// Ackley's gradient is undefined at z = 0 (a cone in the radius); it is documented as 0 there.
-TEST(SyntheticOptimum, AckleyGradientIsZeroAtTheOrigin) {
+// Ackley's gradient is undefined at its minimizer (a cone in the radius); it is documented as 0
+// there. The normalized minimizer x_opt / 5 is exact, so the env sees exactly z = x_opt.
+TEST(SyntheticOptimum, AckleyGradientIsZeroAtTheMinimizer) {
   for (int d : {1, 2, 10}) {
-    const auto env = make("ackley-" + std::to_string(d));
-    std::vector<double> x(d, 0.0), g(d, 1.0);
+    const std::string name = "ackley-" + std::to_string(d);
+    const auto env = make(name);
+    std::vector<double> x = dsb::synthetic_config_from_name(name)->x_opt, g(d, 1.0);
+    for (double& xi : x) xi /= 5.0;
     EXPECT_EQ(env->loss_and_grad(x, g), 0.0);
     for (double gi : g) EXPECT_EQ(gi, 0.0);
   }
@@ -368,7 +491,11 @@ TEST(SyntheticConfig, ConfigDescribesTheBox) {
   EXPECT_EQ(sphere.at("dim"), 10);
   EXPECT_EQ(sphere.at("lower").get<std::vector<double>>(), std::vector<double>(10, -5.0));
   EXPECT_EQ(sphere.at("upper").get<std::vector<double>>(), std::vector<double>(10, 5.0));
+  EXPECT_EQ(sphere.at("x_opt").get<std::vector<double>>(),
+            dsb::synthetic_config_from_name("sphere-10")->x_opt);
   const auto branin = make("branin")->config();
+  EXPECT_FALSE(branin.contains("x_opt"));  // not shifted: the classic config, unchanged
+  EXPECT_FALSE(make("hartmann6")->config().contains("x_opt"));
   EXPECT_EQ(branin.at("lower").get<std::vector<double>>(), (std::vector<double>{-5.0, 0.0}));
   EXPECT_EQ(branin.at("upper").get<std::vector<double>>(), (std::vector<double>{10.0, 15.0}));
   const auto hartmann = make("hartmann6")->config();
@@ -387,6 +514,10 @@ TEST(SyntheticConfig, HashDistinguishesEnvsAndIsStable) {
   EXPECT_NE(h10, dsb::config_hash(make("rastrigin-10")->config()));
   EXPECT_NE(dsb::config_hash(make("branin")->config()),
             dsb::config_hash(make("hartmann6")->config()));
+  // x_opt is part of the hash
+  auto moved = *dsb::synthetic_config_from_name("sphere-10");
+  moved.x_opt[3] += 0.25;
+  EXPECT_NE(h10, dsb::config_hash(moved.to_json()));
 }
 
 TEST(SyntheticConfig, ValidateNamesTheField) {
@@ -429,6 +560,22 @@ TEST(SyntheticConfig, ValidateNamesTheField) {
   c = good;
   c.upper[0] = c.lower[0];
   expect_field(c, "upper");
+  c = good;
+  c.x_opt.pop_back();
+  expect_field(c, "x_opt");
+  c = good;
+  c.x_opt.clear();
+  expect_field(c, "x_opt");
+  c = good;
+  c.x_opt[1] = 5.5;
+  expect_field(c, "x_opt");
+  c = good;
+  c.x_opt[0] = std::numeric_limits<double>::quiet_NaN();
+  expect_field(c, "x_opt");
+  c = *dsb::synthetic_config_from_name("branin");
+  c.x_opt = {1.0, 1.0};
+  expect_field(c, "x_opt");
+  EXPECT_THROW((void)dsb::make_synthetic_env("branin", c), dsb::ConfigError);
   // a ConfigError is a UsageError (the harness reports it as bad input)
   c.function = "nope";
   EXPECT_THROW(c.validate(), dsb::UsageError);

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "common/det_math.hpp"
+
 namespace dsb {
 
 CartpoleModel CartpoleModel::build(const CartpoleConfig& cfg) {
@@ -50,10 +52,7 @@ void cartpole_step(const CartpoleModel& m, CartpoleState& s, double u, const dou
   // velocity control: the cart reaches the commanded speed within the step
   const double cart_accel = (u - s.vx) / m.dt;
   LinkVec sn(n), cs(n);
-  for (int j = 0; j < n; ++j) {
-    sn(j) = std::sin(s.phi(j));
-    cs(j) = std::cos(s.phi(j));
-  }
+  for (int j = 0; j < n; ++j) dm::sincos(s.phi(j), &sn(j), &cs(j));
   // joint mass matrix M_jk = mu_jk cos(phi_j - phi_k) (n x n) and
   // r_j = Q_j - sum_k mu_jk sin(phi_j - phi_k) dphi_k^2 - g beta_j sin phi_j - beta_j cos phi_j a_cart,
   // with generalized forces of the joint torques Q_j = tau_j - tau_{j+1}
@@ -147,8 +146,8 @@ Eigen::Vector2d cartpole_tip(const CartpoleModel& m, const CartpoleState& s) {
   // tip = (x + L sum sin phi_i, -L sum cos phi_i)
   Eigen::Vector2d tip(s.x, 0.0);
   for (int i = 0; i < m.n; ++i) {
-    tip.x() += m.length * std::sin(s.phi(i));
-    tip.y() -= m.length * std::cos(s.phi(i));
+    tip.x() += m.length * dm::sin(s.phi(i));
+    tip.y() -= m.length * dm::cos(s.phi(i));
   }
   return tip;
 }
@@ -161,7 +160,7 @@ double cartpole_chain_energy(const CartpoleModel& m, const CartpoleState& s,
   double px = s.x, py = 0.0, vx = s.vx, vy = 0.0;  // joint position and velocity
   for (int i = 0; i < m.n; ++i) {
     const double mi = cfg.link_masses[i];
-    const double sp = std::sin(s.phi(i)), cp = std::cos(s.phi(i));
+    const double sp = dm::sin(s.phi(i)), cp = dm::cos(s.phi(i));
     const double cy = py - 0.5 * L * cp;
     const double cvx = vx + 0.5 * L * cp * s.dphi(i);
     const double cvy = vy + 0.5 * L * sp * s.dphi(i);

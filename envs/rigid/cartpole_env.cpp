@@ -3,6 +3,8 @@
 #include <cmath>
 #include <limits>
 
+#include "common/det_math.hpp"
+
 namespace dsb {
 
 namespace {
@@ -111,7 +113,7 @@ double CartpoleEnv::rollout_with_grad(std::span<const double> x, std::span<doubl
   adj.phi = LinkVec(m.n);
   adj.dphi = LinkVec::Zero(m.n);
   for (int i = 0; i < m.n; ++i)
-    adj.phi(i) = m.length * (dir.x() * std::cos(last.phi(i)) + dir.y() * std::sin(last.phi(i)));
+    adj.phi(i) = m.length * (dir.x() * dm::cos(last.phi(i)) + dir.y() * dm::sin(last.phi(i)));
 
   // reverse pass through the steps; gradient in normalized units (chain rule through the scales)
   const int stride = 1 + cfg_.links;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/det_math.hpp"
 #include "envs/rigid/contact.hpp"
 
 namespace dsb {
@@ -142,7 +143,7 @@ PaddleAxes PinballEnv::axes(std::span<const double> x) const {
   PaddleAxes ax;
   for (int k = 0; k < m.paddles; ++k) {
     const double a = cfg_.max_angle * x[k];
-    ax.axis[k] = Eigen::Vector2d(std::cos(a), std::sin(a));
+    ax.axis[k] = Eigen::Vector2d(dm::cos(a), dm::sin(a));
   }
   return ax;
 }

@@ -1,6 +1,7 @@
 #include "envs/synthetic/synthetic.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <numbers>
 #include <span>
@@ -8,8 +9,10 @@
 #include <string_view>
 #include <utility>
 
+#include "common/det_math.hpp"
 #include "common/error.hpp"
 #include "common/parallel.hpp"
+#include "common/rng.hpp"
 
 namespace dsb {
 namespace {
@@ -62,15 +65,16 @@ double rastrigin(std::span<const double> z, std::span<double> g, ThreadTeam& tea
   const double init = 10.0 * static_cast<double>(z.size());
   return parallel_sum(team, size_of(z), kGrain, init, [&](std::int64_t begin, std::int64_t end, double f) {
     for (std::int64_t i = begin; i < end; ++i) {
-      f += z[i] * z[i] - 10.0 * std::cos(2.0 * kPi * z[i]);
-      if (!g.empty()) g[i] = 2.0 * z[i] + 20.0 * kPi * std::sin(2.0 * kPi * z[i]);
+      f += z[i] * z[i] - 10.0 * dm::cos(2.0 * kPi * z[i]);
+      if (!g.empty()) g[i] = 2.0 * z[i] + 20.0 * kPi * dm::sin(2.0 * kPi * z[i]);
     }
     return f;
   });
 }
 
-// ackley: f = -20 exp(-0.2 r) - exp(sum cos(2 pi z_i) / D) + 20 + e, r = sqrt(sum z_i^2 / D),
-// evaluated as 20 (1 - exp(-0.2 r)) + (e - exp(...)) so that f(0) is exactly 0. Minimum 0 at
+// ackley: f = -20 exp(-0.2 r) - exp(s) + 20 + e, r = sqrt(sum z_i^2 / D),
+// s = sum cos(2 pi z_i) / D, evaluated as 20 (1 - exp(-0.2 r)) - e expm1(s - 1) so that f(0) is
+// exactly 0 (e - exp(1) is not: exp(1) need not round to e). Minimum 0 at
 // z = 0. The first term is a cone in r, so the gradient is undefined at exactly z = 0; there it
 // is returned as 0 (the second term's gradient vanishes at 0 too).
 double ackley(std::span<const double> z, std::span<double> g, ThreadTeam& team) {
@@ -83,23 +87,23 @@ double ackley(std::span<const double> z, std::span<double> g, ThreadTeam& team) 
       [&](std::int64_t begin, std::int64_t end, Sums acc) {
         for (std::int64_t i = begin; i < end; ++i) {
           acc.sq += z[i] * z[i];
-          acc.cos += std::cos(2.0 * kPi * z[i]);
+          acc.cos += dm::cos(2.0 * kPi * z[i]);
         }
         return acc;
       },
       [](Sums a, Sums b) { return Sums{a.sq + b.sq, a.cos + b.cos}; });
   const double r = std::sqrt(sums.sq / d);
-  const double e_r = std::exp(-0.2 * r);
-  const double e_cos = std::exp(sums.cos / d);
+  const double e_r = dm::exp(-0.2 * r);
+  const double e_cos = dm::exp(sums.cos / d);
   if (!g.empty()) {
     // d/dz_i of the first term: 4 exp(-0.2 r) z_i / (D r); of the second: (2 pi / D) e_cos sin
     const double radial = r > 0.0 ? 4.0 * e_r / (d * r) : 0.0;
     parallel_for(team, size_of(z), kGrain, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t i = begin; i < end; ++i)
-        g[i] = radial * z[i] + 2.0 * kPi / d * e_cos * std::sin(2.0 * kPi * z[i]);
+        g[i] = radial * z[i] + 2.0 * kPi / d * e_cos * dm::sin(2.0 * kPi * z[i]);
     });
   }
-  return 20.0 * (1.0 - e_r) + (std::numbers::e - e_cos);
+  return 20.0 * (1.0 - e_r) - std::numbers::e * dm::expm1(sums.cos / d - 1.0);
 }
 
 // Styblinski-Tang: f = 0.5 sum (z_i^4 - 16 z_i^2 + 5 z_i). Minimum -39.16616570377142 D at
@@ -127,10 +131,10 @@ double branin(std::span<const double> z, std::span<double> g, ThreadTeam&) {
                t = 1.0 / (8.0 * kPi);
   const double u = z[1] - b * z[0] * z[0] + c * z[0] - r;
   if (!g.empty()) {
-    g[0] = 2.0 * a * u * (c - 2.0 * b * z[0]) - s * (1.0 - t) * std::sin(z[0]);
+    g[0] = 2.0 * a * u * (c - 2.0 * b * z[0]) - s * (1.0 - t) * dm::sin(z[0]);
     g[1] = 2.0 * a * u;
   }
-  return a * u * u + s * (1.0 - t) * std::cos(z[0]) + s;
+  return a * u * u + s * (1.0 - t) * dm::cos(z[0]) + s;
 }
 
 // hartmann6: f = -sum_{i=1..4} alpha_i exp(-sum_j A_ij (z_j - P_ij)^2) with the standard
@@ -156,7 +160,7 @@ double hartmann6(std::span<const double> z, std::span<double> g, ThreadTeam&) {
       dz[j] = z[j] - kHartmannP[i][j] / 10000.0;
       q += kHartmannA[i][j] * dz[j] * dz[j];
     }
-    const double term = kHartmannAlpha[i] * std::exp(-q);
+    const double term = kHartmannAlpha[i] * dm::exp(-q);
     f -= term;
     if (!g.empty())
       for (int j = 0; j < 6; ++j) g[j] += term * 2.0 * kHartmannA[i][j] * dz[j];
@@ -164,8 +168,9 @@ double hartmann6(std::span<const double> z, std::span<double> g, ThreadTeam&) {
   return f;
 }
 
-// One synthetic family. Scalable ones ("key-D") live on [-5, 5]^D; fixed ones ("key") have
-// their own dimension and box.
+// One synthetic family. Scalable ones ("key-D") live on [-5, 5]^D and are shifted: the env
+// evaluates f(z - x_opt + z_star), whose minimizer is x_opt; fixed ones ("key") have their own
+// dimension and box and are not shifted.
 struct Spec {
   std::string_view key;
   std::string_view description;
@@ -174,18 +179,20 @@ struct Spec {
   int fixed_dim;              // 0 for scalable families
   std::vector<double> lower;  // fixed families: the box
   std::vector<double> upper;
+  double z_star = 0.0;        // scalable: f's classic minimizer is z_star in every coordinate
 };
 
 const std::vector<Spec>& specs() {
   static const std::vector<Spec> all = {
-      {"sphere", "sum z_i^2 on [-5,5]^D; min 0 at z = 0", sphere, 1, 0, {}, {}},
-      {"rosenbrock", "Rosenbrock valley on [-5,5]^D, D >= 2; min 0 at z = 1", rosenbrock, 2, 0,
-       {}, {}},
-      {"rastrigin", "Rastrigin (many local minima) on [-5,5]^D; min 0 at z = 0", rastrigin, 1, 0,
-       {}, {}},
-      {"ackley", "Ackley on [-5,5]^D; min 0 at z = 0", ackley, 1, 0, {}, {}},
-      {"styblinski", "Styblinski-Tang on [-5,5]^D; min -39.16616570377142 D at z_i = -2.9035",
-       styblinski, 1, 0, {}, {}},
+      {"sphere", "sum z_i^2 on [-5,5]^D, shifted; min 0 at z = x_opt", sphere, 1, 0, {}, {},
+       0.0},
+      {"rosenbrock", "Rosenbrock valley on [-5,5]^D, D >= 2, shifted; min 0 at z = x_opt",
+       rosenbrock, 2, 0, {}, {}, 1.0},
+      {"rastrigin", "Rastrigin (many local minima) on [-5,5]^D, shifted; min 0 at z = x_opt",
+       rastrigin, 1, 0, {}, {}, 0.0},
+      {"ackley", "Ackley on [-5,5]^D, shifted; min 0 at z = x_opt", ackley, 1, 0, {}, {}, 0.0},
+      {"styblinski", "Styblinski-Tang on [-5,5]^D, shifted; min -39.16616570377142 D at z = x_opt",
+       styblinski, 1, 0, {}, {}, kStyblinskiArgmin},
       {"branin", "Branin on [-5,10]x[0,15]; min 0.397887357729738 at three points", branin, 2, 2,
        {-5.0, 0.0}, {10.0, 15.0}},
       {"hartmann6", "Hartmann 6-D on [0,1]^6; min -3.32236801141551", hartmann6, 6, 6,
@@ -200,6 +207,27 @@ const Spec* find_spec(std::string_view key) {
   return nullptr;
 }
 
+// The shifted minimizer of a scalable family on [-5, 5]^D (design.md "Synthetic instances"):
+// x_opt_i = 5 k_i / 2^20 with k_i uniform on the integers of [-838860, 838860] (0.8 * 2^20), so
+// x_opt_i lies in [-4, 4], at least 1 from every face; a coordinate with |x_opt_i| < 0.5 is drawn
+// again (no coordinate near the centre, where gd and the NLopt local methods start). The 2^-20
+// grid makes x_opt / 5, the normalized minimizer, exact. One stream per (function, D):
+// Rng(fnv1a64("<function>-<D>") ^ kShiftSeed).
+constexpr std::uint64_t kShiftSeed = 0x5348494654;  // "SHIFT" in ASCII
+constexpr std::int64_t kShiftSteps = 838860;
+
+std::vector<double> shifted_optimum(std::string_view function, int dim) {
+  Rng rng(fnv1a64(std::string(function) + "-" + std::to_string(dim)) ^ kShiftSeed);
+  std::vector<double> x_opt(dim);
+  for (double& v : x_opt) {
+    do {
+      const auto k = static_cast<std::int64_t>(rng.below(2 * kShiftSteps + 1)) - kShiftSteps;
+      v = 5.0 * static_cast<double>(k) / 1048576.0;
+    } while (std::abs(v) < 0.5);
+  }
+  return x_opt;
+}
+
 SyntheticConfig standard_config(const Spec& spec, int dim) {
   SyntheticConfig config;
   config.function = std::string(spec.key);
@@ -210,6 +238,7 @@ SyntheticConfig standard_config(const Spec& spec, int dim) {
   } else {
     config.lower.assign(dim, -5.0);
     config.upper.assign(dim, 5.0);
+    config.x_opt = shifted_optimum(spec.key, dim);
   }
   return config;
 }
@@ -251,8 +280,9 @@ EnvInfo synthetic_info(std::string name, const SyntheticConfig& config) {
 
 class SyntheticEnv final : public Env {
  public:
-  SyntheticEnv(std::string name, SyntheticConfig config, Function function)
-      : Env(synthetic_info(std::move(name), config)), config_(std::move(config)), function_(function) {
+  SyntheticEnv(std::string name, SyntheticConfig config, Function function, double z_star)
+      : Env(synthetic_info(std::move(name), config)), config_(std::move(config)), function_(function),
+        z_star_(z_star) {
     config_.validate();
     for (int i = 0; i < config_.dim; ++i) {
       centre_.push_back(0.5 * (config_.lower[i] + config_.upper[i]));
@@ -281,7 +311,8 @@ class SyntheticEnv final : public Env {
   }
 
  private:
-  // f at z = centre + halfwidth * x; df/dx = df/dz * halfwidth into grad unless it is empty
+  // f at z = centre + halfwidth * x, shifted to f(z - x_opt + z_star) when x_opt is set (unit
+  // Jacobian); df/dx = df/dz * halfwidth into grad unless it is empty
   double evaluate(std::span<const double> x, std::span<double> grad, Workspace& workspace,
                   ThreadTeam& team) const {
     if (static_cast<int>(x.size()) != config_.dim)
@@ -289,6 +320,8 @@ class SyntheticEnv final : public Env {
                                   ", expected " + std::to_string(config_.dim));
     std::vector<double>& z = static_cast<SyntheticWorkspace&>(workspace).z;
     for (std::size_t i = 0; i < x.size(); ++i) z[i] = centre_[i] + halfwidth_[i] * x[i];
+    if (!config_.x_opt.empty())
+      for (std::size_t i = 0; i < x.size(); ++i) z[i] = (z[i] - config_.x_opt[i]) + z_star_;
     const double f = function_(z, grad, team);
     for (std::size_t i = 0; i < grad.size(); ++i) grad[i] *= halfwidth_[i];
     return f;
@@ -296,17 +329,17 @@ class SyntheticEnv final : public Env {
 
   SyntheticConfig config_;
   Function function_;
+  double z_star_;
   std::vector<double> centre_, halfwidth_;
 };
 
 KnownOptimum known_optimum(const SyntheticConfig& config) {
   const int d = config.dim;
   const std::string& f = config.function;
-  if (f == "sphere" || f == "rastrigin" || f == "ackley")
-    return {0.0, std::vector<double>(d, 0.0), {}};
-  if (f == "rosenbrock") return {0.0, std::vector<double>(d, 1.0), {}};
-  if (f == "styblinski")
-    return {kStyblinskiMinPerDim * d, std::vector<double>(d, kStyblinskiArgmin), {}};
+  // shifted families: the minimizer is x_opt, the value f's classic minimum
+  if (f == "sphere" || f == "rastrigin" || f == "ackley" || f == "rosenbrock")
+    return {0.0, config.x_opt, {}};
+  if (f == "styblinski") return {kStyblinskiMinPerDim * d, config.x_opt, {}};
   if (f == "branin")
     return {5.0 / (4.0 * kPi), {-kPi, 12.275}, {{kPi, 2.275}, {3.0 * kPi, 2.475}}};
   // hartmann6
@@ -343,10 +376,26 @@ void SyntheticConfig::validate() const {
       throw ConfigError("synthetic", "upper",
                         "must exceed lower at index " + std::to_string(i));
   }
+  // scalable families are shifted (x_opt of size dim, inside the box); fixed ones are not
+  if (spec->fixed_dim > 0) {
+    if (!x_opt.empty())
+      throw ConfigError("synthetic", "x_opt", "must be empty for " + function + " (not shifted)");
+    return;
+  }
+  if (static_cast<int>(x_opt.size()) != dim)
+    throw ConfigError("synthetic", "x_opt",
+                      "has size " + std::to_string(x_opt.size()) + ", expected " +
+                          std::to_string(dim));
+  for (int i = 0; i < dim; ++i)
+    if (!(x_opt[i] >= lower[i] && x_opt[i] <= upper[i]))
+      throw ConfigError("synthetic", "x_opt",
+                        "is outside the box (or not finite) at index " + std::to_string(i));
 }
 
 nlohmann::json SyntheticConfig::to_json() const {
-  return {{"function", function}, {"dim", dim}, {"lower", lower}, {"upper", upper}};
+  nlohmann::json j = {{"function", function}, {"dim", dim}, {"lower", lower}, {"upper", upper}};
+  if (!x_opt.empty()) j["x_opt"] = x_opt;  // branin and hartmann6 keep their unshifted JSON
+  return j;
 }
 
 std::optional<SyntheticConfig> synthetic_config_from_name(const std::string& name) {
@@ -358,6 +407,13 @@ std::optional<SyntheticConfig> synthetic_config_from_name(const std::string& nam
 std::optional<KnownOptimum> synthetic_known_optimum(const std::string& name) {
   if (auto config = synthetic_config_from_name(name)) return known_optimum(*config);
   return std::nullopt;
+}
+
+std::unique_ptr<Env> make_synthetic_env(std::string name, SyntheticConfig config) {
+  config.validate();
+  const Spec* spec = find_spec(config.function);
+  return std::make_unique<SyntheticEnv>(std::move(name), std::move(config), spec->function,
+                                        spec->z_star);
 }
 
 std::vector<EnvFamily> synthetic_families() {
@@ -372,7 +428,8 @@ std::vector<EnvFamily> synthetic_families() {
     family.try_make = [&spec](const std::string& name) -> std::unique_ptr<Env> {
       auto config = parse_name(spec, name);
       if (!config) return nullptr;
-      return std::make_unique<SyntheticEnv>(name, std::move(*config), spec.function);
+      return std::make_unique<SyntheticEnv>(name, std::move(*config), spec.function,
+                                            spec.z_star);
     };
     families.push_back(std::move(family));
   }

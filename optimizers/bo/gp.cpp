@@ -26,6 +26,7 @@
 
 #include <nlopt.hpp>
 
+#include "common/det_math.hpp"
 #include "common/error.hpp"
 
 namespace dsb {
@@ -57,7 +58,7 @@ std::string num(double v) {
 // Matern-5/2 from r^2: value, and gneg = -(dk/dr) / r = 5/3 s (1 + sqrt5 r) exp(-sqrt5 r)
 inline double matern_r2(double s, double r2, double* gneg) {
   const double r = std::sqrt(r2);
-  const double e = std::exp(-kSqrt5 * r);
+  const double e = dm::exp(-kSqrt5 * r);
   if (gneg) *gneg = (5.0 / 3.0) * s * (1.0 + kSqrt5 * r) * e;
   return s * (1.0 + kSqrt5 * r + (5.0 / 3.0) * r2) * e;
 }
@@ -94,7 +95,7 @@ bool factor_ok(const Eigen::Ref<Eigen::MatrixXd>& L) {
 double factor_with_jitter(const Eigen::MatrixXd& Xs, double s, double noise, Eigen::Ref<Eigen::MatrixXd> A) {
   double jitter = 0.0;
   for (int k = 0; k <= kJitterTries; ++k) {
-    jitter = k == 0 ? 0.0 : kJitterBase * std::pow(10.0, k - 1) * s;
+    jitter = k == 0 ? 0.0 : kJitterBase * dm::pow(10.0, k - 1) * s;
     build_kernel(Xs, s, noise + jitter, A);
     Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(A);
     if (llt.info() == Eigen::Success && factor_ok(A)) return jitter;
@@ -166,14 +167,14 @@ void lauum_lower(Eigen::Ref<Eigen::MatrixXd> A) {
 // log of the Gamma(x; k, rate) density and its derivative with respect to log x
 inline double log_gamma_density(double x, double k, double rate, double* dlogx) {
   if (dlogx) *dlogx = (k - 1.0) - rate * x;
-  return k * std::log(rate) + (k - 1.0) * std::log(x) - rate * x - std::lgamma(k);
+  return k * dm::log(rate) + (k - 1.0) * dm::log(x) - rate * x - dm::lgamma(k);
 }
 
 // Gamma(k, rate) draw: Marsaglia and Tsang (2000), boosted by U^(1/k) for k < 1
 double sample_gamma(Rng& rng, double k, double rate) {
   double boost = 1.0;
   if (k < 1.0) {
-    boost = std::pow(rng.uniform(), 1.0 / k);
+    boost = dm::pow(rng.uniform(), 1.0 / k);
     k += 1.0;
   }
   const double dd = k - 1.0 / 3.0, c = 1.0 / std::sqrt(9.0 * dd);
@@ -184,7 +185,7 @@ double sample_gamma(Rng& rng, double k, double rate) {
     v = v * v * v;
     const double u = rng.uniform();
     if (u < 1.0 - 0.0331 * (x * x) * (x * x)) return boost * dd * v / rate;
-    if (std::log(u) < 0.5 * x * x + dd * (1.0 - v + std::log(v))) return boost * dd * v / rate;
+    if (dm::log(u) < 0.5 * x * x + dd * (1.0 - v + dm::log(v))) return boost * dd * v / rate;
   }
 }
 
@@ -261,8 +262,8 @@ GaussianProcess::GaussianProcess(int dim, const GpConfig& cfg) : dim_(dim), cfg_
   cfg_.validate();
   // GPyTorch's initial values: softplus(0) = ln 2 for lengthscales and outputscale, noise at the
   // prior mode 2.0 (not below the floor), mean 0
-  hyper_.lengthscales = Eigen::VectorXd::Constant(dim, std::log(2.0));
-  hyper_.outputscale = std::log(2.0);
+  hyper_.lengthscales = Eigen::VectorXd::Constant(dim, dm::log(2.0));
+  hyper_.outputscale = dm::log(2.0);
   hyper_.noise = std::max(2.0, cfg_.noise_floor);
   hyper_.mean = 0.0;
   X_.resize(0, dim);
@@ -413,18 +414,18 @@ void GaussianProcess::add_point(const Eigen::VectorXd& x, double y) {
 
 Eigen::VectorXd GaussianProcess::theta_of(const GpHyperparameters& h) const {
   Eigen::VectorXd t(dim_ + 3);
-  t.head(dim_) = h.lengthscales.array().log();
-  t[dim_] = std::log(h.outputscale);
-  t[dim_ + 1] = std::log(std::max(h.noise - cfg_.noise_floor, 0.0));  // -inf at the floor
+  t.head(dim_) = h.lengthscales.unaryExpr([](double v) { return dm::log(v); });
+  t[dim_] = dm::log(h.outputscale);
+  t[dim_ + 1] = dm::log(std::max(h.noise - cfg_.noise_floor, 0.0));  // -inf at the floor
   t[dim_ + 2] = cfg_.constant_mean ? h.mean : 0.0;
   return t;
 }
 
 GpHyperparameters GaussianProcess::hyper_of(const Eigen::VectorXd& theta) const {
   GpHyperparameters h;
-  h.lengthscales = theta.head(dim_).array().exp();
-  h.outputscale = std::exp(theta[dim_]);
-  h.noise = cfg_.noise_floor + std::exp(theta[dim_ + 1]);
+  h.lengthscales = theta.head(dim_).unaryExpr([](double v) { return dm::exp(v); });
+  h.outputscale = dm::exp(theta[dim_]);
+  h.noise = cfg_.noise_floor + dm::exp(theta[dim_ + 1]);
   h.mean = cfg_.constant_mean ? theta[dim_ + 2] : 0.0;
   return h;
 }
@@ -466,7 +467,7 @@ double GaussianProcess::fit_objective(const Eigen::VectorXd& theta, Eigen::Vecto
   A.triangularView<Eigen::Lower>().solveInPlace(alpha);
   const double quad = alpha.squaredNorm();
   double logdet = 0.0;
-  for (int i = 0; i < n; ++i) logdet += std::log(A(i, i));
+  for (int i = 0; i < n; ++i) logdet += dm::log(A(i, i));
   logdet *= 2.0;
   A.triangularView<Eigen::Lower>().transpose().solveInPlace(alpha);
   value += -0.5 * quad - 0.5 * logdet - 0.5 * n * kLog2Pi;

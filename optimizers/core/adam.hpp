@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/det_math.hpp"
+
 namespace dsb {
 
 struct AdamConfig {
@@ -29,8 +31,8 @@ class Adam {
   // x <- clip(x - lr * mhat / (sqrt(vhat) + eps), -1, 1)   (Adam update, eq. in Alg. 1 of the paper)
   void step(std::span<double> x, std::span<const double> grad) {
     ++t_;
-    const double c1 = 1.0 - std::pow(cfg_.beta1, t_);
-    const double c2 = 1.0 - std::pow(cfg_.beta2, t_);
+    const double c1 = 1.0 - dm::pow(cfg_.beta1, t_);
+    const double c2 = 1.0 - dm::pow(cfg_.beta2, t_);
     for (std::size_t i = 0; i < x.size(); ++i) {
       m_[i] = cfg_.beta1 * m_[i] + (1.0 - cfg_.beta1) * grad[i];
       v_[i] = cfg_.beta2 * v_[i] + (1.0 - cfg_.beta2) * grad[i] * grad[i];

@@ -1,0 +1,42 @@
+#include "common/det_math.hpp"
+
+#include <sleef.h>
+
+// Every function is SLEEF's "cinz" (consistent, no FMA) pure-C scalar variant at 1.0-ulp accuracy
+// (u10), except erfc (SLEEF has it only at 1.5 ulp). These are plain C with no CPU dispatch, so a
+// given libsleef gives the same bits on every x86-64 CPU.
+namespace dsb::detmath {
+
+double exp(double x) { return Sleef_cinz_expd1_u10purec(x); }
+double expm1(double x) { return Sleef_cinz_expm1d1_u10purec(x); }
+double exp2(double x) { return Sleef_cinz_exp2d1_u10purec(x); }
+double log(double x) { return Sleef_cinz_logd1_u10purec(x); }
+double log1p(double x) { return Sleef_cinz_log1pd1_u10purec(x); }
+double log2(double x) { return Sleef_cinz_log2d1_u10purec(x); }
+double log10(double x) { return Sleef_cinz_log10d1_u10purec(x); }
+double pow(double x, double y) { return Sleef_cinz_powd1_u10purec(x, y); }
+double cbrt(double x) { return Sleef_cinz_cbrtd1_u10purec(x); }
+double hypot(double x, double y) { return Sleef_cinz_hypotd1_u05purec(x, y); }
+
+double sin(double x) { return Sleef_cinz_sind1_u10purec(x); }
+double cos(double x) { return Sleef_cinz_cosd1_u10purec(x); }
+void sincos(double x, double* s, double* c) {
+  const Sleef_double_2 r = Sleef_cinz_sincosd1_u10purec(x);
+  *s = r.x;
+  *c = r.y;
+}
+double tan(double x) { return Sleef_cinz_tand1_u10purec(x); }
+double asin(double x) { return Sleef_cinz_asind1_u10purec(x); }
+double acos(double x) { return Sleef_cinz_acosd1_u10purec(x); }
+double atan(double x) { return Sleef_cinz_atand1_u10purec(x); }
+double atan2(double y, double x) { return Sleef_cinz_atan2d1_u10purec(y, x); }
+
+double sinh(double x) { return Sleef_cinz_sinhd1_u10purec(x); }
+double cosh(double x) { return Sleef_cinz_coshd1_u10purec(x); }
+double tanh(double x) { return Sleef_cinz_tanhd1_u10purec(x); }
+
+double erf(double x) { return Sleef_cinz_erfd1_u10purec(x); }
+double erfc(double x) { return Sleef_cinz_erfcd1_u15purec(x); }
+double lgamma(double x) { return Sleef_cinz_lgammad1_u10purec(x); }
+
+}  // namespace dsb::detmath

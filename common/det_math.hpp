@@ -1,0 +1,51 @@
+#pragma once
+// Deterministic elementary functions: the same bits on every x86-64 CPU.
+//
+// glibc's libm picks its exp/log/pow/sin/cos/tan/atan variants by CPU feature (FMA, AVX2,
+// AVX-512) at load time, so the same binary gives results that differ in the last bit between
+// machines, and an optimizer run then diverges. Every elementary function that a stored result
+// depends on (envs, optimizers, the RNG) goes through these instead: SLEEF's "cinz" pure-C scalar
+// functions (Debian's libsleef-dev), which use no FMA and no CPU dispatch. Accuracy: 1.0 ulp
+// (SLEEF's u10 bound; tests/test_det_math.cpp checks it against libm). Cost per call against
+// glibc's: exp about 2x, sin/cos 2-2.5x, log 4x, pow 5-6x (tests/perf/bench_det_math.cpp).
+// sqrt, fabs, floor, round, fmin/fmax and + - * / are exact in IEEE 754 and need nothing here.
+// Not covered: NLopt's own libm calls (see optimizers/nlopt_adapters.hpp) and reference/.
+//
+// Use: `dm::exp(x)` (dm is an alias of dsb::detmath, declared below).
+namespace dsb {
+namespace detmath {
+
+double exp(double x);
+double expm1(double x);  // exp(x) - 1, accurate near 0
+double exp2(double x);
+double log(double x);
+double log1p(double x);  // log(1 + x), accurate near 0
+double log2(double x);
+double log10(double x);
+double pow(double x, double y);
+double cbrt(double x);
+double hypot(double x, double y);
+
+double sin(double x);
+double cos(double x);
+// both at the cost of about one; may differ from sin(x), cos(x) in the last bit
+void sincos(double x, double* s, double* c);
+double tan(double x);
+double asin(double x);
+double acos(double x);
+double atan(double x);
+double atan2(double y, double x);
+
+double sinh(double x);
+double cosh(double x);
+double tanh(double x);
+
+double erf(double x);
+double erfc(double x);
+double lgamma(double x);  // log |Gamma(x)|; 1 ulp for x > 0
+
+}  // namespace detmath
+
+namespace dm = detmath;
+
+}  // namespace dsb

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Same bits on every x86-64 CPU: a grid of every env x every optimizer, run twice, once as is and
+# once with glibc told to ignore AVX2, FMA and AVX-512 (so libm would pick its other exp/log/pow/
+# sin variants), must give one digest (sha256 of `harness export`). Prints both digests.
+#   tests/check_cpu_features.sh BUILD_DIR
+# Exit 0: equal; 1: different (the differing (env, optimizer) pairs are listed); 77 (skipped):
+# this CPU has none of the masked features, so the comparison would prove nothing.
+set -euo pipefail
+build=$(cd "${1:?usage: check_cpu_features.sh BUILD_DIR}" && pwd)
+harness=$build/bin/harness
+mask=glibc.cpu.hwcaps=-AVX2,-FMA,-AVX512F
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# glibc reports which x86-64 levels (v2, v3 = AVX2 + FMA, v4 = AVX-512) it uses; the mask must
+# change that, or this machine cannot show a difference
+ldso=/lib64/ld-linux-x86-64.so.2
+levels() { "$ldso" --list-diagnostics | sed -n 's/^dl_hwcaps_subdirs_active=//p'; }
+plain_levels=$(levels)
+masked_levels=$(GLIBC_TUNABLES=$mask levels)
+if [[ "$plain_levels" == "$masked_levels" ]]; then
+  echo "check_cpu_features: the mask changes nothing on this CPU (x86-64 levels $plain_levels): skipped"
+  exit 77
+fi
+
+run() {  # run NAME [env assignments...]: grid into NAME.sqlite, export to NAME.csv
+  local name=$1
+  shift
+  env "$@" "$harness" --all --seeds 2 --budget 30 --jobs 2 --quiet --db "$work/$name.sqlite"
+  "$harness" export --db "$work/$name.sqlite" --out "$work/$name.csv" >/dev/null
+}
+run plain
+run masked GLIBC_TUNABLES=$mask
+
+plain=$(sha256sum <"$work/plain.csv" | cut -d' ' -f1)
+masked=$(sha256sum <"$work/masked.csv" | cut -d' ' -f1)
+echo "check_cpu_features: $(($(wc -l <"$work/plain.csv") - 1)) episodes"
+echo "  digest as is                     ($plain_levels): $plain"
+echo "  digest with $mask ($masked_levels): $masked"
+if [[ "$plain" != "$masked" ]]; then
+  echo "check_cpu_features: FAILED, results depend on the CPU's features; differing env,optimizer:"
+  diff "$work/plain.csv" "$work/masked.csv" | sed -n 's/^< \([^,]*,[^,]*\),.*/    \1/p' | sort | uniq -c
+  exit 1
+fi
+echo "check_cpu_features: OK"
