@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 #include "envs/core/registry.hpp"
 #include "optimizers/core/registry.hpp"
 
@@ -112,6 +113,7 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
   const int i = static_cast<int>(d[0]), j = static_cast<int>(d[1]);
   out << "i,j,xi,xj,loss,grad_i,grad_j\n";
   std::vector<double> grad(n);
+  const auto ws = env->make_workspace();  // one workspace for every grid point
   auto num = [](double v) { return std::isfinite(v) ? fmt::format("{:.17g}", v) : std::string("nan"); };
   for (int a = 0; a < resolution; ++a) {
     for (int b = 0; b < resolution; ++b) {
@@ -120,10 +122,10 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
       x[j] = -1.0 + 2.0 * b / (resolution - 1);
       out << a << ',' << b << ',' << num(x[i]) << ',' << num(x[j]) << ',';
       if (env->differentiable()) {
-        const double loss = env->loss_and_grad(x, grad);
+        const double loss = env->loss_and_grad(x, grad, *ws, serial_team());
         out << num(loss) << ',' << num(grad[i]) << ',' << num(grad[j]) << '\n';
       } else {
-        out << num(env->loss(x)) << ",,\n";
+        out << num(env->loss(x, *ws, serial_team())) << ",,\n";
       }
     }
   }

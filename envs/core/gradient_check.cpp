@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 #include "common/rng.hpp"
 
 namespace dsb {
@@ -67,8 +68,11 @@ void GradientSurveyOptions::validate() const {
     throw ConfigError("gradcheck", "amplitude", "must be in (0, 1], got " + str(amplitude));
 }
 
-Differences finite_differences(const Env& env, std::span<const double> x_in, int i, double step,
-                               double loss_at_x) {
+namespace {
+
+// the differences along coordinate i, every rollout on one workspace
+Differences differences_on(const Env& env, Workspace& ws, std::span<const double> x_in, int i, double step,
+                           double loss_at_x) {
   require_in_box(env, x_in);
   if (i < 0 || i >= env.dim())
     throw std::invalid_argument("gradient check of '" + env.name() + "': coordinate " +
@@ -85,9 +89,9 @@ Differences finite_differences(const Env& env, std::span<const double> x_in, int
     hi = -1.0 + 2.0 * step;
   }
   x[i] = hi;
-  const double fp = env.loss(x);
+  const double fp = env.loss(x, ws, serial_team());
   x[i] = lo;
-  const double fm = env.loss(x);
+  const double fm = env.loss(x, ws, serial_team());
   // central (or one-sided) difference over the window, and the two one-sided ones from x
   Differences d;
   d.central = (fp - fm) / (hi - lo);
@@ -96,9 +100,18 @@ Differences finite_differences(const Env& env, std::span<const double> x_in, int
   return d;
 }
 
+}  // namespace
+
+Differences finite_differences(const Env& env, std::span<const double> x, int i, double step,
+                               double loss_at_x) {
+  const auto ws = env.make_workspace();
+  return differences_on(env, *ws, x, i, step, loss_at_x);
+}
+
 Differences finite_differences(const Env& env, std::span<const double> x, int i, double step) {
   require_in_box(env, x);
-  return finite_differences(env, x, i, step, env.loss(x));
+  const auto ws = env.make_workspace();
+  return differences_on(env, *ws, x, i, step, env.loss(x, *ws, serial_team()));
 }
 
 GradientCheckResult check_gradient(const Env& env, std::span<const double> x,
@@ -110,19 +123,20 @@ GradientCheckResult check_gradient(const Env& env, std::span<const double> x,
   const int n = env.dim();
   GradientCheckResult r;
 
-  // the analytic path, once
+  // the analytic path, once; every rollout of the check reuses one workspace
+  const auto ws = env.make_workspace();
   std::vector<double> grad(n);
   auto start = std::chrono::steady_clock::now();
-  r.loss = env.loss_and_grad(x, grad);
+  r.loss = env.loss_and_grad(x, grad, *ws, serial_team());
   r.seconds_loss_and_grad = seconds_since(start);
 
   // the value-only path: the loss at x and the differences
   start = std::chrono::steady_clock::now();
-  r.value_path_loss = env.loss(x);
+  r.value_path_loss = env.loss(x, *ws, serial_team());
   r.coordinates.resize(n);
   for (int i = 0; i < n; ++i) {
     r.coordinates[i].analytic = grad[i];
-    r.coordinates[i].differences = finite_differences(env, x, i, options.step, r.value_path_loss);
+    r.coordinates[i].differences = differences_on(env, *ws, x, i, options.step, r.value_path_loss);
   }
   r.seconds_per_loss = seconds_since(start) / (2 * n + 1);
   r.value_agrees = values_agree(r.value_path_loss, r.loss, options.value_tolerance);
