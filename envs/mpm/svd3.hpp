@@ -9,9 +9,14 @@
 //   QR of B. Departures: double precision, exact Jacobi and Givens rotations (sqrt and division,
 //   no quaternion or rsqrt approximations), a one-sided Jacobi sweep on B that makes the columns of
 //   B orthogonal to round-off relative to their own norms (what A^T A alone cannot give when the
-//   singular values are graded), and sweep counts chosen to converge to round-off (svd3.cpp).
-//   Only + - * / sqrt and selects: the same bits on every x86-64 CPU (with -ffp-contract=off).
-//   Valid for |A| between about 1e-70 and 1e70 (squares of squares stay normal doubles).
+//   singular values are graded), sweep counts chosen to converge to round-off (4 on A^T A, 1
+//   one-sided: svd3.cpp says how they were measured), rotations skipped only for off-diagonal
+//   entries below 1e-30 of the matrix's scale, and sigma(1), |sigma(2)| clamped to the entry before
+//   them where round-off left them an ulp above it. Only + - * / sqrt and selects: the same bits on
+//   every x86-64 CPU (with -ffp-contract=off). Valid for |A| between about 1e-70 and 1e70.
+//   Accuracy (tests/test_mpm_svd.cpp): ||A - U Sigma V^T|| < 10 eps ||A||, ||V^T V - I|| < 16 eps.
+//   Cost on one core (portable -O3 build, 2.6 GHz Xeon): ~100 ns per SVD through svd3_batch,
+//   ~375 ns through svd3 (one element cannot hide the latency of its sqrt/division chain).
 // svd3_adjoint: the general reverse-mode SVD formula (Townsend 2016, "Differentiating the singular
 //   value decomposition"; PyTorch's svd_backward; PlasticineLab's clamped variant).
 // iso_uv_adjoint / iso_uu_adjoint: reverse mode of the isotropic maps F -> U diag(f(sigma)) V^T
