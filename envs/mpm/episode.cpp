@@ -1,0 +1,114 @@
+#include "envs/mpm/episode.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include "common/parallel.hpp"
+#include "envs/mpm/substep.hpp"
+
+namespace dsb::mpm {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Advances one env step; records tapes[0 .. substeps) when given.
+void env_step(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const double* actions,
+              SubstepTape* tapes) {
+  for (int s = 0; s < model.config.substeps; ++s) substep(model, ws, team, actions, tapes ? &tapes[s] : nullptr);
+}
+
+void zero_adjoints(MpmWorkspace& ws) {
+  std::fill(ws.adj.begin(), ws.adj.end(), zero_adjoint());
+  std::fill(ws.pose_adj.begin(), ws.pose_adj.end(), PoseAdjoint{});
+}
+
+}  // namespace
+
+bool state_is_finite(const std::vector<Particle>& particles, ThreadTeam& team) {
+  const double bad = parallel_sum(team, static_cast<std::int64_t>(particles.size()), kParticleGrain * 8, 0.0,
+                                  [&](std::int64_t begin, std::int64_t end, double acc) {
+                                    for (std::int64_t p = begin; p < end; ++p)
+                                      if (!particles[p].x.allFinite() || !particles[p].v.allFinite()) acc += 1.0;
+                                    return acc;
+                                  });
+  return bad == 0.0;
+}
+
+double run_episode(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, std::span<const double> actions,
+                   int env_steps, const EpisodeObjective& objective) {
+  const int adim = model.action_dim();
+  ws.reset_state(model);
+  double loss = 0.0;
+  for (int k = 0; k < env_steps; ++k) {
+    env_step(model, ws, team, actions.data() + static_cast<std::size_t>(k) * adim, nullptr);
+    if (!state_is_finite(ws.particles, team)) return kNaN;
+    loss += objective.step_loss(k, ws.particles, ws.poses, team);
+  }
+  return loss;
+}
+
+double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
+                             std::span<const double> actions, int env_steps, const EpisodeObjective& objective,
+                             std::span<double> actions_bar, ReverseMode mode) {
+  const int adim = model.action_dim();
+  const int S = model.config.substeps;
+  const bool full = mode == ReverseMode::full_history;
+  ws.reserve_reverse(model, full ? 0 : env_steps);
+  if (full) {
+    const std::size_t total = static_cast<std::size_t>(env_steps) * S;
+    if (ws.tapes.size() < total) ws.tapes.resize(total);
+    for (auto& t : ws.tapes) {
+      t.before.resize(model.particles());
+      t.solid.resize(model.particles());
+      t.poses.resize(model.primitives.size());
+    }
+  }
+  std::fill(actions_bar.begin(), actions_bar.end(), 0.0);
+  auto fail = [&] {
+    std::fill(actions_bar.begin(), actions_bar.end(), kNaN);
+    return kNaN;
+  };
+
+  // forward, keeping the state before every env step (or every substep's tape)
+  ws.reset_state(model);
+  double loss = 0.0;
+  for (int k = 0; k < env_steps; ++k) {
+    if (!full) {
+      ws.checkpoints[k].particles = ws.particles;
+      ws.checkpoints[k].poses = ws.poses;
+    }
+    env_step(model, ws, team, actions.data() + static_cast<std::size_t>(k) * adim,
+             full ? &ws.tapes[static_cast<std::size_t>(k) * S] : nullptr);
+    if (!state_is_finite(ws.particles, team)) return fail();
+    loss += objective.step_loss(k, ws.particles, ws.poses, team);
+  }
+  if (!std::isfinite(loss)) return fail();
+
+  // reverse: env steps backwards; the state after env step k is the final state or checkpoint
+  // k + 1 (the start of tape (k + 1) S in full history)
+  zero_adjoints(ws);
+  for (int k = env_steps - 1; k >= 0; --k) {
+    const bool last = k == env_steps - 1;
+    const std::vector<Particle>& after =
+        last ? ws.particles : (full ? ws.tapes[static_cast<std::size_t>(k + 1) * S].before : ws.checkpoints[k + 1].particles);
+    const std::vector<Pose>& after_poses =
+        last ? ws.poses : (full ? ws.tapes[static_cast<std::size_t>(k + 1) * S].poses : ws.checkpoints[k + 1].poses);
+    objective.step_loss_adjoint(k, after, after_poses, ws.adj, ws.pose_adj, team);
+    const double* a = actions.data() + static_cast<std::size_t>(k) * adim;
+    double* a_bar = actions_bar.data() + static_cast<std::size_t>(k) * adim;
+    SubstepTape* tapes = full ? &ws.tapes[static_cast<std::size_t>(k) * S] : ws.tapes.data();
+    if (!full) {
+      // recompute env step k from its checkpoint, recording its substeps
+      ws.particles = ws.checkpoints[k].particles;
+      ws.poses = ws.checkpoints[k].poses;
+      env_step(model, ws, team, a, tapes);
+    }
+    for (int s = S - 1; s >= 0; --s) substep_adjoint(model, ws, team, a, tapes[s], a_bar);
+  }
+  for (double g : actions_bar)
+    if (!std::isfinite(g)) return fail();
+  return loss;
+}
+
+}  // namespace dsb::mpm

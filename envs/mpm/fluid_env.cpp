@@ -1,0 +1,171 @@
+#include "envs/mpm/fluid_env.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include "common/error.hpp"
+#include "common/parallel.hpp"
+#include "envs/mpm/episode.hpp"
+#include "envs/mpm/fluid_scene.hpp"
+#include "envs/mpm/substep.hpp"
+
+namespace dsb::mpm {
+
+namespace {
+
+constexpr int kActionsPerStep = 4;  // bowl (x, y), handle (x, y)
+
+EnvInfo fluid_info(std::string name, const FluidConfig& cfg) {
+  cfg.validate();
+  EnvInfo info;
+  info.name = std::move(name);
+  info.dim = 2 * cfg.segments;
+  info.differentiable = true;
+  info.rl = true;
+  info.threaded = true;
+  // bench_mpm: one gradient episode of the full task on one core (scaled by the horizon)
+  info.cost_hint_s = 5.0 * cfg.env_steps / 50.0;
+  return info;
+}
+
+// Per-env-step interface: the action is the ladle's (forward/back, up/down) speed in [-1, 1]^2.
+class FluidRl : public RlEnv {
+ public:
+  FluidRl(const FluidEnv& env) : env_(env), ws_(env.model()), objective_(env.fluid_config(), env.model()) {
+    reset();
+  }
+  int observation_dim() const override { return 12; }
+  int action_dim() const override { return 2; }
+  int horizon() const override { return env_.fluid_config().env_steps; }
+  void reset() override {
+    ws_.reset_state(env_.model());
+    step_ = 0;
+    last_action_ = {0.0, 0.0};
+    blown_up_ = false;
+  }
+  // cube centre and mean velocity, bowl position and velocity
+  std::vector<double> observe() const override {
+    const MpmModel& m = env_.model();
+    const Vec3 c = cube_centre(m, ws_.particles);
+    Vec3 v = Vec3::Zero();
+    const Body& cube = m.bodies[0];
+    for (int p = cube.begin; p < cube.end; ++p) v += ws_.particles[p].v;
+    v /= static_cast<double>(cube.end - cube.begin);
+    const Vec3& b = ws_.poses[0].p;
+    const double speed = env_.fluid_config().max_speed;
+    return {c.x(), c.y(), c.z(), v.x(), v.y(), v.z(), b.x(), b.y(), b.z(),
+            speed * last_action_[0], speed * last_action_[1], 0.0};
+  }
+  void step(std::span<const double> action) override {
+    if (done()) return;
+    last_action_ = {std::clamp(action[0], -1.0, 1.0), std::clamp(action[1], -1.0, 1.0)};
+    const double a[kActionsPerStep] = {last_action_[0], last_action_[1], last_action_[0], last_action_[1]};
+    for (int s = 0; s < env_.model().config.substeps; ++s) substep(env_.model(), ws_, serial_team(), a, nullptr);
+    if (!state_is_finite(ws_.particles, serial_team())) blown_up_ = true;
+    ++step_;
+  }
+  bool done() const override { return step_ >= horizon() || blown_up_; }
+  double final_loss() const override {
+    if (blown_up_) return std::numeric_limits<double>::quiet_NaN();
+    return objective_.final_loss(ws_.particles, ws_.poses);
+  }
+
+ private:
+  const FluidEnv& env_;
+  MpmWorkspace ws_;
+  FluidObjective objective_;
+  int step_ = 0;
+  std::array<double, 2> last_action_{};
+  bool blown_up_ = false;
+};
+
+}  // namespace
+
+FluidEnv::FluidEnv(std::string name, FluidConfig cfg)
+    : Env(fluid_info(std::move(name), cfg)), cfg_(std::move(cfg)),
+      model_([c = cfg_] { return build_fluid_model(c); }) {}
+
+std::unique_ptr<Workspace> FluidEnv::make_workspace() const {
+  auto ws = std::make_unique<FluidWorkspace>(model());
+  ws->actions.resize(static_cast<std::size_t>(cfg_.env_steps) * kActionsPerStep);
+  ws->actions_bar.resize(ws->actions.size());
+  return ws;
+}
+
+std::unique_ptr<RlEnv> FluidEnv::make_rl() const { return std::make_unique<FluidRl>(*this); }
+
+void FluidEnv::actions(std::span<const double> x, std::vector<double>& out) const {
+  out.resize(static_cast<std::size_t>(cfg_.env_steps) * kActionsPerStep);
+  const int per = cfg_.steps_per_segment();
+  for (int k = 0; k < cfg_.env_steps; ++k) {
+    const int s = k / per;
+    double* a = out.data() + static_cast<std::size_t>(k) * kActionsPerStep;
+    a[0] = a[2] = x[2 * s];
+    a[1] = a[3] = x[2 * s + 1];
+  }
+}
+
+double FluidEnv::rollout(std::span<const double> x, Workspace& workspace, ThreadTeam& team) const {
+  auto& ws = static_cast<FluidWorkspace&>(workspace);
+  actions(x, ws.actions);
+  const FluidObjective objective(cfg_, model());
+  return run_episode(model(), ws.mpm, team, ws.actions, cfg_.env_steps, objective);
+}
+
+double FluidEnv::rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& workspace,
+                                   ThreadTeam& team) const {
+  auto& ws = static_cast<FluidWorkspace&>(workspace);
+  actions(x, ws.actions);
+  const FluidObjective objective(cfg_, model());
+  const double loss =
+      run_episode_with_grad(model(), ws.mpm, team, ws.actions, cfg_.env_steps, objective, ws.actions_bar);
+  // each param drives both primitives over its segment's env steps
+  std::fill(grad.begin(), grad.end(), 0.0);
+  const int per = cfg_.steps_per_segment();
+  for (int k = 0; k < cfg_.env_steps; ++k) {
+    const int s = k / per;
+    const double* g = ws.actions_bar.data() + static_cast<std::size_t>(k) * kActionsPerStep;
+    grad[2 * s] += g[0] + g[2];
+    grad[2 * s + 1] += g[1] + g[3];
+  }
+  return loss;
+}
+
+std::vector<FluidEnv::Frame> FluidEnv::trajectory(std::span<const double> x, ThreadTeam& team) const {
+  MpmWorkspace ws(model());
+  std::vector<double> a;
+  actions(x, a);
+  ws.reset_state(model());
+  std::vector<Frame> frames{{cube_centre(model(), ws.particles), ws.poses[0].p}};
+  for (int k = 0; k < cfg_.env_steps; ++k) {
+    for (int s = 0; s < cfg_.mpm.substeps; ++s)
+      substep(model(), ws, team, a.data() + static_cast<std::size_t>(k) * kActionsPerStep, nullptr);
+    frames.push_back({cube_centre(model(), ws.particles), ws.poses[0].p});
+  }
+  return frames;
+}
+
+EnvFamily fluid_family() {
+  EnvFamily f;
+  f.pattern = "fluid, fluid-hN";
+  f.description =
+      "MLS-MPM: a 2-DOF ladle scoops a sugar cube (elastic) out of syrup (viscous fluid) in a 0.4 x 0.4 x 0.2 m "
+      "tank, 5 segments x 2 speeds = 10-D; fluid-hN: N env steps instead of 50";
+  f.grid_names = {"fluid"};
+  f.try_make = [](const std::string& requested) -> std::unique_ptr<Env> {
+    if (requested == "fluid") return std::make_unique<FluidEnv>("fluid", FluidConfig{});
+    const std::string prefix = "fluid-h";
+    if (requested.rfind(prefix, 0) != 0) return nullptr;
+    const std::string digits = requested.substr(prefix.size());
+    if (digits.empty() || digits.size() > 3 || !std::all_of(digits.begin(), digits.end(), ::isdigit))
+      throw UsageError("unknown env '" + requested + "' (fluid-hN: N env steps, a multiple of 5 up to 50)");
+    FluidConfig cfg;
+    cfg.env_steps = std::stoi(digits);
+    if (cfg.env_steps < 5 || cfg.env_steps > 50 || cfg.env_steps % cfg.segments != 0)
+      throw UsageError("unknown env '" + requested + "' (fluid-hN: N env steps, a multiple of 5 up to 50)");
+    return std::make_unique<FluidEnv>(requested, cfg);
+  };
+  return f;
+}
+
+}  // namespace dsb::mpm

@@ -1,0 +1,56 @@
+#pragma once
+// `fluid` (fluid_config.hpp) as an Env: 10 params (5 segments x forward/back and up/down speed of
+// the ladle) -> the MPM episode -> the seed's loss; the gradient by the engine's checkpointed
+// reverse pass; an RL view with per-env-step actions. `fluid-hN` is the same task with N env
+// steps (N a multiple of 5, N <= 50): the regression grid's short horizon.
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "envs/core/env.hpp"
+#include "envs/core/lazy_model.hpp"
+#include "envs/core/registry.hpp"
+#include "envs/mpm/fluid_config.hpp"
+#include "envs/mpm/mpm_model.hpp"
+#include "envs/mpm/mpm_workspace.hpp"
+
+namespace dsb::mpm {
+
+struct FluidWorkspace : Workspace {
+  explicit FluidWorkspace(const MpmModel& model) : mpm(model) {}
+  MpmWorkspace mpm;
+  std::vector<double> actions, actions_bar;  // env_steps x 4
+};
+
+class FluidEnv : public Env {
+ public:
+  FluidEnv(std::string name, FluidConfig cfg);
+  nlohmann::json config() const override { return cfg_.to_json(); }
+  std::unique_ptr<Workspace> make_workspace() const override;
+  std::unique_ptr<RlEnv> make_rl() const override;
+
+  const FluidConfig& fluid_config() const { return cfg_; }
+  const MpmModel& model() const { return model_.get(); }
+  // the engine's actions of every env step for params x: env_steps x (bowl x, bowl y, handle x,
+  // handle y), each segment's two params held for its env steps
+  void actions(std::span<const double> x, std::vector<double>& out) const;
+  // the cube's centre and the bowl's position after every env step (index 0 = the start)
+  struct Frame {
+    Vec3 cube, bowl;
+  };
+  std::vector<Frame> trajectory(std::span<const double> x, ThreadTeam& team) const;
+
+ protected:
+  double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override;
+  double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
+                           ThreadTeam& team) const override;
+
+ private:
+  FluidConfig cfg_;
+  LazyModel<MpmModel> model_;
+};
+
+EnvFamily fluid_family();
+
+}  // namespace dsb::mpm

@@ -1,0 +1,93 @@
+#pragma once
+// The background grid of the MPM engine and the particle binning that makes its work sparse and
+// its scatter deterministic.
+//
+// Layout: nodes in a dense row-major array (z fastest), index (i n_y + j) n_z + k; the grid is
+// cut into blocks of 4 x 4 x 4 nodes. Only *active* blocks are cleared, updated and read: the
+// blocks a particle's 3 x 3 x 3 stencil can touch (its home block, the block of its base node, and
+// the next block along each axis). Memory is dense (64^3 nodes x 7 doubles = 15 MB); work is
+// proportional to the active blocks.
+//
+// Deterministic scatter (reference/mpm-facts.md 7): particles are binned by home block in a stable
+// counting sort (ascending particle index inside a block), and blocks are coloured by the parity
+// of their block coordinates. A particle writes nodes base..base+2, i.e. only its home block and
+// the next one along each axis, so two home blocks of one colour (2 blocks apart along some axis)
+// never write the same node: the 8 colours run one after another, the blocks of a colour in any
+// order on any thread, each block's particles in ascending order. Every node therefore sums its
+// contributions in one fixed order (colour, block, particle), whatever the number of threads.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "envs/mpm/mpm_types.hpp"
+
+namespace dsb::mpm {
+
+constexpr int kBlockLog2 = 2;
+constexpr int kBlock = 1 << kBlockLog2;  // nodes per block and axis
+constexpr int kColours = 8;
+
+struct GridLayout {
+  std::array<int, 3> n{};   // nodes per axis
+  std::array<int, 3> nb{};  // blocks per axis
+
+  explicit GridLayout(const std::array<int, 3>& nodes);
+  GridLayout() = default;
+  int nodes() const { return n[0] * n[1] * n[2]; }
+  int blocks() const { return nb[0] * nb[1] * nb[2]; }
+  int node(int i, int j, int k) const { return (i * n[1] + j) * n[2] + k; }
+  int block(int bi, int bj, int bk) const { return (bi * nb[1] + bj) * nb[2] + bk; }
+  std::array<int, 3> block_coords(int b) const {
+    return {b / (nb[1] * nb[2]), (b / nb[2]) % nb[1], b % nb[2]};
+  }
+  int colour(int b) const {
+    const auto c = block_coords(b);
+    return (c[0] & 1) << 2 | (c[1] & 1) << 1 | (c[2] & 1);
+  }
+  // node index range of block b along one axis: [lo, hi)
+  void block_range(int b, std::array<int, 3>& lo, std::array<int, 3>& hi) const;
+};
+
+// Grid fields, dense over all nodes; only active blocks hold meaningful values.
+struct GridFields {
+  std::vector<double> m;  // node mass (P2G)
+  std::vector<Vec3> q;    // node momentum (P2G)
+  std::vector<Vec3> v;    // node velocity after the grid update (read by G2P)
+  void resize(int nodes);
+};
+
+// Grid adjoints, the same shape.
+struct GridAdjoint {
+  std::vector<double> m;  // dL/dm
+  std::vector<Vec3> q;    // dL/dq
+  std::vector<Vec3> v;    // dL/dv (velocity after the grid update)
+  void resize(int nodes);
+};
+
+// Particles binned by home block, and the active blocks, for one substep.
+struct ParticleBins {
+  std::vector<int> home;          // per particle: home block
+  std::vector<int> order;         // particle indices sorted by home block, stable
+  std::vector<int> block_begin;   // per block: first position in `order` (size blocks + 1)
+  std::array<std::vector<int>, kColours> by_colour;  // occupied blocks of each colour, ascending
+  std::vector<int> active;        // active blocks, ascending
+  std::vector<std::uint8_t> flag; // per block scratch
+
+  // bins particles with home blocks `home` (already filled, size particles)
+  void rebuild(const GridLayout& layout);
+};
+
+// Zeroes m and q on the nodes of the given blocks.
+void clear_blocks(const GridLayout& layout, const std::vector<int>& blocks, GridFields& g);
+void clear_blocks(const GridLayout& layout, const std::vector<int>& blocks, GridAdjoint& g);
+
+// A compact copy of the active blocks' fields (what the reverse pass of a substep needs).
+struct GridSnapshot {
+  std::vector<int> active;
+  std::vector<double> m;
+  std::vector<Vec3> q, v;
+  void save(const GridLayout& layout, const std::vector<int>& blocks, const GridFields& g);
+  void restore(const GridLayout& layout, GridFields& g) const;
+};
+
+}  // namespace dsb::mpm

@@ -1,0 +1,39 @@
+#pragma once
+// Constants of one MLS-MPM simulation (grid, time step, gravity, boundary): a plain struct with
+// PlasticineLab's defaults (reference/environment-facts.md 1.1), validated with messages that
+// name the field, stored with every run through the task's config.
+//
+// The domain is the box [0, n_x dx] x [0, n_y dx] x [0, n_z dx] with grid nodes at integer
+// multiples of dx. Walls: a node within `bound` cells of a face (index < bound, or > n - bound,
+// PlasticineLab's asymmetric test) loses the velocity component that points out of the domain;
+// on the floor (y) that component goes through Coulomb friction instead (see grid_update.hpp).
+#include <array>
+
+#include <nlohmann/json.hpp>
+
+#include "envs/mpm/mpm_types.hpp"
+
+namespace dsb::mpm {
+
+struct MpmConfig {
+  std::array<int, 3> grid = {64, 64, 64};  // nodes per axis (PlasticineLab: 64^3)
+  double dx = 1.0 / 64.0;                  // grid spacing (PlasticineLab: unit cube / 64)
+  double dt = 1e-4;                        // substep (PlasticineLab: 0.5e-4 / quality 0.5)
+  int substeps = 19;                       // substeps per env step (PlasticineLab: floor(2e-3/dt) in
+                                           // floating point = 19)
+  Vec3 gravity = Vec3(0.0, -30.0, 0.0);    // PlasticineLab: (0, -1, 0) x 30
+  int bound = 3;                           // wall cells (PlasticineLab: 3)
+  double floor_friction = 1.5;             // PlasticineLab ground_friction: 0 = slip, >= 10 = sticky
+  double grid_mass_epsilon = 1e-12;        // nodes at or below this mass are empty (PlasticineLab)
+
+  // Particles' positions are clamped to [lo, hi] per axis after advection: hi = (n - bound) dx as
+  // PlasticineLab (1 - 3 dx on its unit cube); lo = dx where PlasticineLab has 0, so that a
+  // particle's stencil never leaves the grid (the walls keep particles 3 cells away anyway).
+  double clamp_low() const { return dx; }
+  double clamp_high(int axis) const { return (grid[axis] - bound) * dx; }
+
+  void validate(const char* owner) const;  // throws ConfigError naming the field
+  nlohmann::json to_json() const;
+};
+
+}  // namespace dsb::mpm

@@ -1,0 +1,46 @@
+#include "envs/mpm/mpm_workspace.hpp"
+
+#include "common/error.hpp"
+
+namespace dsb::mpm {
+
+MpmWorkspace::MpmWorkspace(const MpmModel& model) {
+  if (model.primitives.size() > static_cast<std::size_t>(kMaxPrimitives))
+    throw ConfigError("mpm", "primitives", "at most " + std::to_string(kMaxPrimitives) + " primitives");
+  const int n = model.particles();
+  particles.resize(n);
+  affine.resize(n);
+  grid.resize(model.layout.nodes());
+  bins.home.resize(n);
+  poses = model.initial_poses;
+  next_poses = poses;
+  frames.resize(poses.size());
+}
+
+void MpmWorkspace::reset_state(const MpmModel& model) {
+  particles = model.initial;
+  poses = model.initial_poses;
+}
+
+void MpmWorkspace::reserve_reverse(const MpmModel& model, int env_steps) {
+  const int n = model.particles();
+  if (static_cast<int>(checkpoints.size()) < env_steps) checkpoints.resize(env_steps);
+  for (auto& c : checkpoints) {
+    c.particles.resize(n);
+    c.poses.resize(model.primitives.size());
+  }
+  const int substeps = model.config.substeps;
+  if (static_cast<int>(tapes.size()) < substeps) tapes.resize(substeps);
+  for (auto& t : tapes) {
+    t.before.resize(n);
+    t.solid.resize(n);
+    t.poses.resize(model.primitives.size());
+  }
+  adj.resize(n);
+  adj_prev.resize(n);
+  v_new.resize(n);
+  pose_adj.resize(model.primitives.size());
+  if (grid_adj.m.size() != static_cast<std::size_t>(model.layout.nodes())) grid_adj.resize(model.layout.nodes());
+}
+
+}  // namespace dsb::mpm

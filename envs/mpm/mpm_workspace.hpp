@@ -1,0 +1,55 @@
+#pragma once
+// The mutable buffers of MPM rollouts (MuJoCo's mjData): the current particle and primitive
+// state, the grid, the bins, and for gradients the env-step checkpoints, one env step's
+// substep tapes and the adjoints. Sized once for a model and reused by every rollout of a run,
+// so a rollout allocates nothing after the first.
+#include <vector>
+
+#include "envs/mpm/grid.hpp"
+#include "envs/mpm/material.hpp"
+#include "envs/mpm/mpm_model.hpp"
+#include "envs/mpm/primitive.hpp"
+
+namespace dsb::mpm {
+
+constexpr int kMaxPrimitives = 8;
+
+// What the reverse pass of one substep needs (recorded when an env step is recomputed).
+struct SubstepTape {
+  std::vector<Particle> before;   // particles at the start of the substep
+  std::vector<SolidTape> solid;   // per particle (solids only; fluids leave theirs untouched)
+  std::vector<Pose> poses;        // primitive poses at the start of the substep
+  GridSnapshot grid;              // active blocks' m, q, v after the grid update
+};
+
+// The state at an env-step boundary.
+struct Checkpoint {
+  std::vector<Particle> particles;
+  std::vector<Pose> poses;
+};
+
+struct MpmWorkspace {
+  explicit MpmWorkspace(const MpmModel& model);
+
+  // current state
+  std::vector<Particle> particles;
+  std::vector<Pose> poses;
+  // per substep scratch
+  std::vector<Pose> next_poses;
+  std::vector<ContactFrame> frames;
+  std::vector<Mat3> affine;  // per particle: A = -(4 dt V / dx^2) tau + m C
+  GridFields grid;
+  ParticleBins bins;
+  // reverse pass
+  std::vector<Checkpoint> checkpoints;  // env steps (checkpoint k = state before env step k)
+  std::vector<SubstepTape> tapes;       // substeps of one env step
+  std::vector<ParticleAdjoint> adj, adj_prev;
+  std::vector<Vec3> v_new;  // per particle: its G2P velocity, recomputed in the reverse pass
+  std::vector<PoseAdjoint> pose_adj;
+  GridAdjoint grid_adj;
+
+  void reset_state(const MpmModel& model);  // particles and poses to the model's initial state
+  void reserve_reverse(const MpmModel& model, int env_steps);  // checkpoints and tapes
+};
+
+}  // namespace dsb::mpm
