@@ -1,5 +1,6 @@
 #include "common/det_math.hpp"
 
+#include <emmintrin.h>
 #include <sleef.h>
 
 // Every function is SLEEF's "cinz" (consistent, no FMA) pure-C scalar variant at 1.0-ulp accuracy
@@ -38,5 +39,24 @@ double tanh(double x) { return Sleef_cinz_tanhd1_u10purec(x); }
 double erf(double x) { return Sleef_cinz_erfd1_u10purec(x); }
 double erfc(double x) { return Sleef_cinz_erfcd1_u15purec(x); }
 double lgamma(double x) { return Sleef_cinz_lgammad1_u10purec(x); }
+
+namespace {
+
+template <class Pair, class Single>
+void batch(const double* x, double* out, std::size_t n, Pair pair, Single single) {
+  std::size_t i = 0;
+  for (; i + 2 <= n; i += 2) _mm_storeu_pd(out + i, pair(_mm_loadu_pd(x + i)));
+  for (; i < n; ++i) out[i] = single(x[i]);
+}
+
+}  // namespace
+
+void exp_batch(const double* x, double* out, std::size_t n) {
+  batch(x, out, n, Sleef_cinz_expd2_u10sse2, Sleef_cinz_expd1_u10purec);
+}
+
+void log_batch(const double* x, double* out, std::size_t n) {
+  batch(x, out, n, Sleef_cinz_logd2_u10sse2, Sleef_cinz_logd1_u10purec);
+}
 
 }  // namespace dsb::detmath

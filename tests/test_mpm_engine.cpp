@@ -77,7 +77,7 @@ TEST(MpmTransfers, ConserveMassAndLinearAndAngularMomentum) {
       m.layout.block_range(b, lo, hi);
       for (int i = lo[0]; i < hi[0]; ++i)
         for (int j = lo[1]; j < hi[1]; ++j)
-          for (int k = lo[2]; k < hi[2]; ++k) grid_mass += ws.grid.m[m.layout.node(i, j, k)];
+          for (int k = lo[2]; k < hi[2]; ++k) grid_mass += ws.grid.mq[m.layout.node(i, j, k)].w();
     }
   }
   EXPECT_NEAR(grid_mass, total_mass(m), 1e-14 * total_mass(m));

@@ -60,8 +60,8 @@ double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam
     if (ws.tapes.size() < total) ws.tapes.resize(total);
     for (auto& t : ws.tapes) {
       t.before.resize(model.particles());
-      t.solid.resize(model.particles());
       t.poses.resize(model.primitives.size());
+      t.bins.home.resize(model.particles());
     }
   }
   std::fill(actions_bar.begin(), actions_bar.end(), 0.0);
@@ -104,7 +104,12 @@ double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam
       ws.poses = ws.checkpoints[k].poses;
       env_step(model, ws, team, a, tapes);
     }
-    for (int s = S - 1; s >= 0; --s) substep_adjoint(model, ws, team, a, tapes[s], a_bar);
+    // the state each substep produced: the next substep's start, or the state after env step k
+    // (ws.particles: the end of the recomputation, or the final state in full history)
+    const std::vector<Particle>& end_of_step =
+        (full && !last) ? ws.tapes[static_cast<std::size_t>(k + 1) * S].before : ws.particles;
+    for (int s = S - 1; s >= 0; --s)
+      substep_adjoint(model, ws, team, a, tapes[s], s + 1 < S ? tapes[s + 1].before : end_of_step, a_bar);
   }
   for (double g : actions_bar)
     if (!std::isfinite(g)) return fail();

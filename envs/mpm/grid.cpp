@@ -17,16 +17,11 @@ void GridLayout::block_range(int b, std::array<int, 3>& lo, std::array<int, 3>& 
 }
 
 void GridFields::resize(int nodes) {
-  m.assign(nodes, 0.0);
-  q.assign(nodes, Vec3::Zero());
+  mq.assign(nodes, Vec4::Zero());
   v.assign(nodes, Vec3::Zero());
 }
 
-void GridAdjoint::resize(int nodes) {
-  m.assign(nodes, 0.0);
-  q.assign(nodes, Vec3::Zero());
-  v.assign(nodes, Vec3::Zero());
-}
+void GridAdjoint::resize(int nodes) { v.assign(nodes, Vec3::Zero()); }
 
 void ParticleBins::rebuild(const GridLayout& layout) {
   const int blocks = layout.blocks();
@@ -77,28 +72,19 @@ void for_nodes_of_blocks(const GridLayout& layout, const std::vector<int>& block
 }  // namespace
 
 void clear_blocks(const GridLayout& layout, const std::vector<int>& blocks, GridFields& g) {
-  for_nodes_of_blocks(layout, blocks, [&](int n) {
-    g.m[n] = 0.0;
-    g.q[n].setZero();
-  });
+  for_nodes_of_blocks(layout, blocks, [&](int n) { g.mq[n].setZero(); });
 }
 
 void clear_blocks(const GridLayout& layout, const std::vector<int>& blocks, GridAdjoint& g) {
-  for_nodes_of_blocks(layout, blocks, [&](int n) {
-    g.m[n] = 0.0;
-    g.q[n].setZero();
-    g.v[n].setZero();
-  });
+  for_nodes_of_blocks(layout, blocks, [&](int n) { g.v[n].setZero(); });
 }
 
 void GridSnapshot::save(const GridLayout& layout, const std::vector<int>& blocks, const GridFields& g) {
   active = blocks;
-  m.clear();
-  q.clear();
+  mq.clear();
   v.clear();
   for_nodes_of_blocks(layout, blocks, [&](int n) {
-    m.push_back(g.m[n]);
-    q.push_back(g.q[n]);
+    mq.push_back(g.mq[n]);
     v.push_back(g.v[n]);
   });
 }
@@ -106,8 +92,7 @@ void GridSnapshot::save(const GridLayout& layout, const std::vector<int>& blocks
 void GridSnapshot::restore(const GridLayout& layout, GridFields& g) const {
   std::size_t i = 0;
   for_nodes_of_blocks(layout, active, [&](int n) {
-    g.m[n] = m[i];
-    g.q[n] = q[i];
+    g.mq[n] = mq[i];
     g.v[n] = v[i];
     ++i;
   });

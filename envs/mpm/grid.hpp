@@ -50,17 +50,15 @@ struct GridLayout {
 
 // Grid fields, dense over all nodes; only active blocks hold meaningful values.
 struct GridFields {
-  std::vector<double> m;  // node mass (P2G)
-  std::vector<Vec3> q;    // node momentum (P2G)
+  std::vector<Vec4> mq;   // node momentum and mass (q, m) from P2G
   std::vector<Vec3> v;    // node velocity after the grid update (read by G2P)
   void resize(int nodes);
 };
 
-// Grid adjoints, the same shape.
+// dL/dv of the node velocities after the grid update. (The reverse pass writes (dL/dq, dL/dm)
+// over the restored mq of GridFields, once the grid update's adjoint has read them.)
 struct GridAdjoint {
-  std::vector<double> m;  // dL/dm
-  std::vector<Vec3> q;    // dL/dq
-  std::vector<Vec3> v;    // dL/dv (velocity after the grid update)
+  std::vector<Vec3> v;
   void resize(int nodes);
 };
 
@@ -77,15 +75,15 @@ struct ParticleBins {
   void rebuild(const GridLayout& layout);
 };
 
-// Zeroes m and q on the nodes of the given blocks.
+// Zeroes mq (GridFields) or v (GridAdjoint) on the nodes of the given blocks.
 void clear_blocks(const GridLayout& layout, const std::vector<int>& blocks, GridFields& g);
 void clear_blocks(const GridLayout& layout, const std::vector<int>& blocks, GridAdjoint& g);
 
 // A compact copy of the active blocks' fields (what the reverse pass of a substep needs).
 struct GridSnapshot {
   std::vector<int> active;
-  std::vector<double> m;
-  std::vector<Vec3> q, v;
+  std::vector<Vec4> mq;
+  std::vector<Vec3> v;
   void save(const GridLayout& layout, const std::vector<int>& blocks, const GridFields& g);
   void restore(const GridLayout& layout, GridFields& g) const;
 };

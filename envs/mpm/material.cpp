@@ -1,6 +1,8 @@
 #include "envs/mpm/material.hpp"
 
 #include <algorithm>
+#include <array>
+#include <stdexcept>
 #include <cmath>
 
 #include "common/det_math.hpp"
@@ -124,41 +126,63 @@ nlohmann::json Material::to_json() const {
 
 Mat3 solid_update(const Material& mat, const Mat3& C, double dt, Mat3& F, SolidTape& tape) {
   // F_tmp = (I + dt C) F
-  const Mat3 F_tmp = trial_deformation(C, dt, F);
-  tape.svd = svd3(F_tmp);
-  F = F_tmp;
-  return solid_update_from_svd(mat, F, tape);
+  F = trial_deformation(C, dt, F);
+  tape.svd = svd3(F);
+  const Material* m = &mat;
+  Mat3 tau;
+  solid_update_batch(&m, &F, &tape, &tau, 1);
+  return tau;
 }
 
-Mat3 solid_update_from_svd(const Material& mat, Mat3& F, SolidTape& tape) {
-  const double mu = mat.mu();
-  const Vec3& sigma = tape.svd.sigma;
-  tape.flow = false;
-  tape.k = 1.0;
-  if (mat.kind == MaterialKind::plastic) {
-    // von Mises return mapping in log strain
-    Vec3 eps;
-    for (int i = 0; i < 3; ++i) eps[i] = dm::log(std::max(sigma[i], kSigmaFloor));
+void solid_update_batch(const Material* const* mats, Mat3* F, SolidTape* tapes, Mat3* tau, int n) {
+  if (n > kSolidBatch) throw std::invalid_argument("solid_update_batch: at most kSolidBatch particles");
+  // von Mises return mapping in log strain: the logarithms of every plastic particle at once
+  std::array<double, 3 * kSolidBatch> args{}, logs{};
+  int m = 0;
+  for (int i = 0; i < n; ++i)
+    if (mats[i]->kind == MaterialKind::plastic)
+      for (int a = 0; a < 3; ++a) args[m++] = std::max(tapes[i].svd.sigma[a], kSigmaFloor);
+  dm::log_batch(args.data(), logs.data(), m);
+  // the flow's targets mean + k eps^, then their exponentials at once
+  int used = 0, e = 0;
+  for (int i = 0; i < n; ++i) {
+    SolidTape& t = tapes[i];
+    t.flow = false;
+    t.k = 1.0;
+    if (mats[i]->kind != MaterialKind::plastic) continue;
+    const Vec3 eps(logs[used], logs[used + 1], logs[used + 2]);
+    used += 3;
+    const double mu = mats[i]->mu();
     const double mean = (eps[0] + eps[1] + eps[2]) / 3.0;
-    const Vec3 eps_hat = eps - Vec3::Constant(mean);
-    const double norm = std::sqrt(eps_hat.squaredNorm() + kNormEpsilon);
-    const double dgamma = norm - mat.yield_stress / (2.0 * mu);
-    tape.eps_hat = eps_hat;
-    tape.norm = norm;
+    t.eps_hat = eps - Vec3::Constant(mean);
+    t.norm = std::sqrt(t.eps_hat.squaredNorm() + kNormEpsilon);
+    const double dgamma = t.norm - mats[i]->yield_stress / (2.0 * mu);
     if (dgamma > 0.0) {
-      tape.flow = true;
-      tape.k = mat.yield_stress / (2.0 * mu * norm);
-      for (int i = 0; i < 3; ++i) tape.f[i] = dm::exp(mean + tape.k * eps_hat[i]);
-    } else {
-      for (int i = 0; i < 3; ++i) tape.f[i] = std::max(sigma[i], kSigmaFloor);
+      t.flow = true;
+      t.k = mats[i]->yield_stress / (2.0 * mu * t.norm);
+      for (int a = 0; a < 3; ++a) args[e++] = mean + t.k * t.eps_hat[a];
     }
-    // F_new = U diag(f) V^T
-    F = tape.svd.U * tape.f.asDiagonal() * tape.svd.V.transpose();
-  } else {
-    tape.f = sigma;  // F_new = F_tmp, already in F
   }
-  // tau = U diag(g) U^T
-  return solid_stress(mat, tape);
+  dm::exp_batch(args.data(), logs.data(), e);
+  e = 0;
+  for (int i = 0; i < n; ++i) {
+    SolidTape& t = tapes[i];
+    const Vec3& sigma = t.svd.sigma;
+    if (mats[i]->kind == MaterialKind::plastic) {
+      if (t.flow) {
+        t.f = Vec3(logs[e], logs[e + 1], logs[e + 2]);
+        e += 3;
+      } else {
+        for (int a = 0; a < 3; ++a) t.f[a] = std::max(sigma[a], kSigmaFloor);
+      }
+      // F_new = U diag(f) V^T
+      F[i] = t.svd.U * t.f.asDiagonal() * t.svd.V.transpose();
+    } else {
+      t.f = sigma;  // F_new = F_tmp, already in F
+    }
+    // tau = U diag(g) U^T
+    tau[i] = solid_stress(*mats[i], t);
+  }
 }
 
 Mat3 solid_stress(const Material& mat, const SolidTape& tape) {

@@ -66,10 +66,14 @@ struct SolidTape {
 // Solid update: F in = F of the particle, out = F_new; returns the Kirchhoff stress.
 Mat3 solid_update(const Material& mat, const Mat3& C, double dt, Mat3& F, SolidTape& tape);
 
-// The same in two halves, so that a caller can batch the SVDs (svd3_batch) in between:
-// F_tmp = (I + dt C) F, then, with tape.svd = svd3(F_tmp), the return mapping and the stress.
+// The same in two halves, so that a caller can batch the SVDs (svd3_batch) and the return
+// mapping's logarithms and exponentials (dm::log_batch, dm::exp_batch) of many particles:
+// F_tmp = (I + dt C) F; then, with tapes[i].svd = svd3(F[i] = F_tmp), F[i] becomes F_new and
+// tau[i] the stress, for n <= kSolidBatch particles of materials mats[i]. The same bits as
+// solid_update, particle by particle.
 inline Mat3 trial_deformation(const Mat3& C, double dt, const Mat3& F) { return F + dt * (C * F); }
-Mat3 solid_update_from_svd(const Material& mat, Mat3& F, SolidTape& tape);
+constexpr int kSolidBatch = 64;
+void solid_update_batch(const Material* const* mats, Mat3* F, SolidTape* tapes, Mat3* tau, int n);
 
 // The Kirchhoff stress solid_update returned, from its tape (tau = U diag(g(f)) U^T).
 Mat3 solid_stress(const Material& mat, const SolidTape& tape);

@@ -55,7 +55,9 @@ struct MpmModel {
   int particles() const { return static_cast<int>(initial.size()); }
   int action_offset(int primitive) const;  // where a primitive's actions start in an env step's actions
   int action_dim() const;  // sum of the primitives' action dims (the actions of one env step)
-  // checks sizes and ranges, fills layout, material_of, volume, mass and initial_poses; throws ConfigError
+  // checks sizes and ranges, fills layout, material_of, volume, mass and initial_poses, and sorts
+  // each body's particles by their starting grid block (memory order follows space); throws
+  // ConfigError
   void finalize(const std::string& owner);
 };
 

@@ -7,5 +7,6 @@ namespace dsb::mpm {
 
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
+using Vec4 = Eigen::Vector4d;  // a grid node's momentum and mass (q_x, q_y, q_z, m): two SSE2 packets
 
 }  // namespace dsb::mpm

@@ -33,14 +33,14 @@ void MpmWorkspace::reserve_reverse(const MpmModel& model, int env_steps) {
   if (static_cast<int>(tapes.size()) < substeps) tapes.resize(substeps);
   for (auto& t : tapes) {
     t.before.resize(n);
-    t.solid.resize(n);
     t.poses.resize(model.primitives.size());
+    t.bins.home.resize(n);
   }
   adj.resize(n);
   adj_prev.resize(n);
-  v_new.resize(n);
+  advection.resize(n);
   pose_adj.resize(model.primitives.size());
-  if (grid_adj.m.size() != static_cast<std::size_t>(model.layout.nodes())) grid_adj.resize(model.layout.nodes());
+  if (grid_adj.v.size() != static_cast<std::size_t>(model.layout.nodes())) grid_adj.resize(model.layout.nodes());
 }
 
 }  // namespace dsb::mpm

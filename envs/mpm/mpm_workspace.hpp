@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "envs/mpm/grid.hpp"
-#include "envs/mpm/material.hpp"
 #include "envs/mpm/mpm_model.hpp"
 #include "envs/mpm/primitive.hpp"
 
@@ -14,12 +13,21 @@ namespace dsb::mpm {
 
 constexpr int kMaxPrimitives = 8;
 
-// What the reverse pass of one substep needs (recorded when an env step is recomputed).
+// What the reverse pass of one substep needs (recorded when an env step is recomputed). The
+// stress update (SVD, return mapping) is not kept: the reverse pass recomputes it from `before`
+// (cheaper in memory than its 29 doubles per particle, and its bits are the forward's).
 struct SubstepTape {
   std::vector<Particle> before;   // particles at the start of the substep
-  std::vector<SolidTape> solid;   // per particle (solids only; fluids leave theirs untouched)
   std::vector<Pose> poses;        // primitive poses at the start of the substep
+  ParticleBins bins;              // the substep's binning of `before`
   GridSnapshot grid;              // active blocks' m, q, v after the grid update
+};
+
+// dL/d(x + dt v') split where the advection was not clamped: its part reaching x, and the
+// total dL/dv' (v' the G2P velocity).
+struct AdvectionAdjoint {
+  Vec3 x_bar = Vec3::Zero();
+  Vec3 v_bar = Vec3::Zero();
 };
 
 // The state at an env-step boundary.
@@ -44,7 +52,7 @@ struct MpmWorkspace {
   std::vector<Checkpoint> checkpoints;  // env steps (checkpoint k = state before env step k)
   std::vector<SubstepTape> tapes;       // substeps of one env step
   std::vector<ParticleAdjoint> adj, adj_prev;
-  std::vector<Vec3> v_new;  // per particle: its G2P velocity, recomputed in the reverse pass
+  std::vector<AdvectionAdjoint> advection;  // per particle, within one substep's reverse
   std::vector<PoseAdjoint> pose_adj;
   GridAdjoint grid_adj;
 

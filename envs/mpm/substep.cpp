@@ -10,30 +10,30 @@ namespace dsb::mpm {
 
 namespace {
 
-// 1. stress phase: A_p and the new F (or J) of every particle. Solids' SVDs go through
-// svd3_batch in chunks (the same bits as one at a time, about 3.7x faster).
-void stress_phase(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, SubstepTape* tape) {
-  constexpr int kChunk = 64;
+// 1. stress phase: A_p and the new F (or J) of every particle. Solids go through
+// solid_update_batch in chunks (SVDs, logarithms and exponentials batched: the same bits as one
+// particle at a time, several times faster).
+void stress_phase(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
   const MpmConfig& cfg = model.config;
   const double k_stress = 4.0 * cfg.dt / (cfg.dx * cfg.dx);
   parallel_for(team, model.particles(), kParticleGrain, [&](std::int64_t begin, std::int64_t end) {
-    std::array<SolidTape, kChunk> scratch;
-    std::array<Mat3, kChunk> F_tmp;
-    std::array<Svd3, kChunk> svd;
-    std::array<int, kChunk> index;
+    std::array<SolidTape, kSolidBatch> tapes;
+    std::array<Mat3, kSolidBatch> F, tau;
+    std::array<Svd3, kSolidBatch> svd;
+    std::array<const Material*, kSolidBatch> mats;
+    std::array<int, kSolidBatch> index;
     int n = 0;
-    // finish the solids gathered so far: SVDs in one batch, then return mapping and stress
+    // finish the solids gathered so far
     auto flush = [&] {
-      svd3_batch(F_tmp.data(), svd.data(), n);
+      svd3_batch(F.data(), svd.data(), n);
+      for (int i = 0; i < n; ++i) tapes[i].svd = svd[i];
+      solid_update_batch(mats.data(), F.data(), tapes.data(), tau.data(), n);
       for (int i = 0; i < n; ++i) {
         const int p = index[i];
         Particle& P = ws.particles[p];
-        SolidTape& t = tape ? tape->solid[p] : scratch[i];
-        t.svd = svd[i];
-        P.F = F_tmp[i];
-        const Mat3 tau = solid_update_from_svd(model.materials[model.material_of[p]], P.F, t);
+        P.F = F[i];
         // A = -(4 dt V / dx^2) tau + m C
-        ws.affine[p] = -(k_stress * model.volume[p]) * tau + model.mass[p] * P.C;
+        ws.affine[p] = -(k_stress * model.volume[p]) * tau[i] + model.mass[p] * P.C;
       }
       n = 0;
     };
@@ -41,13 +41,15 @@ void stress_phase(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, Sub
       Particle& P = ws.particles[p];
       const Material& mat = model.materials[model.material_of[p]];
       if (mat.kind == MaterialKind::fluid) {
-        const Mat3 tau = fluid_update(mat, P.C, cfg.dt, P.J);
-        ws.affine[p] = -(k_stress * model.volume[p]) * tau + model.mass[p] * P.C;
+        const Mat3 t = fluid_update(mat, P.C, cfg.dt, P.J);
+        ws.affine[p] = -(k_stress * model.volume[p]) * t + model.mass[p] * P.C;
         continue;
       }
-      F_tmp[n] = trial_deformation(P.C, cfg.dt, P.F);
+      // F_tmp = (I + dt C) F
+      F[n] = trial_deformation(P.C, cfg.dt, P.F);
+      mats[n] = &mat;
       index[n] = static_cast<int>(p);
-      if (++n == kChunk) flush();
+      if (++n == kSolidBatch) flush();
     }
     flush();
   });
@@ -70,35 +72,38 @@ void bin_particles(const MpmModel& model, ParticleBins& bins, ThreadTeam& team, 
 namespace {
 
 // 3. P2G, colour by colour
-void p2g(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
+void p2g(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins, ThreadTeam& team) {
   const MpmConfig& cfg = model.config;
   const double dx = cfg.dx, inv_dx = 1.0 / dx;
   const GridLayout& L = model.layout;
   GridFields& g = ws.grid;
   for (int c = 0; c < kColours; ++c) {
-    const std::vector<int>& blocks = ws.bins.by_colour[c];
+    const std::vector<int>& blocks = bins.by_colour[c];
     parallel_for(team, static_cast<std::int64_t>(blocks.size()), 1, [&](std::int64_t bb, std::int64_t) {
       const int b = blocks[bb];
-      for (int o = ws.bins.block_begin[b]; o < ws.bins.block_begin[b + 1]; ++o) {
-        const int p = ws.bins.order[o];
+      for (int o = bins.block_begin[b]; o < bins.block_begin[b + 1]; ++o) {
+        const int p = bins.order[o];
         const Particle& P = ws.particles[p];
         const Stencil s = make_stencil(P.x, inv_dx, L.n);
         const double mp = model.mass[p];
         const Mat3& A = ws.affine[p];
-        // q_i += w (m v + A dpos), dpos = (o - fx) dx: base term and one column of dx A per axis
-        const Vec3 base_term = mp * P.v - dx * (A * s.fx);
-        const Vec3 a0 = dx * A.col(0), a1 = dx * A.col(1), a2 = dx * A.col(2);
+        // (q_i, m_i) += w (m v + A dpos, m), dpos = (o - fx) dx: a base term and one column of
+        // dx A per axis
+        Vec4 base_term;
+        base_term << mp * P.v - dx * (A * s.fx), mp;
+        Vec4 a0, a1, a2;
+        a0 << dx * A.col(0), 0.0;
+        a1 << dx * A.col(1), 0.0;
+        a2 << dx * A.col(2), 0.0;
         for (int i = 0; i < 3; ++i) {
-          const Vec3 ti = base_term + static_cast<double>(i) * a0;
+          const Vec4 ti = base_term + static_cast<double>(i) * a0;
           for (int j = 0; j < 3; ++j) {
-            const Vec3 tij = ti + static_cast<double>(j) * a1;
+            const Vec4 tij = ti + static_cast<double>(j) * a1;
             const double wij = s.w[0][i] * s.w[1][j];
             const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-            for (int k = 0; k < 3; ++k) {
-              const double w = wij * s.w[2][k];
-              g.m[row + k] += w * mp;
-              g.q[row + k] += w * (tij + static_cast<double>(k) * a2);
-            }
+            g.mq[row] += (wij * s.w[2][0]) * tij;
+            g.mq[row + 1] += (wij * s.w[2][1]) * (tij + a2);
+            g.mq[row + 2] += (wij * s.w[2][2]) * (tij + 2.0 * a2);
           }
         }
       }
@@ -107,11 +112,11 @@ void p2g(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
 }
 
 // 5. grid update on the active blocks
-void grid_update(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
+void grid_update(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins, ThreadTeam& team) {
   const MpmConfig& cfg = model.config;
   const GridLayout& L = model.layout;
   GridFields& g = ws.grid;
-  const std::vector<int>& active = ws.bins.active;
+  const std::vector<int>& active = bins.active;
   const Vec3 dv_gravity = cfg.dt * cfg.gravity;
   const int np = static_cast<int>(model.primitives.size());
   parallel_for(team, static_cast<std::int64_t>(active.size()), kBlockGrain, [&](std::int64_t begin, std::int64_t end) {
@@ -122,12 +127,13 @@ void grid_update(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
         for (int j = lo[1]; j < hi[1]; ++j)
           for (int k = lo[2]; k < hi[2]; ++k) {
             const int n = L.node(i, j, k);
-            if (!(g.m[n] > cfg.grid_mass_epsilon)) {
+            const double m = g.mq[n].w();
+            if (!(m > cfg.grid_mass_epsilon)) {
               g.v[n].setZero();
               continue;
             }
             // v = q / m + dt g
-            Vec3 v = g.q[n] / g.m[n] + dv_gravity;
+            Vec3 v = g.mq[n].head<3>() / m + dv_gravity;
             const Vec3 x(i * cfg.dx, j * cfg.dx, k * cfg.dx);
             for (int pr = 0; pr < np; ++pr) v = collide(model.primitives[pr], ws.frames[pr], x, v);
             const int I[3] = {i, j, k};
@@ -150,19 +156,19 @@ void g2p(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
     for (std::int64_t p = begin; p < end; ++p) {
       Particle& P = ws.particles[p];
       const Stencil s = make_stencil(P.x, inv_dx, L.n);
+      // v = sum w v_i and B = sum w v_i o^T (integer offsets o), by axis: the z sums first
       Vec3 v = Vec3::Zero();
-      Mat3 B = Mat3::Zero();  // sum w v_i o^T with integer offsets o
+      Mat3 B = Mat3::Zero();
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {
-          const double wij = s.w[0][i] * s.w[1][j];
           const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-          for (int k = 0; k < 3; ++k) {
-            const Vec3 wv = (wij * s.w[2][k]) * g.v[row + k];
-            v += wv;
-            B.col(0) += static_cast<double>(i) * wv;
-            B.col(1) += static_cast<double>(j) * wv;
-            B.col(2) += static_cast<double>(k) * wv;
-          }
+          const Vec3 vz = s.w[2][0] * g.v[row] + s.w[2][1] * g.v[row + 1] + s.w[2][2] * g.v[row + 2];
+          const Vec3 vzk = s.w[2][1] * g.v[row + 1] + (2.0 * s.w[2][2]) * g.v[row + 2];
+          const double wij = s.w[0][i] * s.w[1][j];
+          v += wij * vz;
+          B.col(0) += (wij * i) * vz;
+          B.col(1) += (wij * j) * vz;
+          B.col(2) += wij * vzk;
         }
       // C = (4 / dx^2) sum w v_i (x_i - x_p)^T = (4 / dx) (B - v fx^T)
       P.C = (4.0 * inv_dx) * (B - v * s.fx.transpose());
@@ -251,14 +257,15 @@ Vec3 apply_boundary_adjoint(const MpmConfig& cfg, const int I[3], const Vec3& v_
 
 void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const double* actions, SubstepTape* tape) {
   const MpmConfig& cfg = model.config;
+  ParticleBins& bins = tape ? tape->bins : ws.bins;
   if (tape) {
     tape->before = ws.particles;
     tape->poses = ws.poses;
   }
-  stress_phase(model, ws, team, tape);
-  bin_particles(model, ws.bins, team, ws.particles);
-  clear_blocks(model.layout, ws.bins.active, ws.grid);
-  p2g(model, ws, team);
+  bin_particles(model, bins, team, ws.particles);
+  stress_phase(model, ws, team);
+  clear_blocks(model.layout, bins.active, ws.grid);
+  p2g(model, ws, bins, team);
   // 4. kinematics pose f -> f + 1 and the contact frames
   const int np = static_cast<int>(model.primitives.size());
   for (int pr = 0; pr < np; ++pr) {
@@ -266,8 +273,8 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
     ws.next_poses[pr] = advance_pose(spec, ws.poses[pr], actions + model.action_offset(pr), cfg.substeps);
     ws.frames[pr] = contact_frame(spec, ws.poses[pr], ws.next_poses[pr], cfg.dt);
   }
-  grid_update(model, ws, team);
-  if (tape) tape->grid.save(model.layout, ws.bins.active, ws.grid);
+  grid_update(model, ws, bins, team);
+  if (tape) tape->grid.save(model.layout, bins.active, ws.grid);
   g2p(model, ws, team);
   for (int pr = 0; pr < np; ++pr) ws.poses[pr] = ws.next_poses[pr];
 }

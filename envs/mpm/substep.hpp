@@ -23,9 +23,10 @@ namespace dsb::mpm {
 void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const double* actions, SubstepTape* tape);
 
 // Reverse of the substep recorded in `tape`: on entry ws.adj / ws.pose_adj hold dL/d(state after
-// the substep), on exit dL/d(state before it); dL/dactions is added to actions_bar.
+// the substep), on exit dL/d(state before it); dL/dactions is added to actions_bar. `after` is
+// the particle state the substep produced (its velocities are the G2P velocities).
 void substep_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const double* actions,
-                     const SubstepTape& tape, double* actions_bar);
+                     const SubstepTape& tape, const std::vector<Particle>& after, double* actions_bar);
 
 // Loop grains (a function of the problem only, never of the thread count).
 constexpr std::int64_t kParticleGrain = 512;

@@ -1,6 +1,6 @@
 // Reverse of one MLS-MPM substep (substep.hpp). Notation: primes are the state after the
-// substep; bars are adjoints dL/d(.); w, grad w, dpos = x_i - x_p are the stencil of the
-// particle's position at the start of the substep.
+// substep; bars are adjoints dL/d(.); w, grad w, dpos = x_i - x_p = (o - fx) dx belong to the
+// particle's stencil at the start of the substep.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -26,12 +26,7 @@ ContactAdjointSum add(ContactAdjointSum a, const ContactAdjointSum& b) {
   return a;
 }
 
-// dL/dv'_total = v'_bar + dt x'_bar (masked where the position was clamped), and the mask
-struct AdvectionAdjoint {
-  Vec3 x_bar;  // the part of x'_bar that reaches x and v'
-  Vec3 v_bar;  // dL/dv' including advection
-};
-
+// x' = clamp(x + dt v'): where not clamped, x'_bar reaches x and dt x'_bar reaches v'
 AdvectionAdjoint advection_adjoint(const MpmConfig& cfg, const Vec3& x, const Vec3& v_new, const ParticleAdjoint& a) {
   AdvectionAdjoint r;
   const Vec3 x_new = x + cfg.dt * v_new;
@@ -43,31 +38,25 @@ AdvectionAdjoint advection_adjoint(const MpmConfig& cfg, const Vec3& x, const Ve
   return r;
 }
 
-// A. G2P^T: grid v_bar += w (v'_bar + (4 / dx^2) C'_bar dpos), coloured scatter. Also stores each
-// particle's G2P velocity v' (the same sum as the forward pass, so the same bits) in v_new.
-void g2p_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const std::vector<Particle>& before,
-                 std::vector<Vec3>& v_new) {
+// A. G2P^T: node v_bar += w (v'_bar + (4 / dx^2) C'_bar dpos), a coloured scatter (grid.hpp).
+// Keeps each particle's advection adjoint for D.
+void g2p_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const SubstepTape& tape,
+                 const std::vector<Particle>& after) {
   const MpmConfig& cfg = model.config;
   const double inv_dx = 1.0 / cfg.dx;
   const GridLayout& L = model.layout;
-  const GridFields& g = ws.grid;
-  GridAdjoint& ga = ws.grid_adj;
+  const ParticleBins& bins = tape.bins;
+  std::vector<Vec3>& vb = ws.grid_adj.v;
   for (int c = 0; c < kColours; ++c) {
-    const std::vector<int>& blocks = ws.bins.by_colour[c];
+    const std::vector<int>& blocks = bins.by_colour[c];
     parallel_for(team, static_cast<std::int64_t>(blocks.size()), 1, [&](std::int64_t bb, std::int64_t) {
       const int b = blocks[bb];
-      for (int o = ws.bins.block_begin[b]; o < ws.bins.block_begin[b + 1]; ++o) {
-        const int p = ws.bins.order[o];
-        const Stencil s = make_stencil(before[p].x, inv_dx, L.n);
-        Vec3 v = Vec3::Zero();
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) {
-            const double wij = s.w[0][i] * s.w[1][j];
-            const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-            for (int k = 0; k < 3; ++k) v += (wij * s.w[2][k]) * g.v[row + k];
-          }
-        v_new[p] = v;
-        const AdvectionAdjoint adv = advection_adjoint(cfg, before[p].x, v, ws.adj[p]);
+      for (int o = bins.block_begin[b]; o < bins.block_begin[b + 1]; ++o) {
+        const int p = bins.order[o];
+        const Vec3& x = tape.before[p].x;
+        const Stencil s = make_stencil(x, inv_dx, L.n);
+        const AdvectionAdjoint adv = advection_adjoint(cfg, x, after[p].v, ws.adj[p]);
+        ws.advection[p] = adv;
         // (4 / dx^2) C'_bar dpos = (4 / dx) C'_bar (o - fx)
         const Mat3 Cs = (4.0 * inv_dx) * ws.adj[p].C;
         const Vec3 base_term = adv.v_bar - Cs * s.fx;
@@ -77,7 +66,7 @@ void g2p_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, cons
             const Vec3 tij = ti + static_cast<double>(j) * Cs.col(1);
             const double wij = s.w[0][i] * s.w[1][j];
             const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-            for (int k = 0; k < 3; ++k) ga.v[row + k] += (wij * s.w[2][k]) * (tij + static_cast<double>(k) * Cs.col(2));
+            for (int k = 0; k < 3; ++k) vb[row + k] += (wij * s.w[2][k]) * (tij + static_cast<double>(k) * Cs.col(2));
           }
         }
       }
@@ -85,14 +74,15 @@ void g2p_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, cons
   }
 }
 
-// B. grid update^T on the active blocks: node v_bar -> q_bar, m_bar; contact pose adjoints summed
-// over blocks in block order.
-ContactAdjointSum grid_update_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
+// B. grid update^T on the active blocks: node v_bar -> q_bar, m_bar, written over the restored
+// q and m; contact pose adjoints summed over blocks in block order.
+ContactAdjointSum grid_update_adjoint(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins,
+                                      ThreadTeam& team) {
   const MpmConfig& cfg = model.config;
   const GridLayout& L = model.layout;
-  const GridFields& g = ws.grid;
-  GridAdjoint& ga = ws.grid_adj;
-  const std::vector<int>& active = ws.bins.active;
+  GridFields& g = ws.grid;
+  const std::vector<Vec3>& vb = ws.grid_adj.v;
+  const std::vector<int>& active = bins.active;
   const Vec3 dv_gravity = cfg.dt * cfg.gravity;
   const int np = static_cast<int>(model.primitives.size());
   auto fold = [&](std::int64_t begin, std::int64_t end, ContactAdjointSum acc) {
@@ -104,19 +94,22 @@ ContactAdjointSum grid_update_adjoint(const MpmModel& model, MpmWorkspace& ws, T
         for (int j = lo[1]; j < hi[1]; ++j)
           for (int k = lo[2]; k < hi[2]; ++k) {
             const int n = L.node(i, j, k);
-            if (!(g.m[n] > cfg.grid_mass_epsilon)) continue;  // v = 0: nothing flows back
+            const double m = g.mq[n].w();
+            if (!(m > cfg.grid_mass_epsilon)) {  // v = 0: nothing flows back
+              g.mq[n].setZero();
+              continue;
+            }
             // forward again: v_0 = q / m + dt g, then each primitive
-            const Vec3 q_over_m = g.q[n] / g.m[n];
+            const Vec3 q_over_m = g.mq[n].head<3>() / m;
             const Vec3 x(i * cfg.dx, j * cfg.dx, k * cfg.dx);
             vs[0] = q_over_m + dv_gravity;
             for (int pr = 0; pr < np; ++pr) vs[pr + 1] = collide(model.primitives[pr], ws.frames[pr], x, vs[pr]);
             const int I[3] = {i, j, k};
-            Vec3 bar = apply_boundary_adjoint(cfg, I, vs[np], ga.v[n]);
+            Vec3 bar = apply_boundary_adjoint(cfg, I, vs[np], vb[n]);
             for (int pr = np - 1; pr >= 0; --pr)
               bar = collide_adjoint(model.primitives[pr], ws.frames[pr], x, vs[pr], bar, acc.at_f[pr], acc.at_f1[pr]);
-            // v_0 = q / m + dt g
-            ga.q[n] = bar / g.m[n];
-            ga.m[n] = -bar.dot(q_over_m) / g.m[n];
+            // v_0 = q / m + dt g: (dL/dq, dL/dm) over (q, m)
+            g.mq[n] << bar / m, -bar.dot(q_over_m) / m;
           }
     }
     return acc;
@@ -125,72 +118,112 @@ ContactAdjointSum grid_update_adjoint(const MpmModel& model, MpmWorkspace& ws, T
                                             ContactAdjointSum{}, ContactAdjointSum{}, fold, add);
 }
 
-// D. per particle: P2G^T gather, G2P's position terms, and the stress adjoint.
+// D. per particle: the stress update recomputed from `before` (SVDs and the return mapping in
+// batches, the forward's bits), then the P2G^T gather, G2P's position terms and the stress
+// adjoint. Node sums go by axis (the z sums first) to share the weights' products.
 void particle_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const SubstepTape& tape,
-                      const std::vector<Vec3>& v_new) {
+                      const std::vector<Particle>& after) {
   const MpmConfig& cfg = model.config;
   const double dx = cfg.dx, inv_dx = 1.0 / dx;
   const double k_dt = 4.0 * cfg.dt / (dx * dx);
   const GridLayout& L = model.layout;
-  const GridFields& g = ws.grid;
-  const GridAdjoint& ga = ws.grid_adj;
+  const std::vector<Vec3>& gv = ws.grid.v;   // node velocities after the grid update
+  const std::vector<Vec4>& qmb = ws.grid.mq;  // now (dL/dq, dL/dm)
   parallel_for(team, model.particles(), kParticleGrain, [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t p = begin; p < end; ++p) {
-      const Particle& P = tape.before[p];
-      const ParticleAdjoint& a = ws.adj[p];
-      ParticleAdjoint& out = ws.adj_prev[p];
-      const Material& mat = model.materials[model.material_of[p]];
-      const double mp = model.mass[p];
-      const double k_stress = k_dt * model.volume[p];
-      // the forward affine momentum A = -k tau + m C
-      Mat3 tau;
-      double J_new = P.J;
-      if (mat.kind == MaterialKind::fluid)
-        tau = fluid_update(mat, P.C, cfg.dt, J_new);
-      else
-        tau = solid_stress(mat, tape.solid[p]);
-      const Mat3 A = -k_stress * tau + mp * P.C;
-      const Stencil s = make_stencil(P.x, inv_dx, L.n);
-      const Vec3 mv = mp * P.v;
-      const Mat3 Cs = (4.0 * inv_dx * inv_dx) * a.C;  // (4 / dx^2) C'_bar
-      Vec3 sum_wq = Vec3::Zero();   // sum w q_bar
-      Mat3 A_bar = Mat3::Zero();    // sum w q_bar dpos^T
-      Mat3 Gv = Mat3::Zero();       // sum grad w v_i^T
-      Vec3 x_bar = Vec3::Zero();
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-          const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-          for (int k = 0; k < 3; ++k) {
-            const int n = row + k;
-            const double w = s.w[0][i] * s.w[1][j] * s.w[2][k];
-            const Vec3 gw = weight_gradient(s, i, j, k);
-            const Vec3 dpos = (Vec3(i, j, k) - s.fx) * dx;
-            const Vec3& vi = g.v[n];
-            const Vec3& qb = ga.q[n];
-            sum_wq += w * qb;
-            A_bar += (w * qb) * dpos.transpose();
-            Gv += gw * vi.transpose();
-            // P2G: d(w m_p)/dx, d(w (m v + A dpos))/dx through w; G2P: d(w v_i dpos^T)/dx through w
-            const double scalar = ga.m[n] * mp + qb.dot(mv + A * dpos) + vi.dot(Cs * dpos);
-            x_bar += scalar * gw;
+    std::array<SolidTape, kSolidBatch> tapes;
+    std::array<Mat3, kSolidBatch> F, tau_solid;
+    std::array<Svd3, kSolidBatch> svd;
+    std::array<const Material*, kSolidBatch> mats;
+    std::array<int, kSolidBatch> slot_of;  // particle offset in the chunk -> solid slot
+    for (std::int64_t chunk = begin; chunk < end; chunk += kSolidBatch) {
+      const std::int64_t chunk_end = std::min(end, chunk + kSolidBatch);
+      // the solids' stress update, again
+      int n = 0;
+      for (std::int64_t p = chunk; p < chunk_end; ++p) {
+        const Material& mat = model.materials[model.material_of[p]];
+        slot_of[p - chunk] = -1;
+        if (mat.kind == MaterialKind::fluid) continue;
+        F[n] = trial_deformation(tape.before[p].C, cfg.dt, tape.before[p].F);
+        mats[n] = &mat;
+        slot_of[p - chunk] = n++;
+      }
+      svd3_batch(F.data(), svd.data(), n);
+      for (int i = 0; i < n; ++i) tapes[i].svd = svd[i];
+      solid_update_batch(mats.data(), F.data(), tapes.data(), tau_solid.data(), n);
+
+      for (std::int64_t p = chunk; p < chunk_end; ++p) {
+        const Particle& P = tape.before[p];
+        const ParticleAdjoint& a = ws.adj[p];
+        const AdvectionAdjoint& adv = ws.advection[p];
+        ParticleAdjoint& out = ws.adj_prev[p];
+        const Material& mat = model.materials[model.material_of[p]];
+        const int slot = slot_of[p - chunk];
+        const double mp = model.mass[p];
+        const double k_stress = k_dt * model.volume[p];
+        double J_new = P.J;
+        const Mat3 tau = slot >= 0 ? tau_solid[slot] : fluid_update(mat, P.C, cfg.dt, J_new);
+        // A = -k tau + m C
+        const Mat3 A = -k_stress * tau + mp * P.C;
+        const Vec3& v_new = after[p].v;
+        const Stencil s = make_stencil(P.x, inv_dx, L.n);
+        const Mat3 Cs = (4.0 * inv_dx * inv_dx) * a.C;  // (4 / dx^2) C'_bar
+        // per node n (offset o): the scalar whose product with grad w_n is x_bar's share,
+        //   m_bar m_p + q_bar . (m v + A dpos) + v_n . (C_s dpos + v'_bar)
+        // with m v + A dpos = t0 + dx A o and C_s dpos + v'_bar = u0 + dx C_s o
+        // (t, m_p) as a 4-vector, so that m_bar m_p + q_bar . t is one dot product with (q_bar, m_bar)
+        Vec4 t0, ad0, ad1, ad2;
+        t0 << mp * P.v - dx * (A * s.fx), mp;
+        ad0 << dx * A.col(0), 0.0;
+        ad1 << dx * A.col(1), 0.0;
+        ad2 << dx * A.col(2), 0.0;
+        const Vec3 u0 = adv.v_bar - dx * (Cs * s.fx);
+        const Mat3 Csd = dx * Cs;
+        Vec3 x_bar = Vec3::Zero();
+        Vec3 sum_wq = Vec3::Zero();  // sum w q_bar
+        Mat3 Mq = Mat3::Zero();      // sum w q_bar o^T
+        for (int i = 0; i < 3; ++i) {
+          const Vec4 ti = t0 + static_cast<double>(i) * ad0;
+          const Vec3 ui = u0 + static_cast<double>(i) * Csd.col(0);
+          for (int j = 0; j < 3; ++j) {
+            const Vec4 tij = ti + static_cast<double>(j) * ad1;
+            const Vec3 uij = ui + static_cast<double>(j) * Csd.col(1);
+            const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
+            double S0 = 0.0, S1 = 0.0;  // sum_k w_z s, sum_k w_z' s
+            Vec3 Q0 = Vec3::Zero(), Qk = Vec3::Zero();  // sum_k w_z q_bar, sum_k k w_z q_bar
+            for (int k = 0; k < 3; ++k) {
+              const int nd = row + k;
+              const double sc = qmb[nd].dot(tij + static_cast<double>(k) * ad2) +
+                                gv[nd].dot(uij + static_cast<double>(k) * Csd.col(2));
+              S0 += s.w[2][k] * sc;
+              S1 += s.dw[2][k] * sc;
+              const Vec3 wq = s.w[2][k] * qmb[nd].head<3>();
+              Q0 += wq;
+              Qk += static_cast<double>(k) * wq;
+            }
+            const double wxy = s.w[0][i] * s.w[1][j];
+            x_bar += Vec3(s.dw[0][i] * s.w[1][j] * S0, s.w[0][i] * s.dw[1][j] * S0, wxy * S1);
+            sum_wq += wxy * Q0;
+            Mq.col(0) += (wxy * i) * Q0;
+            Mq.col(1) += (wxy * j) * Q0;
+            Mq.col(2) += wxy * Qk;
           }
         }
-      const AdvectionAdjoint adv = advection_adjoint(cfg, P.x, v_new[p], a);
-      // G2P: v' = sum w v_i (through grad w), C' through dpos = x_i - x_p; advection x' = x + dt v'
-      x_bar += Gv * adv.v_bar - Cs.transpose() * v_new[p] + adv.x_bar;
-      // P2G: q through dpos = x_i - x_p
-      x_bar -= A.transpose() * sum_wq;
-      out.x = x_bar;
-      out.v = mp * sum_wq;
-      // A = -k tau + m C
-      const Mat3 tau_bar = -k_stress * A_bar;
-      out.C = mp * A_bar;
-      if (mat.kind == MaterialKind::fluid) {
-        out.J = fluid_update_adjoint(mat, P.C, P.J, cfg.dt, tau_bar, a.J, out.C);
-        out.F = a.F;  // F is not used by fluids
-      } else {
-        solid_update_adjoint(mat, P.C, P.F, cfg.dt, tape.solid[p], tau_bar, a.F, out.C, out.F);
-        out.J = a.J;  // J is not used by solids
+        // G2P's C' through dpos = x_i - x_p: -C_s^T v'; advection; P2G's q through dpos: -A^T sum w q_bar
+        x_bar += adv.x_bar - Cs.transpose() * v_new - A.transpose() * sum_wq;
+        out.x = x_bar;
+        // q_i = sum w (m v + A dpos)
+        out.v = mp * sum_wq;
+        const Mat3 A_bar = dx * (Mq - sum_wq * s.fx.transpose());  // sum w q_bar dpos^T
+        // A = -k tau + m C
+        const Mat3 tau_bar = -k_stress * A_bar;
+        out.C = mp * A_bar;
+        if (slot < 0) {
+          out.J = fluid_update_adjoint(mat, P.C, P.J, cfg.dt, tau_bar, a.J, out.C);
+          out.F = a.F;  // F is not used by fluids
+        } else {
+          solid_update_adjoint(mat, P.C, P.F, cfg.dt, tapes[slot], tau_bar, a.F, out.C, out.F);
+          out.J = a.J;  // J is not used by solids
+        }
       }
     }
   });
@@ -199,20 +232,18 @@ void particle_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
 }  // namespace
 
 void substep_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const double* actions,
-                     const SubstepTape& tape, double* actions_bar) {
+                     const SubstepTape& tape, const std::vector<Particle>& after, double* actions_bar) {
   const MpmConfig& cfg = model.config;
   const int np = static_cast<int>(model.primitives.size());
   tape.grid.restore(model.layout, ws.grid);
-  bin_particles(model, ws.bins, team, tape.before);
-  clear_blocks(model.layout, ws.bins.active, ws.grid_adj);
+  clear_blocks(model.layout, tape.bins.active, ws.grid_adj);
   for (int pr = 0; pr < np; ++pr) {
     const PrimitiveSpec& spec = model.primitives[pr];
     ws.next_poses[pr] = advance_pose(spec, tape.poses[pr], actions + model.action_offset(pr), cfg.substeps);
     ws.frames[pr] = contact_frame(spec, tape.poses[pr], ws.next_poses[pr], cfg.dt);
   }
-  std::vector<Vec3>& v_new = ws.v_new;
-  g2p_adjoint(model, ws, team, tape.before, v_new);
-  const ContactAdjointSum contact = grid_update_adjoint(model, ws, team);
+  g2p_adjoint(model, ws, team, tape, after);
+  const ContactAdjointSum contact = grid_update_adjoint(model, ws, tape.bins, team);
   // C. kinematics: pose f+1's adjoint (later substeps + this contact) back to pose f
   for (int pr = 0; pr < np; ++pr) {
     PoseAdjoint bar = ws.pose_adj[pr];
@@ -222,7 +253,7 @@ void substep_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, 
     bar += contact.at_f[pr];
     ws.pose_adj[pr] = bar;
   }
-  particle_adjoint(model, ws, team, tape, v_new);
+  particle_adjoint(model, ws, team, tape, after);
   ws.adj.swap(ws.adj_prev);
 }
 
