@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# The frozen regression grid of CI: 4 cheap envs x every optimizer x 2 seeds x 30 episodes.
+# The frozen regression grid of CI: 4 cheap envs x every optimizer x 2 seeds x 30 episodes, and the
+# MPM engine's `fluid` at a 10-env-step horizon (fluid-h10, 80 substeps) x random, gd, cmaes x 2
+# seeds x 5 episodes.
 #   scripts/regression-grid.sh check [BUILD_DIR]       run the grid, compare with the baseline (exit 1 on any difference)
 #   scripts/regression-grid.sh regenerate [BUILD_DIR]  run the grid, rewrite data/baselines/small-grid.csv
 # A change that alters results on purpose regenerates the baseline in the same commit and says why.
@@ -15,6 +17,8 @@ trap 'rm -rf "$work"' EXIT
   --env cartpole1,rosenbrock-10,branin,hartmann6 \
   --optimizer random,gd,rand-descents,cmaes,bo,boleap,nlopt-lbfgs,nlopt-bobyqa,nlopt-direct-l,nlopt-crs2 \
   --seeds 2 --budget 30 --jobs 2 --quiet --db "$work/grid.sqlite"
+"$build/bin/harness" --env fluid-h10 --optimizer random,gd,cmaes \
+  --seeds 2 --budget 5 --jobs 2 --quiet --db "$work/grid.sqlite"
 
 case $mode in
   check) exec "$build/bin/harness" check --db "$work/grid.sqlite" --baseline "$baseline" ;;

@@ -147,10 +147,10 @@ std::vector<FluidEnv::Frame> FluidEnv::trajectory(std::span<const double> x, Thr
 
 EnvFamily fluid_family() {
   EnvFamily f;
-  f.pattern = "fluid, fluid-hN";
+  f.pattern = "fluid";
   f.description =
-      "MLS-MPM: a 2-DOF ladle scoops a sugar cube (elastic) out of syrup (viscous fluid) in a 0.4 x 0.4 x 0.2 m "
-      "tank, 5 segments x 2 speeds = 10-D; fluid-hN: N env steps instead of 50";
+      "MLS-MPM (9,834 particles, 400 substeps): a 2-DOF ladle scoops a sugar cube out of syrup in a 0.4 x 0.4 "
+      "x 0.2 m tank, 5 segments x 2 speeds; fluid-hN: N env steps instead of 50";
   f.grid_names = {"fluid"};
   f.try_make = [](const std::string& requested) -> std::unique_ptr<Env> {
     if (requested == "fluid") return std::make_unique<FluidEnv>("fluid", FluidConfig{});

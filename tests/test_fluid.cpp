@@ -1,0 +1,166 @@
+// `fluid` (envs/mpm/fluid_*): the scene is resolved, a hand-found scoop lifts the cube out, the
+// gradient agrees with central differences, results are the same for any thread count and any
+// rerun, the RL view replays the same episode, and the harness runs and stores it.
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include "common/error.hpp"
+#include "common/parallel.hpp"
+#include "common/rng.hpp"
+#include "envs/core/gradient_check.hpp"
+#include "envs/core/registry.hpp"
+#include "envs/mpm/fluid_env.hpp"
+#include "envs/mpm/fluid_scene.hpp"
+#include "support/harness_process.hpp"
+
+namespace dsb {
+namespace {
+
+namespace fs = std::filesystem;
+using mpm::Vec3;
+
+// forward/back then up/down speed of each segment: down beside the cube, forward along the floor
+// with the bowl's lip under the cube, then up (found by hand, see README "fluid")
+const std::vector<double> kScoop = {0.5, -1.0, 0.5, -1.0, 0.6, 0.3, 0.0, 1.0, -0.3, 1.0};
+
+const mpm::FluidEnv& fluid(const std::string& name) {
+  return static_cast<const mpm::FluidEnv&>(*shared_env(name));
+}
+
+TEST(Fluid, SceneIsResolved) {
+  const auto& env = fluid("fluid");
+  const auto& c = env.fluid_config();
+  const double dx = c.mpm.dx;
+  EXPECT_GE(c.cube_size / dx, 4.0) << "cube cells";
+  EXPECT_GE(2.0 * (c.bowl_radius - c.bowl_thickness / 2) / dx, 6.0) << "bowl cells (inner diameter)";
+  EXPECT_GE(c.syrup_depth / dx, 6.0) << "syrup cells";
+  // tank 0.4 x 0.4 m between the walls, floor at 3 dx
+  EXPECT_NEAR((c.mpm.grid[0] - 2 * c.mpm.bound) * dx, 0.4, 1e-12);
+  EXPECT_NEAR((c.mpm.grid[2] - 2 * c.mpm.bound) * dx, 0.4, 1e-12);
+  const auto& m = env.model();
+  EXPECT_EQ(m.bodies[0].name, "cube");
+  EXPECT_EQ(m.bodies[0].end - m.bodies[0].begin, 512);
+  EXPECT_GT(m.particles(), 9000);
+  // the cube is denser than the syrup, so it rests on the floor
+  EXPECT_GT(c.cube.density, c.syrup.density);
+}
+
+TEST(Fluid, HandFoundScoopLiftsTheCubeAboveTheRim) {
+  const auto& env = fluid("fluid");
+  const auto frames = env.trajectory(kScoop, serial_team());
+  const double floor = env.fluid_config().floor_y();
+  const double start = frames.front().cube.y() - floor, end = frames.back().cube.y() - floor;
+  EXPECT_LT(start, 0.05) << "the cube starts on the floor";
+  EXPECT_GT(end, env.fluid_config().rim_height) << "and ends above the tank's rim";
+  // without the ladle moving the cube stays on the floor
+  const auto still = env.trajectory(std::vector<double>(10, 0.0), serial_team());
+  EXPECT_LT(still.back().cube.y() - floor, 0.05);
+  EXPECT_GT(env.loss(std::vector<double>(10, 0.0)), env.loss(kScoop));
+}
+
+TEST(Fluid, GradientMatchesCentralDifferences) {
+  // short horizon (5 env steps, 40 substeps) where differences are trustworthy; contact makes the
+  // loss only piecewise smooth, so differences carry ~1e-9 of noise: an absolute floor of 1e-8
+  const auto& env = fluid("fluid-h5");
+  GradientCheckOptions options;
+  options.step = 1e-6;
+  options.tolerance = 1e-4;
+  options.absolute_floor = 1e-8;
+  Rng rng(5);
+  for (int point = 0; point < 3; ++point) {
+    std::vector<double> x(10);
+    for (auto& v : x) v = rng.uniform(-1.0, 1.0);
+    const auto r = check_gradient(env, x, options);
+    EXPECT_TRUE(r.value_agrees);
+    EXPECT_GT(r.max_abs_central, 1e-3) << "degenerate point";
+    EXPECT_TRUE(r.passed) << "point " << point << ": worst coordinate " << r.worst_coordinate << " relative error "
+                          << r.worst_relative_error;
+  }
+}
+
+TEST(Fluid, SameBitsForAnyThreadCountAndRerun) {
+  const auto& env = fluid("fluid-h10");
+  std::vector<double> losses;
+  std::vector<std::vector<double>> grads;
+  for (int threads : {1, 2, 2, 1}) {
+    ThreadTeam team(threads);
+    auto ws = env.make_workspace();  // a fresh workspace, then reused below
+    std::vector<double> g(10);
+    losses.push_back(env.loss_and_grad(kScoop, g, *ws, team));
+    grads.push_back(g);
+    losses.push_back(env.loss(kScoop, *ws, team));
+  }
+  for (std::size_t i = 1; i < losses.size(); ++i) EXPECT_EQ(losses[i], losses[0]) << i;
+  for (std::size_t i = 1; i < grads.size(); ++i) EXPECT_EQ(grads[i], grads[0]) << i;
+}
+
+TEST(Fluid, RlViewReplaysTheEpisode) {
+  const auto& env = fluid("fluid-h10");
+  auto rl = env.make_rl();
+  ASSERT_TRUE(rl);
+  EXPECT_EQ(rl->action_dim(), 2);
+  EXPECT_EQ(rl->observation_dim(), 12);
+  EXPECT_EQ(rl->horizon(), 10);
+  rl->reset();
+  const auto obs0 = rl->observe();
+  const double floor = env.fluid_config().floor_y();
+  EXPECT_LT(obs0[1] - floor, 0.05);  // cube on the floor
+  const int per = env.fluid_config().steps_per_segment();
+  for (int k = 0; !rl->done(); ++k) rl->step(std::vector<double>{kScoop[2 * (k / per)], kScoop[2 * (k / per) + 1]});
+  EXPECT_EQ(rl->final_loss(), env.loss(kScoop));
+}
+
+TEST(Fluid, BadNamesAreRefused) {
+  EXPECT_THROW(make_env("fluid-h7"), UsageError);
+  EXPECT_THROW(make_env("fluid-h55"), UsageError);
+  EXPECT_THROW(make_env("fluid-hx"), UsageError);
+  EXPECT_NO_THROW(make_env("fluid-h25"));
+}
+
+class FluidHarness : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("dsb_fluid_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(FluidHarness, ListEvalAndAGridOfCmaesAndGd) {
+  auto r = testing::run_harness(dir_, "list");
+  ASSERT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("fluid               10            yes yes"), std::string::npos) << r.out;
+
+  r = testing::run_harness(dir_, "eval --env fluid --x 0.5,-1,0.5,-1,0.6,0.3,0,1,-0.3,1 --grad");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(std::isfinite(j["loss"].get<double>()));
+  ASSERT_EQ(j["grad"].size(), 10u);
+  for (const auto& g : j["grad"]) EXPECT_TRUE(std::isfinite(g.get<double>()));
+
+  const std::string db = (dir_ / "fluid.sqlite").string();
+  r = testing::run_harness(dir_, "--env fluid --optimizer cmaes,gd --seeds 1 --budget 3 --quiet --db " + db);
+  ASSERT_EQ(r.code, 0) << r.err;
+  sqlite3* h = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* q = nullptr;
+  sqlite3_prepare_v2(h, "SELECT count(*), sum(loss IS NOT NULL), sum(used_grad) FROM evals", -1, &q, nullptr);
+  ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(q, 0), 6);
+  EXPECT_EQ(sqlite3_column_int(q, 1), 6) << "every episode finite";
+  EXPECT_EQ(sqlite3_column_int(q, 2), 3) << "gd's episodes carry gradients";
+  sqlite3_finalize(q);
+  sqlite3_close(h);
+}
+
+}  // namespace
+}  // namespace dsb
