@@ -28,7 +28,7 @@ using mpm::Vec3;
 
 // forward/back then up/down speed of each segment: down beside the cube, forward along the floor
 // with the bowl's lip under the cube, then up (found by hand, see README "fluid")
-const std::vector<double> kScoop = {0.5, -1.0, 0.5, -1.0, 0.6, 0.3, 0.0, 1.0, -0.3, 1.0};
+const std::vector<double> kScoop = {0.5, -1.0, 0.6, -1.0, 0.5, 0.2, -0.3, 1.0, -0.3, 1.0};
 
 const mpm::FluidEnv& fluid(const std::string& name) {
   return static_cast<const mpm::FluidEnv&>(*shared_env(name));
@@ -140,7 +140,7 @@ TEST_F(FluidHarness, ListEvalAndAGridOfCmaesAndGd) {
   ASSERT_EQ(r.code, 0);
   EXPECT_NE(r.out.find("fluid               10            yes yes"), std::string::npos) << r.out;
 
-  r = testing::run_harness(dir_, "eval --env fluid --x 0.5,-1,0.5,-1,0.6,0.3,0,1,-0.3,1 --grad");
+  r = testing::run_harness(dir_, "eval --env fluid --x 0.5,-1,0.6,-1,0.5,0.2,-0.3,1,-0.3,1 --grad");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_TRUE(std::isfinite(j["loss"].get<double>()));

@@ -38,15 +38,18 @@ struct FluidConfig {
 
   // ladle: a bowl (spherical cap shell, sdf.hpp) tilted about z so that it opens forward (+x) and
   // up, plus a handle capsule; both translate together
-  double bowl_radius = 0.08;       // m, mid-surface (bowl 7 cells across)
-  double bowl_thickness = 0.025;   // m (1.5 cells: grid contact needs walls about a cell thick)
+  double bowl_radius = 0.09;       // m, mid-surface: inner diameter 0.14 m = 7 cells
+  double bowl_thickness = 0.04;    // m, 2 cells (thinner walls leak: grid contact needs nodes inside)
   double bowl_rim_height = 0.0;    // hemisphere
-  double bowl_tilt = -0.7853981633974483;  // rad about z (-pi/4: the opening faces +x and up)
+  double bowl_tilt = -0.6;         // rad about z: the opening faces +x and up, the lip leads
   double handle_radius = 0.015;    // m
   double handle_half_length = 0.12; // m
-  std::array<double, 3> ladle_start = {0.145, 0.26, 0.26};  // m, bowl centre
-  std::array<double, 3> ladle_lower = {0.145, 0.07, 0.26};  // m, bowl centre clamp
-  std::array<double, 3> ladle_upper = {0.375, 0.375, 0.26};
+  std::array<double, 3> ladle_start = {0.15, 0.26, 0.26};   // m, bowl centre
+  // bowl centre clamp: x keeps the bowl's mid-surface inside the walls; the lowest y lets the lip
+  // scrape 4 cm into the floor's 3-cell wall layer (the bowl then reaches below the grid, where it
+  // touches nothing), like a thin-edged scoop on the tank bottom
+  std::array<double, 3> ladle_lower = {0.15, 0.07, 0.26};
+  std::array<double, 3> ladle_upper = {0.37, 0.37, 0.26};
   double max_speed = 1.5;          // m/s: x = +-1 maps to +-1.5 m/s forward/back (x) and up/down (y)
   double friction = 0.9;           // ladle (PlasticineLab's primitive default)
   double softness = 520.0;         // 1/m: contact band ln10 / softness = 0.22 dx, as PlasticineLab's 666 at dx = 1/64
