@@ -75,8 +75,10 @@ double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam
   double loss = 0.0;
   for (int k = 0; k < env_steps; ++k) {
     if (!full) {
+      PhaseClock clock(ws.phase_times);
       ws.checkpoints[k].particles = ws.particles;
       ws.checkpoints[k].poses = ws.poses;
+      clock.lap(&PhaseTimes::other);
     }
     env_step(model, ws, team, actions.data() + static_cast<std::size_t>(k) * adim,
              full ? &ws.tapes[static_cast<std::size_t>(k) * S] : nullptr);
@@ -100,8 +102,10 @@ double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam
     SubstepTape* tapes = full ? &ws.tapes[static_cast<std::size_t>(k) * S] : ws.tapes.data();
     if (!full) {
       // recompute env step k from its checkpoint, recording its substeps
+      PhaseClock clock(ws.phase_times);
       ws.particles = ws.checkpoints[k].particles;
       ws.poses = ws.checkpoints[k].poses;
+      clock.lap(&PhaseTimes::other);
       env_step(model, ws, team, a, tapes);
     }
     // the state each substep produced: the next substep's start, or the state after env step k

@@ -36,6 +36,20 @@ struct Checkpoint {
   std::vector<Pose> poses;
 };
 
+// Wall seconds spent in each phase of the substeps (filled only when a workspace is given one:
+// benchmarks; results never depend on it).
+struct PhaseTimes {
+  double bin = 0.0;      // binning and clearing active blocks
+  double stress = 0.0;   // F update, SVD, return mapping, stress
+  double p2g = 0.0;
+  double grid = 0.0;     // kinematics and grid update (contact, walls)
+  double g2p = 0.0;
+  double reverse_g2p = 0.0;        // G2P^T scatter
+  double reverse_grid = 0.0;       // grid update^T (and restoring the grid)
+  double reverse_particles = 0.0;  // stress recomputation, P2G^T gather, stress adjoint
+  double other = 0.0;              // tapes, checkpoints, losses
+};
+
 struct MpmWorkspace {
   explicit MpmWorkspace(const MpmModel& model);
 
@@ -55,6 +69,7 @@ struct MpmWorkspace {
   std::vector<AdvectionAdjoint> advection;  // per particle, within one substep's reverse
   std::vector<PoseAdjoint> pose_adj;
   GridAdjoint grid_adj;
+  PhaseTimes* phase_times = nullptr;  // not owned
 
   void reset_state(const MpmModel& model);  // particles and poses to the model's initial state
   void reserve_reverse(const MpmModel& model, int env_steps);  // checkpoints and tapes

@@ -1,6 +1,7 @@
 #include "envs/mpm/substep.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "common/parallel.hpp"
@@ -255,17 +256,34 @@ Vec3 apply_boundary_adjoint(const MpmConfig& cfg, const int I[3], const Vec3& v_
   return bar;
 }
 
+PhaseClock::PhaseClock(PhaseTimes* times) : times_(times) {
+  if (times_) last_ = std::chrono::steady_clock::now();
+}
+
+void PhaseClock::lap(double PhaseTimes::*phase) {
+  if (!times_) return;
+  const auto now = std::chrono::steady_clock::now();
+  times_->*phase += std::chrono::duration<double>(now - last_).count();
+  last_ = now;
+}
+
 void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const double* actions, SubstepTape* tape) {
   const MpmConfig& cfg = model.config;
+  PhaseClock clock(ws.phase_times);
   ParticleBins& bins = tape ? tape->bins : ws.bins;
   if (tape) {
     tape->before = ws.particles;
     tape->poses = ws.poses;
+    clock.lap(&PhaseTimes::other);
   }
   bin_particles(model, bins, team, ws.particles);
+  clock.lap(&PhaseTimes::bin);
   stress_phase(model, ws, team);
+  clock.lap(&PhaseTimes::stress);
   clear_blocks(model.layout, bins.active, ws.grid);
+  clock.lap(&PhaseTimes::bin);
   p2g(model, ws, bins, team);
+  clock.lap(&PhaseTimes::p2g);
   // 4. kinematics pose f -> f + 1 and the contact frames
   const int np = static_cast<int>(model.primitives.size());
   for (int pr = 0; pr < np; ++pr) {
@@ -274,9 +292,14 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
     ws.frames[pr] = contact_frame(spec, ws.poses[pr], ws.next_poses[pr], cfg.dt);
   }
   grid_update(model, ws, bins, team);
-  if (tape) tape->grid.save(model.layout, bins.active, ws.grid);
+  clock.lap(&PhaseTimes::grid);
+  if (tape) {
+    tape->grid.save(model.layout, bins.active, ws.grid);
+    clock.lap(&PhaseTimes::other);
+  }
   g2p(model, ws, team);
   for (int pr = 0; pr < np; ++pr) ws.poses[pr] = ws.next_poses[pr];
+  clock.lap(&PhaseTimes::g2p);
 }
 
 }  // namespace dsb::mpm

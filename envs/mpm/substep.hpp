@@ -12,6 +12,8 @@
 // adjoint per node (contact adjoints reduced over blocks in block order), the kinematics'
 // adjoint, then per particle the P2G^T gather and the stress adjoint. Every loop that sums across
 // particles or nodes does so in an order that does not depend on the number of threads.
+#include <chrono>
+
 #include "common/thread_team.hpp"
 #include "envs/mpm/mpm_model.hpp"
 #include "envs/mpm/mpm_workspace.hpp"
@@ -27,6 +29,17 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
 // the particle state the substep produced (its velocities are the G2P velocities).
 void substep_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const double* actions,
                      const SubstepTape& tape, const std::vector<Particle>& after, double* actions_bar);
+
+// Adds the wall time since the last lap to one phase of a PhaseTimes (does nothing without one).
+class PhaseClock {
+ public:
+  explicit PhaseClock(PhaseTimes* times);
+  void lap(double PhaseTimes::*phase);
+
+ private:
+  PhaseTimes* times_;
+  std::chrono::steady_clock::time_point last_;
+};
 
 // Loop grains (a function of the problem only, never of the thread count).
 constexpr std::int64_t kParticleGrain = 512;

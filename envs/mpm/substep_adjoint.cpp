@@ -235,6 +235,7 @@ void substep_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, 
                      const SubstepTape& tape, const std::vector<Particle>& after, double* actions_bar) {
   const MpmConfig& cfg = model.config;
   const int np = static_cast<int>(model.primitives.size());
+  PhaseClock clock(ws.phase_times);
   tape.grid.restore(model.layout, ws.grid);
   clear_blocks(model.layout, tape.bins.active, ws.grid_adj);
   for (int pr = 0; pr < np; ++pr) {
@@ -242,7 +243,9 @@ void substep_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, 
     ws.next_poses[pr] = advance_pose(spec, tape.poses[pr], actions + model.action_offset(pr), cfg.substeps);
     ws.frames[pr] = contact_frame(spec, tape.poses[pr], ws.next_poses[pr], cfg.dt);
   }
+  clock.lap(&PhaseTimes::reverse_grid);
   g2p_adjoint(model, ws, team, tape, after);
+  clock.lap(&PhaseTimes::reverse_g2p);
   const ContactAdjointSum contact = grid_update_adjoint(model, ws, tape.bins, team);
   // C. kinematics: pose f+1's adjoint (later substeps + this contact) back to pose f
   for (int pr = 0; pr < np; ++pr) {
@@ -253,8 +256,10 @@ void substep_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, 
     bar += contact.at_f[pr];
     ws.pose_adj[pr] = bar;
   }
+  clock.lap(&PhaseTimes::reverse_grid);
   particle_adjoint(model, ws, team, tape, after);
   ws.adj.swap(ws.adj_prev);
+  clock.lap(&PhaseTimes::reverse_particles);
 }
 
 }  // namespace dsb::mpm

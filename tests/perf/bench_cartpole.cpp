@@ -17,30 +17,12 @@
 #include "envs/core/registry.hpp"
 #include "harness/runner.hpp"
 #include "optimizers/core/registry.hpp"
+#include "tests/perf/allocation_counter.hpp"
 #include "tests/perf/timing_reporter.hpp"
 
 namespace {
-std::atomic<long long> g_allocations{0};
-}  // namespace
 
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-
-namespace {
-
-// heap allocations per iteration, as a benchmark counter
-struct AllocationCounter {
-  long long start = g_allocations.load();
-  void report(benchmark::State& state) const {
-    state.counters["allocs/rollout"] = benchmark::Counter(
-        static_cast<double>(g_allocations.load() - start) / static_cast<double>(state.iterations()));
-  }
-};
+using dsb::perf::AllocationCounter;
 
 std::vector<double> point(const dsb::Env& env) {
   dsb::Rng rng(1);

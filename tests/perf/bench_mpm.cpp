@@ -1,0 +1,194 @@
+// The MLS-MPM engine on a PlasticineLab-sized scene (10,000 von Mises particles, 64^3 grid,
+// dt 1e-4, 19 substeps x 50 env steps = 950 substeps, a sphere pressing in with soft contact):
+//   - forward episode, particle-substeps per second, 1 and 2 threads;
+//   - gradient episode (forward + checkpointed reverse) against the forward, 1 and 2 threads;
+//   - the phase breakdown of both (stress = F update + SVD + return mapping + stress);
+//   - peak resident memory of a process that runs one gradient episode, against the full
+//     history's size (950 states of every particle).
+//   - heap allocations per `fluid` rollout with a reused workspace (fluid-h5, forward and gradient).
+// Benchmarks named *Full* run the whole episode once; the smoke test (filter -Full) runs 1 env
+// step. Ratios print at the end.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <memory>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "common/parallel.hpp"
+#include "common/rng.hpp"
+#include "envs/mpm/episode.hpp"
+#include "envs/core/registry.hpp"
+#include "tests/perf/allocation_counter.hpp"
+#include "tests/perf/timing_reporter.hpp"
+#include "tests/support/mpm_scenes.hpp"
+
+namespace {
+
+using namespace dsb;
+using namespace dsb::mpm;
+
+constexpr int kParticles = 10000;
+constexpr int kEnvSteps = 50;
+
+// PlasticineLab's defaults (MpmConfig, Material): a 0.3 x 0.1 x 0.3 box of uniformly sampled
+// particles (its RollingPin/Writer/Torus shape) and a sphere of radius 0.04 moving into it
+const MpmModel& scene() {
+  static const MpmModel model = [] {
+    MpmModel m;
+    m.materials = {Material{}};
+    Rng rng(0);
+    for (int i = 0; i < kParticles; ++i) {
+      Particle p;
+      p.x = Vec3(0.35 + 0.3 * rng.uniform(), 0.05 + 0.1 * rng.uniform(), 0.35 + 0.3 * rng.uniform());
+      m.initial.push_back(p);
+    }
+    m.bodies.push_back({"plasticine", 0, 0, kParticles, 0.5 / 64 * 0.5 / 64});  // PlasticineLab's (dx / 2)^2
+    PrimitiveSpec sphere;
+    sphere.shape.kind = ShapeKind::sphere;
+    sphere.shape.radius = 0.04;
+    sphere.position = Vec3(0.5, 0.19, 0.5);
+    sphere.softness = 666.0;
+    sphere.motion = PrimitiveMotion::translate;
+    sphere.action_axes = {0, 1, 2};
+    sphere.action_scale = {0.02, 0.02, 0.02};
+    m.primitives = {sphere};
+    m.finalize("bench_mpm");
+    return m;
+  }();
+  return model;
+}
+
+// down into the plasticine for half the episode, then sideways and up
+std::vector<double> actions(int env_steps) {
+  std::vector<double> a(3 * env_steps);
+  for (int k = 0; k < env_steps; ++k) {
+    a[3 * k] = k < kEnvSteps / 2 ? 0.0 : 0.5;
+    a[3 * k + 1] = k < kEnvSteps / 2 ? -0.4 : 0.2;
+    a[3 * k + 2] = 0.1;
+  }
+  return a;
+}
+
+PhaseTimes forward_phases, gradient_phases;
+
+void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phases) {
+  const MpmModel& m = scene();
+  const testing::SmoothObjective objective;
+  ThreadTeam team(static_cast<int>(state.range(0)));
+  MpmWorkspace ws(m);
+  const auto a = actions(env_steps);
+  std::vector<double> g(a.size());
+  if (gradient) run_episode_with_grad(m, ws, team, a, env_steps, objective, g);  // size the buffers
+  PhaseTimes times;
+  ws.phase_times = &times;
+  for (auto _ : state) {
+    const double loss = gradient ? run_episode_with_grad(m, ws, team, a, env_steps, objective, g)
+                                 : run_episode(m, ws, team, a, env_steps, objective);
+    benchmark::DoNotOptimize(loss);
+  }
+  if (phases && state.range(0) == 1) {
+    *phases = times;
+    const double n = static_cast<double>(state.iterations());
+    for (double* t : {&phases->bin, &phases->stress, &phases->p2g, &phases->grid, &phases->g2p,
+                      &phases->reverse_g2p, &phases->reverse_grid, &phases->reverse_particles, &phases->other})
+      *t /= n;
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kParticles) * env_steps *
+                          m.config.substeps);
+}
+
+void BM_ForwardEpisodeFull(benchmark::State& s) { run(s, kEnvSteps, false, &forward_phases); }
+void BM_GradientEpisodeFull(benchmark::State& s) { run(s, kEnvSteps, true, &gradient_phases); }
+void BM_ForwardOneEnvStep(benchmark::State& s) { run(s, 1, false, nullptr); }
+void BM_GradientOneEnvStep(benchmark::State& s) { run(s, 1, true, nullptr); }
+BENCHMARK(BM_ForwardEpisodeFull)->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK(BM_GradientEpisodeFull)->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK(BM_ForwardOneEnvStep)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void fluid_rollouts(benchmark::State& state, bool gradient) {
+  const auto env = make_env("fluid-h5");
+  const std::vector<double> x = {0.5, -1.0, 0.6, -1.0, 0.5, 0.2, -0.3, 1.0, -0.3, 1.0};
+  std::vector<double> g(x.size());
+  const auto ws = env->make_workspace();
+  env->loss_and_grad(x, g, *ws, serial_team());  // the first rollout sizes the buffers
+  const perf::AllocationCounter allocations;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(gradient ? env->loss_and_grad(x, g, *ws, serial_team()) : env->loss(x, *ws, serial_team()));
+  allocations.report(state);
+}
+void BM_FluidH5Forward(benchmark::State& s) { fluid_rollouts(s, false); }
+void BM_FluidH5Gradient(benchmark::State& s) { fluid_rollouts(s, true); }
+BENCHMARK(BM_FluidH5Forward)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FluidH5Gradient)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GradientOneEnvStep)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// peak RSS (MB) of a child process that builds the scene and runs one episode
+double child_peak_rss_mb(bool gradient) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const MpmModel& m = scene();
+    const testing::SmoothObjective objective;
+    MpmWorkspace ws(m);
+    const auto a = actions(kEnvSteps);
+    std::vector<double> g(a.size());
+    const double loss = gradient ? run_episode_with_grad(m, ws, serial_team(), a, kEnvSteps, objective, g)
+                                 : run_episode(m, ws, serial_team(), a, kEnvSteps, objective);
+    _exit(std::isfinite(loss) ? 0 : 1);
+  }
+  int status = 0;
+  struct rusage ru {};
+  wait4(pid, &status, 0, &ru);
+  return ru.ru_maxrss / 1024.0;
+}
+
+void print_phases(const char* what, const PhaseTimes& t) {
+  const double total = t.bin + t.stress + t.p2g + t.grid + t.g2p + t.reverse_g2p + t.reverse_grid +
+                       t.reverse_particles + t.other;
+  if (total <= 0.0) return;
+  std::printf("%s phases (1 thread, s): stress %.2f, p2g %.2f, g2p %.2f, grid %.2f, binning %.2f", what, t.stress,
+              t.p2g, t.g2p, t.grid, t.bin);
+  if (t.reverse_particles > 0.0)
+    std::printf(", reverse: particles %.2f, g2p^T %.2f, grid^T %.2f", t.reverse_particles, t.reverse_g2p,
+                t.reverse_grid);
+  std::printf(", tapes/checkpoints %.2f; total %.2f\n", t.other, total);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bool full = [&] {
+    for (int i = 1; i < argc; ++i)
+      if (std::string(argv[i]).find("-Full") != std::string::npos) return false;
+    return true;
+  }();
+  const double rss_forward = full ? child_peak_rss_mb(false) : 0.0;
+  const double rss_gradient = full ? child_peak_rss_mb(true) : 0.0;
+  benchmark::Initialize(&argc, argv);
+  dsb::perf::TimingReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  const double f1 = reporter.seconds("BM_ForwardEpisodeFull/1/iterations:1/real_time");
+  const double f2 = reporter.seconds("BM_ForwardEpisodeFull/2/iterations:1/real_time");
+  const double g1 = reporter.seconds("BM_GradientEpisodeFull/1/iterations:1/real_time");
+  const double g2 = reporter.seconds("BM_GradientEpisodeFull/2/iterations:1/real_time");
+  const double substeps = static_cast<double>(kEnvSteps) * scene().config.substeps;
+  if (f1 > 0.0) {
+    std::printf("\nscene: %d particles, %dx%dx%d grid, dt %g, %.0f substeps\n", kParticles, scene().config.grid[0],
+                scene().config.grid[1], scene().config.grid[2], scene().config.dt, substeps);
+    std::printf("forward: %.2f s = %.2f M particle-substeps/s (1 thread)\n", f1, kParticles * substeps / f1 / 1e6);
+    if (g1 > 0.0) std::printf("gradient episode: %.2f s = %.2fx the forward (1 thread)\n", g1, g1 / f1);
+    if (f2 > 0.0) std::printf("2 threads: forward %.2fx, gradient %.2fx one thread\n", f1 / f2, g2 > 0 ? g1 / g2 : 0.0);
+    print_phases("forward", forward_phases);
+    print_phases("gradient", gradient_phases);
+  }
+  if (full)
+    std::printf("peak RSS of a process running one episode: forward %.0f MB, gradient %.0f MB (full history of "
+                "the particle states: %.0f MB)\n",
+                rss_forward, rss_gradient, substeps * kParticles * sizeof(Particle) / 1e6);
+  return 0;
+}
