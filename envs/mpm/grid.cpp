@@ -58,15 +58,7 @@ namespace {
 
 template <class Fn>
 void for_nodes_of_blocks(const GridLayout& layout, const std::vector<int>& blocks, Fn&& fn) {
-  std::array<int, 3> lo, hi;
-  for (int b : blocks) {
-    layout.block_range(b, lo, hi);
-    for (int i = lo[0]; i < hi[0]; ++i)
-      for (int j = lo[1]; j < hi[1]; ++j) {
-        const int row = layout.node(i, j, 0);
-        for (int k = lo[2]; k < hi[2]; ++k) fn(row + k);
-      }
-  }
+  for (int b : blocks) for_each_node_of_block(layout, b, [&](int, int, int, int n) { fn(n); });
 }
 
 }  // namespace

@@ -48,6 +48,18 @@ struct GridLayout {
   void block_range(int b, std::array<int, 3>& lo, std::array<int, 3>& hi) const;
 };
 
+// fn(i, j, k, n) for every node (i, j, k) of block b, n its index, in index order
+template <class Fn>
+void for_each_node_of_block(const GridLayout& layout, int b, Fn&& fn) {
+  std::array<int, 3> lo, hi;
+  layout.block_range(b, lo, hi);
+  for (int i = lo[0]; i < hi[0]; ++i)
+    for (int j = lo[1]; j < hi[1]; ++j) {
+      const int row = layout.node(i, j, 0);
+      for (int k = lo[2]; k < hi[2]; ++k) fn(i, j, k, row + k);
+    }
+}
+
 // Grid fields, dense over all nodes; only active blocks hold meaningful values.
 struct GridFields {
   std::vector<Vec4> mq;   // node momentum and mass (q, m) from P2G

@@ -61,6 +61,30 @@ const char* motion_name(PrimitiveMotion m) {
   return "?";
 }
 
+// translate: d = sum_k a_k scale_k e_axis_k / substeps
+Vec3 translation(const PrimitiveSpec& spec, const double* action, double inv_n) {
+  Vec3 d = Vec3::Zero();
+  for (std::size_t k = 0; k < spec.action_axes.size(); ++k)
+    d[spec.action_axes[k]] += action[k] * spec.action_scale[k] * inv_n;
+  return d;
+}
+
+// rolling_pin: one substep's roll, yaw and vertical move, the pin's axis direction u = R (0,-1,0)
+// and the translation t = (e_y x u) dw roll_radius with t_y = dy
+struct RollStep {
+  double dw, dth, dy;
+  Vec3 u, t;
+};
+RollStep roll_step(const PrimitiveSpec& spec, const Pose& pose, const double* action, double inv_n) {
+  RollStep r;
+  r.dw = action[0] * spec.action_scale[0] * inv_n;
+  r.dth = action[1] * spec.action_scale[1] * inv_n;
+  r.dy = action[2] * spec.action_scale[2] * inv_n;
+  r.u = -(pose.q.toRotationMatrix().col(1));
+  r.t = Vec3(spec.roll_radius * r.dw * r.u.z(), r.dy, -spec.roll_radius * r.dw * r.u.x());
+  return r;
+}
+
 }  // namespace
 
 int PrimitiveSpec::action_dim() const {
@@ -130,24 +154,15 @@ Pose advance_pose(const PrimitiveSpec& spec, const Pose& pose, const double* act
   Pose next = pose;
   switch (spec.motion) {
     case PrimitiveMotion::fixed: break;
-    case PrimitiveMotion::translate: {
-      // p' = clamp(p + sum_k a_k scale_k e_axis_k / substeps)
-      Vec3 d = Vec3::Zero();
-      for (std::size_t k = 0; k < spec.action_axes.size(); ++k)
-        d[spec.action_axes[k]] += action[k] * spec.action_scale[k] * inv_n;
-      next.p = clamp3(pose.p + d, spec.lower_bound, spec.upper_bound, nullptr);
+    case PrimitiveMotion::translate:
+      // p' = clamp(p + d)
+      next.p = clamp3(pose.p + translation(spec, action, inv_n), spec.lower_bound, spec.upper_bound, nullptr);
       break;
-    }
     case PrimitiveMotion::rolling_pin: {
-      const double dw = action[0] * spec.action_scale[0] * inv_n;
-      const double dth = action[1] * spec.action_scale[1] * inv_n;
-      const double dy = action[2] * spec.action_scale[2] * inv_n;
-      // t = (e_y x u) dw roll_radius with u = R (0, -1, 0), then t_y = dy
-      const Vec3 u = -(pose.q.toRotationMatrix().col(1));
-      const Vec3 t(spec.roll_radius * dw * u.z(), dy, -spec.roll_radius * dw * u.x());
-      next.p = clamp3(pose.p + t, spec.lower_bound, spec.upper_bound, nullptr);
+      const RollStep r = roll_step(spec, pose, action, inv_n);
+      next.p = clamp3(pose.p + r.t, spec.lower_bound, spec.upper_bound, nullptr);
       // R' = Ry(-dth) R Ry_body(dw)
-      next.q = (about_y(-dth) * pose.q * about_y(dw)).normalized();
+      next.q = (about_y(-r.dth) * pose.q * about_y(r.dw)).normalized();
       break;
     }
   }
@@ -160,11 +175,8 @@ void advance_pose_adjoint(const PrimitiveSpec& spec, const Pose& pose, const dou
   switch (spec.motion) {
     case PrimitiveMotion::fixed: break;
     case PrimitiveMotion::translate: {
-      Vec3 d = Vec3::Zero();
-      for (std::size_t k = 0; k < spec.action_axes.size(); ++k)
-        d[spec.action_axes[k]] += action[k] * spec.action_scale[k] * inv_n;
       Vec3 mask;
-      clamp3(pose.p + d, spec.lower_bound, spec.upper_bound, &mask);
+      clamp3(pose.p + translation(spec, action, inv_n), spec.lower_bound, spec.upper_bound, &mask);
       const Vec3 pm = mask.cwiseProduct(bar.p);
       for (std::size_t k = 0; k < spec.action_axes.size(); ++k)
         action_bar[k] += spec.action_scale[k] * inv_n * pm[spec.action_axes[k]];
@@ -172,13 +184,11 @@ void advance_pose_adjoint(const PrimitiveSpec& spec, const Pose& pose, const dou
       break;
     }
     case PrimitiveMotion::rolling_pin: {
-      const double dw = action[0] * spec.action_scale[0] * inv_n;
-      const double dth = action[1] * spec.action_scale[1] * inv_n;
-      const double dy = action[2] * spec.action_scale[2] * inv_n;
-      const Vec3 u = -(pose.q.toRotationMatrix().col(1));
-      const Vec3 t(spec.roll_radius * dw * u.z(), dy, -spec.roll_radius * dw * u.x());
+      const RollStep r = roll_step(spec, pose, action, inv_n);
+      const double dw = r.dw, dth = r.dth;
+      const Vec3& u = r.u;
       Vec3 mask;
-      clamp3(pose.p + t, spec.lower_bound, spec.upper_bound, &mask);
+      clamp3(pose.p + r.t, spec.lower_bound, spec.upper_bound, &mask);
       const Eigen::Quaterniond q_next = (about_y(-dth) * pose.q * about_y(dw)).normalized();
       const Vec3 t_bar = mask.cwiseProduct(bar.p);
       // translation: t = (rr dw u_z, dy, -rr dw u_x)

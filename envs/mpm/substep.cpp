@@ -121,27 +121,21 @@ void grid_update(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bi
   const Vec3 dv_gravity = cfg.dt * cfg.gravity;
   const int np = static_cast<int>(model.primitives.size());
   parallel_for(team, static_cast<std::int64_t>(active.size()), kBlockGrain, [&](std::int64_t begin, std::int64_t end) {
-    std::array<int, 3> lo, hi;
-    for (std::int64_t bb = begin; bb < end; ++bb) {
-      L.block_range(active[bb], lo, hi);
-      for (int i = lo[0]; i < hi[0]; ++i)
-        for (int j = lo[1]; j < hi[1]; ++j)
-          for (int k = lo[2]; k < hi[2]; ++k) {
-            const int n = L.node(i, j, k);
-            const double m = g.mq[n].w();
-            if (!(m > cfg.grid_mass_epsilon)) {
-              g.v[n].setZero();
-              continue;
-            }
-            // v = q / m + dt g
-            Vec3 v = g.mq[n].head<3>() / m + dv_gravity;
-            const Vec3 x(i * cfg.dx, j * cfg.dx, k * cfg.dx);
-            for (int pr = 0; pr < np; ++pr) v = collide(model.primitives[pr], ws.frames[pr], x, v);
-            const int I[3] = {i, j, k};
-            apply_boundary(cfg, I, v);
-            g.v[n] = v;
-          }
-    }
+    for (std::int64_t bb = begin; bb < end; ++bb)
+      for_each_node_of_block(L, active[bb], [&](int i, int j, int k, int n) {
+        const double m = g.mq[n].w();
+        if (!(m > cfg.grid_mass_epsilon)) {
+          g.v[n].setZero();
+          return;
+        }
+        // v = q / m + dt g
+        Vec3 v = g.mq[n].head<3>() / m + dv_gravity;
+        const Vec3 x(i * cfg.dx, j * cfg.dx, k * cfg.dx);
+        for (int pr = 0; pr < np; ++pr) v = collide(model.primitives[pr], ws.frames[pr], x, v);
+        const int I[3] = {i, j, k};
+        apply_boundary(cfg, I, v);
+        g.v[n] = v;
+      });
   });
 }
 

@@ -86,32 +86,26 @@ ContactAdjointSum grid_update_adjoint(const MpmModel& model, MpmWorkspace& ws, c
   const Vec3 dv_gravity = cfg.dt * cfg.gravity;
   const int np = static_cast<int>(model.primitives.size());
   auto fold = [&](std::int64_t begin, std::int64_t end, ContactAdjointSum acc) {
-    std::array<int, 3> lo, hi;
     std::array<Vec3, kMaxPrimitives + 1> vs;
-    for (std::int64_t bb = begin; bb < end; ++bb) {
-      L.block_range(active[bb], lo, hi);
-      for (int i = lo[0]; i < hi[0]; ++i)
-        for (int j = lo[1]; j < hi[1]; ++j)
-          for (int k = lo[2]; k < hi[2]; ++k) {
-            const int n = L.node(i, j, k);
-            const double m = g.mq[n].w();
-            if (!(m > cfg.grid_mass_epsilon)) {  // v = 0: nothing flows back
-              g.mq[n].setZero();
-              continue;
-            }
-            // forward again: v_0 = q / m + dt g, then each primitive
-            const Vec3 q_over_m = g.mq[n].head<3>() / m;
-            const Vec3 x(i * cfg.dx, j * cfg.dx, k * cfg.dx);
-            vs[0] = q_over_m + dv_gravity;
-            for (int pr = 0; pr < np; ++pr) vs[pr + 1] = collide(model.primitives[pr], ws.frames[pr], x, vs[pr]);
-            const int I[3] = {i, j, k};
-            Vec3 bar = apply_boundary_adjoint(cfg, I, vs[np], vb[n]);
-            for (int pr = np - 1; pr >= 0; --pr)
-              bar = collide_adjoint(model.primitives[pr], ws.frames[pr], x, vs[pr], bar, acc.at_f[pr], acc.at_f1[pr]);
-            // v_0 = q / m + dt g: (dL/dq, dL/dm) over (q, m)
-            g.mq[n] << bar / m, -bar.dot(q_over_m) / m;
-          }
-    }
+    for (std::int64_t bb = begin; bb < end; ++bb)
+      for_each_node_of_block(L, active[bb], [&](int i, int j, int k, int n) {
+        const double m = g.mq[n].w();
+        if (!(m > cfg.grid_mass_epsilon)) {  // v = 0: nothing flows back
+          g.mq[n].setZero();
+          return;
+        }
+        // forward again: v_0 = q / m + dt g, then each primitive
+        const Vec3 q_over_m = g.mq[n].head<3>() / m;
+        const Vec3 x(i * cfg.dx, j * cfg.dx, k * cfg.dx);
+        vs[0] = q_over_m + dv_gravity;
+        for (int pr = 0; pr < np; ++pr) vs[pr + 1] = collide(model.primitives[pr], ws.frames[pr], x, vs[pr]);
+        const int I[3] = {i, j, k};
+        Vec3 bar = apply_boundary_adjoint(cfg, I, vs[np], vb[n]);
+        for (int pr = np - 1; pr >= 0; --pr)
+          bar = collide_adjoint(model.primitives[pr], ws.frames[pr], x, vs[pr], bar, acc.at_f[pr], acc.at_f1[pr]);
+        // v_0 = q / m + dt g: (dL/dq, dL/dm) over (q, m)
+        g.mq[n] << bar / m, -bar.dot(q_over_m) / m;
+      });
     return acc;
   };
   return parallel_reduce<ContactAdjointSum>(team, static_cast<std::int64_t>(active.size()), kBlockGrain,
