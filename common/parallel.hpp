@@ -62,6 +62,17 @@ double parallel_sum(ThreadTeam& team, std::int64_t n, std::int64_t grain, double
   return parallel_reduce<double>(team, n, grain, init, 0.0, fold, [](double a, double b) { return a + b; });
 }
 
+// body(begin, end) over one contiguous part of [0, n) per thread of the team, part t on thread t
+// (run_per_thread): for loops whose iterations write disjoint data, so that the split cannot
+// change results, and whose data should stay in each core's cache from one loop to the next.
+template <class Body>
+void parallel_for_per_thread(ThreadTeam& team, std::int64_t n, Body&& body) {
+  const int parts = team.size();
+  team.run_per_thread([&](int t) {
+    body(n * t / parts, n * (t + 1) / parts);
+  });
+}
+
 // A team of one thread, for callers that have no team (convenience paths, tests).
 inline ThreadTeam& serial_team() {
   thread_local ThreadTeam team(1);

@@ -63,7 +63,7 @@ class ThreadTeam {
   explicit ThreadTeam(int threads) {
     if (threads < 1) throw std::invalid_argument("ThreadTeam: threads must be >= 1, got " + std::to_string(threads));
     workers_.reserve(static_cast<std::size_t>(threads - 1));
-    for (int t = 1; t < threads; ++t) workers_.emplace_back([this] { worker_loop(); });
+    for (int t = 1; t < threads; ++t) workers_.emplace_back([this, t] { worker_loop(t); });
   }
   ~ThreadTeam() {
     {
@@ -82,6 +82,23 @@ class ThreadTeam {
   // thrown by a task is rethrown here (the remaining tasks are skipped).
   template <class F>
   void run(int tasks, F&& task) {
+    dispatch(tasks, task, false);
+  }
+
+  // Runs task(t) once for every thread t in [0, size()), on thread t itself (the caller is 0):
+  // for work split into one contiguous part per thread that should stay on the same core from one
+  // job to the next (cache locality). Nested or on a team of one, the calls run in order on the
+  // calling thread. Callers must not let results depend on the split (e.g. disjoint writes).
+  template <class F>
+  void run_per_thread(F&& task) {
+    dispatch(size(), task, true);
+  }
+
+  static constexpr int kSpinMicros = 50;
+
+ private:
+  template <class F>
+  void dispatch(int tasks, F& task, bool per_thread) {
     if (tasks <= 0) return;
     if (workers_.empty() || tasks == 1 || inside_task()) {
       for (int i = 0; i < tasks; ++i) task(i);
@@ -92,6 +109,7 @@ class ThreadTeam {
     {
       std::lock_guard lock(mutex_);
       job_ = &ref;
+      per_thread_ = per_thread;
       tasks_ = tasks;
       next_.store(0, std::memory_order_relaxed);
       busy_.store(static_cast<int>(workers_.size()), std::memory_order_relaxed);
@@ -99,7 +117,7 @@ class ThreadTeam {
       generation_.fetch_add(1, std::memory_order_release);
     }
     start_.notify_all();
-    work(ref, tasks);
+    work(ref, tasks, per_thread ? 0 : -1);
     auto idle = [this] { return busy_.load(std::memory_order_acquire) == 0; };
     if (!spin_until(idle, kSpinMicros)) {
       std::unique_lock lock(mutex_);
@@ -110,18 +128,15 @@ class ThreadTeam {
     if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
   }
 
-  static constexpr int kSpinMicros = 50;
-
- private:
   static bool& inside_task() {
     thread_local bool inside = false;
     return inside;
   }
 
-  // takes tasks until none is left
-  void work(const TaskRef& job, int tasks) {
+  // takes tasks until none is left, or (own >= 0) runs task `own` only
+  void work(const TaskRef& job, int tasks, int own) {
     inside_task() = true;
-    for (int i; (i = next_.fetch_add(1, std::memory_order_relaxed)) < tasks;) {
+    auto one = [&](int i) {
       try {
         job(i);
       } catch (...) {
@@ -129,15 +144,21 @@ class ThreadTeam {
         if (!error_) error_ = std::current_exception();
         next_.store(tasks, std::memory_order_relaxed);
       }
+    };
+    if (own >= 0) {
+      one(own);
+    } else {
+      for (int i; (i = next_.fetch_add(1, std::memory_order_relaxed)) < tasks;) one(i);
     }
     inside_task() = false;
   }
 
-  void worker_loop() {
+  void worker_loop(int index) {
     std::uint64_t seen = 0;
     for (;;) {
       const TaskRef* job;
       int tasks;
+      bool per_thread;
       // a new job soon after the last one is caught spinning; otherwise sleep
       spin_until([&] { return generation_.load(std::memory_order_acquire) != seen; }, kSpinMicros);
       {
@@ -147,8 +168,9 @@ class ThreadTeam {
         seen = generation_.load(std::memory_order_relaxed);
         job = job_;
         tasks = tasks_;
+        per_thread = per_thread_;
       }
-      work(*job, tasks);
+      work(*job, tasks, per_thread ? index : -1);
       if (busy_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
         std::lock_guard lock(mutex_);  // the caller checks busy_ under the mutex before sleeping
         done_.notify_one();
@@ -161,6 +183,7 @@ class ThreadTeam {
   std::condition_variable start_, done_;
   const TaskRef* job_ = nullptr;
   int tasks_ = 0;
+  bool per_thread_ = false;
   std::atomic<int> next_{0};
   std::atomic<int> busy_{0};
   std::atomic<std::uint64_t> generation_{0};

@@ -10,6 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include <mutex>
+#include <thread>
+
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
 #include "common/usable_cpus.hpp"
@@ -91,6 +94,40 @@ TEST(ParallelFor, CoversTheRangeInBlocks) {
     for (std::int64_t i = b; i < e; ++i) ++seen[i];
   });
   for (int s : seen) ASSERT_EQ(s, 1);
+}
+
+TEST(ThreadTeam, RunPerThreadRunsPartTOnThreadT) {
+  ThreadTeam team(3);
+  for (int round = 0; round < 50; ++round) {
+    std::vector<std::thread::id> ran(3);
+    team.run_per_thread([&](int t) { ran[t] = std::this_thread::get_id(); });
+    EXPECT_EQ(ran[0], std::this_thread::get_id()) << "part 0 on the caller";
+    EXPECT_NE(ran[1], ran[0]);
+    EXPECT_NE(ran[2], ran[0]);
+    EXPECT_NE(ran[1], ran[2]);
+    static std::vector<std::thread::id> first;
+    if (round == 0) first = ran;
+    EXPECT_EQ(ran, first) << "the same thread takes the same part every time";
+  }
+  // nested: every part in order on the calling thread
+  std::vector<int> order;
+  team.run(2, [&](int i) {
+    if (i == 0) team.run_per_thread([&](int t) { order.push_back(t); });
+  });
+  EXPECT_EQ(order, (std::vector<int>{0, 1, 2}));
+}
+
+TEST(ParallelFor, PerThreadPartsCoverTheRangeContiguously) {
+  for (int threads : {1, 2, 3}) {
+    ThreadTeam team(threads);
+    std::vector<int> seen(1001, 0);
+    std::mutex m;
+    parallel_for_per_thread(team, 1001, [&](std::int64_t b, std::int64_t e) {
+      std::lock_guard lock(m);
+      for (std::int64_t i = b; i < e; ++i) ++seen[i];
+    });
+    for (int s : seen) ASSERT_EQ(s, 1);
+  }
 }
 
 TEST(UsableCpus, AtLeastOne) { EXPECT_GE(usable_cpus(), 1); }

@@ -17,7 +17,7 @@ namespace {
 void stress_phase(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
   const MpmConfig& cfg = model.config;
   const double k_stress = 4.0 * cfg.dt / (cfg.dx * cfg.dx);
-  parallel_for(team, model.particles(), kParticleGrain, [&](std::int64_t begin, std::int64_t end) {
+  parallel_for_per_thread(team, model.particles(), [&](std::int64_t begin, std::int64_t end) {
     std::array<SolidTape, kSolidBatch> tapes;
     std::array<Mat3, kSolidBatch> F, tau;
     std::array<Svd3, kSolidBatch> svd;
@@ -61,10 +61,10 @@ void stress_phase(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
 void bin_particles(const MpmModel& model, ParticleBins& bins, ThreadTeam& team, const std::vector<Particle>& parts) {
   const double inv_dx = 1.0 / model.config.dx;
   const GridLayout& L = model.layout;
-  parallel_for(team, model.particles(), kParticleGrain * 4, [&](std::int64_t begin, std::int64_t end) {
+  parallel_for_per_thread(team, model.particles(), [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t p = begin; p < end; ++p) {
       const Stencil s = make_stencil(parts[p].x, inv_dx, L.n);
-      bins.home[p] = L.block(s.base[0] >> kBlockLog2, s.base[1] >> kBlockLog2, s.base[2] >> kBlockLog2);
+      bins.home[p] = L.unit(s.base[0] >> kUnitLog2, s.base[1] >> kUnitLog2, s.base[2] >> kUnitLog2);
     }
   });
   bins.rebuild(L);
@@ -79,10 +79,12 @@ void p2g(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins, Thre
   const GridLayout& L = model.layout;
   GridFields& g = ws.grid;
   for (int c = 0; c < kColours; ++c) {
-    const std::vector<int>& blocks = bins.by_colour[c];
-    parallel_for(team, static_cast<std::int64_t>(blocks.size()), 1, [&](std::int64_t bb, std::int64_t) {
-      const int b = blocks[bb];
-      for (int o = bins.block_begin[b]; o < bins.block_begin[b + 1]; ++o) {
+    const std::vector<int>& units = bins.by_colour[c];
+    team.run_per_thread([&](int t) {
+      std::int64_t first, last;
+      particle_balanced_part(bins, units, t, team.size(), first, last);
+      for (std::int64_t uu = first; uu < last; ++uu)
+      for (int o = bins.unit_begin[units[uu]]; o < bins.unit_begin[units[uu] + 1]; ++o) {
         const int p = bins.order[o];
         const Particle& P = ws.particles[p];
         const Stencil s = make_stencil(P.x, inv_dx, L.n);
@@ -120,7 +122,7 @@ void grid_update(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bi
   const std::vector<int>& active = bins.active;
   const Vec3 dv_gravity = cfg.dt * cfg.gravity;
   const int np = static_cast<int>(model.primitives.size());
-  parallel_for(team, static_cast<std::int64_t>(active.size()), kBlockGrain, [&](std::int64_t begin, std::int64_t end) {
+  parallel_for_per_thread(team, static_cast<std::int64_t>(active.size()), [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t bb = begin; bb < end; ++bb)
       for_each_node_of_block(L, active[bb], [&](int i, int j, int k, int n) {
         const double m = g.mq[n].w();
@@ -147,7 +149,7 @@ void g2p(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
   const GridFields& g = ws.grid;
   const double lo = cfg.clamp_low();
   const Vec3 hi(cfg.clamp_high(0), cfg.clamp_high(1), cfg.clamp_high(2));
-  parallel_for(team, model.particles(), kParticleGrain, [&](std::int64_t begin, std::int64_t end) {
+  parallel_for_per_thread(team, model.particles(), [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t p = begin; p < end; ++p) {
       Particle& P = ws.particles[p];
       const Stencil s = make_stencil(P.x, inv_dx, L.n);
@@ -274,7 +276,7 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
   clock.lap(&PhaseTimes::bin);
   stress_phase(model, ws, team);
   clock.lap(&PhaseTimes::stress);
-  clear_blocks(model.layout, bins.active, ws.grid);
+  clear_blocks(model.layout, bins.active, ws.grid, team);
   clock.lap(&PhaseTimes::bin);
   p2g(model, ws, bins, team);
   clock.lap(&PhaseTimes::p2g);

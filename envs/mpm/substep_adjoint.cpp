@@ -48,10 +48,12 @@ void g2p_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, cons
   const ParticleBins& bins = tape.bins;
   std::vector<Vec3>& vb = ws.grid_adj.v;
   for (int c = 0; c < kColours; ++c) {
-    const std::vector<int>& blocks = bins.by_colour[c];
-    parallel_for(team, static_cast<std::int64_t>(blocks.size()), 1, [&](std::int64_t bb, std::int64_t) {
-      const int b = blocks[bb];
-      for (int o = bins.block_begin[b]; o < bins.block_begin[b + 1]; ++o) {
+    const std::vector<int>& units = bins.by_colour[c];
+    team.run_per_thread([&](int t) {
+      std::int64_t first, last;
+      particle_balanced_part(bins, units, t, team.size(), first, last);
+      for (std::int64_t uu = first; uu < last; ++uu)
+      for (int o = bins.unit_begin[units[uu]]; o < bins.unit_begin[units[uu] + 1]; ++o) {
         const int p = bins.order[o];
         const Vec3& x = tape.before[p].x;
         const Stencil s = make_stencil(x, inv_dx, L.n);
@@ -60,13 +62,16 @@ void g2p_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, cons
         // (4 / dx^2) C'_bar dpos = (4 / dx) C'_bar (o - fx)
         const Mat3 Cs = (4.0 * inv_dx) * ws.adj[p].C;
         const Vec3 base_term = adv.v_bar - Cs * s.fx;
+        const Vec3 c0 = Cs.col(0), c1 = Cs.col(1), c2 = Cs.col(2);
         for (int i = 0; i < 3; ++i) {
-          const Vec3 ti = base_term + static_cast<double>(i) * Cs.col(0);
+          const Vec3 ti = base_term + static_cast<double>(i) * c0;
           for (int j = 0; j < 3; ++j) {
-            const Vec3 tij = ti + static_cast<double>(j) * Cs.col(1);
+            const Vec3 tij = ti + static_cast<double>(j) * c1;
             const double wij = s.w[0][i] * s.w[1][j];
             const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-            for (int k = 0; k < 3; ++k) vb[row + k] += (wij * s.w[2][k]) * (tij + static_cast<double>(k) * Cs.col(2));
+            vb[row] += (wij * s.w[2][0]) * tij;
+            vb[row + 1] += (wij * s.w[2][1]) * (tij + c2);
+            vb[row + 2] += (wij * s.w[2][2]) * (tij + 2.0 * c2);
           }
         }
       }
@@ -123,7 +128,7 @@ void particle_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
   const GridLayout& L = model.layout;
   const std::vector<Vec3>& gv = ws.grid.v;   // node velocities after the grid update
   const std::vector<Vec4>& qmb = ws.grid.mq;  // now (dL/dq, dL/dm)
-  parallel_for(team, model.particles(), kParticleGrain, [&](std::int64_t begin, std::int64_t end) {
+  parallel_for_per_thread(team, model.particles(), [&](std::int64_t begin, std::int64_t end) {
     std::array<SolidTape, kSolidBatch> tapes;
     std::array<Mat3, kSolidBatch> F, tau_solid;
     std::array<Svd3, kSolidBatch> svd;
@@ -171,23 +176,23 @@ void particle_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
         ad1 << dx * A.col(1), 0.0;
         ad2 << dx * A.col(2), 0.0;
         const Vec3 u0 = adv.v_bar - dx * (Cs * s.fx);
-        const Mat3 Csd = dx * Cs;
+        const Vec3 cd0 = dx * Cs.col(0), cd1 = dx * Cs.col(1), cd2 = dx * Cs.col(2);
         Vec3 x_bar = Vec3::Zero();
         Vec3 sum_wq = Vec3::Zero();  // sum w q_bar
         Mat3 Mq = Mat3::Zero();      // sum w q_bar o^T
         for (int i = 0; i < 3; ++i) {
           const Vec4 ti = t0 + static_cast<double>(i) * ad0;
-          const Vec3 ui = u0 + static_cast<double>(i) * Csd.col(0);
+          const Vec3 ui = u0 + static_cast<double>(i) * cd0;
           for (int j = 0; j < 3; ++j) {
             const Vec4 tij = ti + static_cast<double>(j) * ad1;
-            const Vec3 uij = ui + static_cast<double>(j) * Csd.col(1);
+            const Vec3 uij = ui + static_cast<double>(j) * cd1;
             const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
             double S0 = 0.0, S1 = 0.0;  // sum_k w_z s, sum_k w_z' s
             Vec3 Q0 = Vec3::Zero(), Qk = Vec3::Zero();  // sum_k w_z q_bar, sum_k k w_z q_bar
             for (int k = 0; k < 3; ++k) {
               const int nd = row + k;
               const double sc = qmb[nd].dot(tij + static_cast<double>(k) * ad2) +
-                                gv[nd].dot(uij + static_cast<double>(k) * Csd.col(2));
+                                gv[nd].dot(uij + static_cast<double>(k) * cd2);
               S0 += s.w[2][k] * sc;
               S1 += s.dw[2][k] * sc;
               const Vec3 wq = s.w[2][k] * qmb[nd].head<3>();
@@ -231,7 +236,7 @@ void substep_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, 
   const int np = static_cast<int>(model.primitives.size());
   PhaseClock clock(ws.phase_times);
   tape.grid.restore(model.layout, ws.grid);
-  clear_blocks(model.layout, tape.bins.active, ws.grid_adj);
+  clear_blocks(model.layout, tape.bins.active, ws.grid_adj, team);
   for (int pr = 0; pr < np; ++pr) {
     const PrimitiveSpec& spec = model.primitives[pr];
     ws.next_poses[pr] = advance_pose(spec, tape.poses[pr], actions + model.action_offset(pr), cfg.substeps);
