@@ -73,6 +73,15 @@ void parallel_for_per_thread(ThreadTeam& team, std::int64_t n, Body&& body) {
   });
 }
 
+// dst = src (same size), each thread copying its part
+template <class T>
+void copy_in_parts(ThreadTeam& team, const std::vector<T>& src, std::vector<T>& dst) {
+  dst.resize(src.size());
+  parallel_for_per_thread(team, static_cast<std::int64_t>(src.size()), [&](std::int64_t begin, std::int64_t end) {
+    std::copy(src.begin() + begin, src.begin() + end, dst.begin() + begin);
+  });
+}
+
 // A team of one thread, for callers that have no team (convenience paths, tests).
 inline ThreadTeam& serial_team() {
   thread_local ThreadTeam team(1);

@@ -60,6 +60,7 @@ double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam
     if (ws.tapes.size() < total) ws.tapes.resize(total);
     for (auto& t : ws.tapes) {
       t.before.resize(model.particles());
+      t.svd.resize(model.particles());
       t.poses.resize(model.primitives.size());
       t.bins.home.resize(model.particles());
     }
@@ -76,7 +77,7 @@ double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam
   for (int k = 0; k < env_steps; ++k) {
     if (!full) {
       PhaseClock clock(ws.phase_times);
-      ws.checkpoints[k].particles = ws.particles;
+      copy_in_parts(team, ws.particles, ws.checkpoints[k].particles);
       ws.checkpoints[k].poses = ws.poses;
       clock.lap(&PhaseTimes::other);
     }
@@ -103,7 +104,7 @@ double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam
     if (!full) {
       // recompute env step k from its checkpoint, recording its substeps
       PhaseClock clock(ws.phase_times);
-      ws.particles = ws.checkpoints[k].particles;
+      copy_in_parts(team, ws.checkpoints[k].particles, ws.particles);
       ws.poses = ws.checkpoints[k].poses;
       clock.lap(&PhaseTimes::other);
       env_step(model, ws, team, a, tapes);

@@ -84,15 +84,6 @@ void particle_balanced_part(const ParticleBins& bins, const std::vector<int>& un
 namespace {
 
 template <class Fn>
-void for_nodes_of_blocks(const GridLayout& layout, const std::vector<int>& blocks, Fn&& fn) {
-  for (int b : blocks) for_each_node_of_block(layout, b, [&](int, int, int, int n) { fn(n); });
-}
-
-}  // namespace
-
-namespace {
-
-template <class Fn>
 void for_nodes_of_blocks_in_parallel(const GridLayout& layout, const std::vector<int>& blocks, ThreadTeam& team,
                                      Fn&& fn) {
   parallel_for_per_thread(team, static_cast<std::int64_t>(blocks.size()), [&](std::int64_t begin, std::int64_t end) {
@@ -110,22 +101,41 @@ void clear_blocks(const GridLayout& layout, const std::vector<int>& blocks, Grid
   for_nodes_of_blocks_in_parallel(layout, blocks, team, [&](int n) { g.v[n].setZero(); });
 }
 
-void GridSnapshot::save(const GridLayout& layout, const std::vector<int>& blocks, const GridFields& g) {
-  active = blocks;
-  mq.clear();
-  v.clear();
-  for_nodes_of_blocks(layout, blocks, [&](int n) {
-    mq.push_back(g.mq[n]);
-    v.push_back(g.v[n]);
+namespace {
+
+constexpr int kBlockNodes = kBlock * kBlock * kBlock;
+
+// fn(node, slot) for the nodes of blocks[i], slot = kBlockNodes i + local index, in parallel parts
+template <class Fn>
+void for_block_slots(const GridLayout& layout, const std::vector<int>& blocks, ThreadTeam& team, Fn&& fn) {
+  parallel_for_per_thread(team, static_cast<std::int64_t>(blocks.size()), [&](std::int64_t begin, std::int64_t end) {
+    std::array<int, 3> lo, hi;
+    for (std::int64_t b = begin; b < end; ++b) {
+      layout.block_range(blocks[b], lo, hi);
+      for_each_node_of_block(layout, blocks[b], [&](int i, int j, int k, int n) {
+        fn(n, kBlockNodes * b + ((i - lo[0]) * kBlock + (j - lo[1])) * kBlock + (k - lo[2]));
+      });
+    }
   });
 }
 
-void GridSnapshot::restore(const GridLayout& layout, GridFields& g) const {
-  std::size_t i = 0;
-  for_nodes_of_blocks(layout, active, [&](int n) {
-    g.mq[n] = mq[i];
-    g.v[n] = v[i];
-    ++i;
+}  // namespace
+
+void GridSnapshot::save(const GridLayout& layout, const std::vector<int>& blocks, const GridFields& g,
+                        ThreadTeam& team) {
+  active = blocks;
+  mq.resize(blocks.size() * kBlockNodes);
+  v.resize(blocks.size() * kBlockNodes);
+  for_block_slots(layout, active, team, [&](int n, std::int64_t slot) {
+    mq[slot] = g.mq[n];
+    v[slot] = g.v[n];
+  });
+}
+
+void GridSnapshot::restore(const GridLayout& layout, GridFields& g, ThreadTeam& team) const {
+  for_block_slots(layout, active, team, [&](int n, std::int64_t slot) {
+    g.mq[n] = mq[slot];
+    g.v[n] = v[slot];
   });
 }
 

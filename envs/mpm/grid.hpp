@@ -112,12 +112,14 @@ void clear_blocks(const GridLayout& layout, const std::vector<int>& blocks, Grid
 void clear_blocks(const GridLayout& layout, const std::vector<int>& blocks, GridAdjoint& g, ThreadTeam& team);
 
 // A compact copy of the active blocks' fields (what the reverse pass of a substep needs).
+// Block i of `active` keeps its nodes at slots 64 i + local index (edge blocks leave some unused),
+// so that threads copy their parts of the block list independently.
 struct GridSnapshot {
   std::vector<int> active;
   std::vector<Vec4> mq;
   std::vector<Vec3> v;
-  void save(const GridLayout& layout, const std::vector<int>& blocks, const GridFields& g);
-  void restore(const GridLayout& layout, GridFields& g) const;
+  void save(const GridLayout& layout, const std::vector<int>& blocks, const GridFields& g, ThreadTeam& team);
+  void restore(const GridLayout& layout, GridFields& g, ThreadTeam& team) const;
 };
 
 }  // namespace dsb::mpm

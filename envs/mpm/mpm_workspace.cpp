@@ -33,6 +33,7 @@ void MpmWorkspace::reserve_reverse(const MpmModel& model, int env_steps) {
   if (static_cast<int>(tapes.size()) < substeps) tapes.resize(substeps);
   for (auto& t : tapes) {
     t.before.resize(n);
+    t.svd.resize(n);
     t.poses.resize(model.primitives.size());
     t.bins.home.resize(n);
   }

@@ -13,11 +13,13 @@ namespace dsb::mpm {
 
 constexpr int kMaxPrimitives = 8;
 
-// What the reverse pass of one substep needs (recorded when an env step is recomputed). The
-// stress update (SVD, return mapping) is not kept: the reverse pass recomputes it from `before`
-// (cheaper in memory than its 29 doubles per particle, and its bits are the forward's).
+// What the reverse pass of one substep needs (recorded when an env step is recomputed). Of the
+// stress update, only each solid's SVD is kept, compactly (svd3.hpp SvdRecord: 7 doubles instead
+// of 21); the reverse pass restores U from it and recomputes the return mapping (a few
+// logarithms), which costs far less than the SVD it saves.
 struct SubstepTape {
   std::vector<Particle> before;   // particles at the start of the substep
+  std::vector<SvdRecord> svd;     // per particle: the SVD of F_tmp (solids only)
   std::vector<Pose> poses;        // primitive poses at the start of the substep
   ParticleBins bins;              // the substep's binning of `before`
   GridSnapshot grid;              // active blocks' m, q, v after the grid update

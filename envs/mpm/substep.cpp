@@ -14,7 +14,7 @@ namespace {
 // 1. stress phase: A_p and the new F (or J) of every particle. Solids go through
 // solid_update_batch in chunks (SVDs, logarithms and exponentials batched: the same bits as one
 // particle at a time, several times faster).
-void stress_phase(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
+void stress_phase(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, SubstepTape* tape) {
   const MpmConfig& cfg = model.config;
   const double k_stress = 4.0 * cfg.dt / (cfg.dx * cfg.dx);
   parallel_for_per_thread(team, model.particles(), [&](std::int64_t begin, std::int64_t end) {
@@ -28,6 +28,8 @@ void stress_phase(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
     auto flush = [&] {
       svd3_batch(F.data(), svd.data(), n);
       for (int i = 0; i < n; ++i) tapes[i].svd = svd[i];
+      if (tape)
+        for (int i = 0; i < n; ++i) tape->svd[index[i]] = record_svd(svd[i]);
       solid_update_batch(mats.data(), F.data(), tapes.data(), tau.data(), n);
       for (int i = 0; i < n; ++i) {
         const int p = index[i];
@@ -268,13 +270,13 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
   PhaseClock clock(ws.phase_times);
   ParticleBins& bins = tape ? tape->bins : ws.bins;
   if (tape) {
-    tape->before = ws.particles;
+    copy_in_parts(team, ws.particles, tape->before);
     tape->poses = ws.poses;
     clock.lap(&PhaseTimes::other);
   }
   bin_particles(model, bins, team, ws.particles);
   clock.lap(&PhaseTimes::bin);
-  stress_phase(model, ws, team);
+  stress_phase(model, ws, team, tape);
   clock.lap(&PhaseTimes::stress);
   clear_blocks(model.layout, bins.active, ws.grid, team);
   clock.lap(&PhaseTimes::bin);
@@ -290,7 +292,7 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
   grid_update(model, ws, bins, team);
   clock.lap(&PhaseTimes::grid);
   if (tape) {
-    tape->grid.save(model.layout, bins.active, ws.grid);
+    tape->grid.save(model.layout, bins.active, ws.grid, team);
     clock.lap(&PhaseTimes::other);
   }
   g2p(model, ws, team);

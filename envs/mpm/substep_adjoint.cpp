@@ -117,9 +117,9 @@ ContactAdjointSum grid_update_adjoint(const MpmModel& model, MpmWorkspace& ws, c
                                             ContactAdjointSum{}, ContactAdjointSum{}, fold, add);
 }
 
-// D. per particle: the stress update recomputed from `before` (SVDs and the return mapping in
-// batches, the forward's bits), then the P2G^T gather, G2P's position terms and the stress
-// adjoint. Node sums go by axis (the z sums first) to share the weights' products.
+// D. per particle: the stress update again from `before` and the recorded SVD (U restored, the
+// return mapping recomputed in batches), then the P2G^T gather, G2P's position terms and the
+// stress adjoint. Node sums go by axis (the z sums first) to share the weights' products.
 void particle_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const SubstepTape& tape,
                       const std::vector<Particle>& after) {
   const MpmConfig& cfg = model.config;
@@ -131,7 +131,6 @@ void particle_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
   parallel_for_per_thread(team, model.particles(), [&](std::int64_t begin, std::int64_t end) {
     std::array<SolidTape, kSolidBatch> tapes;
     std::array<Mat3, kSolidBatch> F, tau_solid;
-    std::array<Svd3, kSolidBatch> svd;
     std::array<const Material*, kSolidBatch> mats;
     std::array<int, kSolidBatch> slot_of;  // particle offset in the chunk -> solid slot
     for (std::int64_t chunk = begin; chunk < end; chunk += kSolidBatch) {
@@ -143,11 +142,10 @@ void particle_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
         slot_of[p - chunk] = -1;
         if (mat.kind == MaterialKind::fluid) continue;
         F[n] = trial_deformation(tape.before[p].C, cfg.dt, tape.before[p].F);
+        tapes[n].svd = restore_svd(tape.svd[p], F[n]);
         mats[n] = &mat;
         slot_of[p - chunk] = n++;
       }
-      svd3_batch(F.data(), svd.data(), n);
-      for (int i = 0; i < n; ++i) tapes[i].svd = svd[i];
       solid_update_batch(mats.data(), F.data(), tapes.data(), tau_solid.data(), n);
 
       for (std::int64_t p = chunk; p < chunk_end; ++p) {
@@ -235,7 +233,7 @@ void substep_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, 
   const MpmConfig& cfg = model.config;
   const int np = static_cast<int>(model.primitives.size());
   PhaseClock clock(ws.phase_times);
-  tape.grid.restore(model.layout, ws.grid);
+  tape.grid.restore(model.layout, ws.grid, team);
   clear_blocks(model.layout, tape.bins.active, ws.grid_adj, team);
   for (int pr = 0; pr < np; ++pr) {
     const PrimitiveSpec& spec = model.primitives[pr];

@@ -426,4 +426,20 @@ Mat3 iso_uu_adjoint(const Svd3& s, const Mat3& dgds, const Mat3& ddg, const Mat3
   return s.U * H * s.V.transpose();
 }
 
+SvdRecord record_svd(const Svd3& s) {
+  const Eigen::Quaterniond q(s.V);
+  return {q.w(), q.x(), q.y(), q.z(), s.sigma[0], s.sigma[1], s.sigma[2]};
+}
+
+Svd3 restore_svd(const SvdRecord& r, const Mat3& A) {
+  Svd3 s;
+  s.sigma = Vec3(r[4], r[5], r[6]);
+  if (!(std::abs(s.sigma[2]) >= 1e-6 * s.sigma[0] && std::abs(s.sigma[1]) >= 1e-6 * s.sigma[0])) return svd3(A);
+  s.V = Eigen::Quaterniond(r[0], r[1], r[2], r[3]).toRotationMatrix();
+  // A V = U diag(sigma)
+  const Mat3 AV = A * s.V;
+  for (int i = 0; i < 3; ++i) s.U.col(i) = AV.col(i) / s.sigma[i];
+  return s;
+}
+
 }  // namespace dsb::mpm

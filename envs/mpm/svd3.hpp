@@ -21,6 +21,7 @@
 //   value decomposition"; PyTorch's svd_backward; PlasticineLab's clamped variant).
 // iso_uv_adjoint / iso_uu_adjoint: reverse mode of the isotropic maps F -> U diag(f(sigma)) V^T
 //   and F -> U diag(g(sigma)) U^T written with divided differences, finite at equal singular values.
+#include <array>
 #include <cstddef>
 
 #include "envs/mpm/mpm_types.hpp"
@@ -39,6 +40,14 @@ Svd3 svd3(const Mat3& A);
 // out[i] = svd3(A[i]) for i < n, bit for bit; processes elements in structure-of-arrays chunks so
 // that the compiler vectorizes across elements.
 void svd3_batch(const Mat3* A, Svd3* out, std::size_t n);
+
+// A compact record of an SVD for a reverse pass: V as a unit quaternion (w, x, y, z) and sigma.
+// restore_svd rebuilds U = A V diag(1 / sigma) from A; where a singular value is tiny
+// (|sigma_i| < 1e-6 sigma_0, so that U would be inaccurate) it computes svd3(A) again. The restored
+// factors equal the original ones to a few ulps, not bit for bit.
+using SvdRecord = std::array<double, 7>;
+SvdRecord record_svd(const Svd3& s);
+Svd3 restore_svd(const SvdRecord& r, const Mat3& A);
 
 // dL/dA from dL/dU, dL/dsigma, dL/dV for A = U diag(sigma) V^T (Townsend 2016 / PyTorch):
 //   A_bar = U [diag(sigma_bar) + (K o (U^T U_bar - U_bar^T U)) Sigma
