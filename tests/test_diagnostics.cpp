@@ -254,7 +254,7 @@ void check_boleap(const std::string& who, const StoredRun& r, int dim) {
       EXPECT_TRUE(ended == "episode_cap" || ended.rfind("cma:", 0) == 0) << who << ": " << ended;
     else
       EXPECT_EQ(ended, "budget") << who;
-    if (l["descents"] > 0) EXPECT_LE(l["best_loss"].get<double>(), l["end_loss"].get<double>()) << who;
+    if (l["descents"] > 0) { EXPECT_LE(l["best_loss"].get<double>(), l["end_loss"].get<double>()) << who; }
   }
   // every episode is in the initial design or a leap; every gradient episode is a descent step
   EXPECT_EQ(episodes, r.episodes) << who;
@@ -297,13 +297,13 @@ void check_descents(const std::string& who, const StoredRun& r, bool single) {
   for (std::size_t i = 0; i < list.size(); ++i) {
     steps += list[i]["steps"].get<std::int64_t>();
     EXPECT_GT(list[i]["steps"].get<int>(), 0) << who;
-    if (i + 1 < list.size()) EXPECT_NE(list[i]["stop"], "budget") << who << " descent " << i;
+    if (i + 1 < list.size()) { EXPECT_NE(list[i]["stop"], "budget") << who << " descent " << i; }
   }
   for (const auto& [reason, n] : d["stops"].items()) by_reason += n.get<int>();
   EXPECT_EQ(by_reason, static_cast<int>(list.size())) << who;
   EXPECT_EQ(steps, r.episodes) << who;
   EXPECT_EQ(r.grad_evals, r.episodes) << who;
-  if (single) EXPECT_EQ(list, json::parse(R"([{"steps": )" + std::to_string(r.budget) + R"(, "stop": "budget"}])")) << who;
+  if (single) { EXPECT_EQ(list, json::parse(R"([{"steps": )" + std::to_string(r.budget) + R"(, "stop": "budget"}])")) << who; }
 }
 
 TEST_F(DiagnosticsCli, StoredDiagnosticsAgreeWithTheEvalsAndARerunGivesTheSameJson) {
@@ -334,7 +334,7 @@ TEST_F(DiagnosticsCli, StoredDiagnosticsAgreeWithTheEvalsAndARerunGivesTheSameJs
     if (optimizer == "nlopt-lbfgs") check_nlopt(who, r);
     if (optimizer == "gd") check_descents(who, r, true);
     if (optimizer == "rand-descents") check_descents(who, r, false);
-    if (optimizer == "random") EXPECT_EQ(r.diagnostics["optimizer"], json::object()) << who;
+    if (optimizer == "random") { EXPECT_EQ(r.diagnostics["optimizer"], json::object()) << who; }
   }
 
   // identical reruns (other --jobs, other order) give identical JSON, byte for byte
