@@ -3,6 +3,7 @@
 // resting elastic cube's compression under its weight, von Mises plasticity (permanent set past
 // yield, spring-back below), and PlasticineLab's contact and floor rules.
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <vector>
 
@@ -158,6 +159,8 @@ TEST(MpmClosedForm, RestingCubeCompressesByItsWeight) {
   }
   const double shortening = height0 - sum / count;
   const double expected = rho * g * h * h / (2.0 * E);  // = h m g / (2 E A)
+  std::printf("  resting cube: shortened %.4e, h m g / (2 E A) = %.4e (ratio %.3f)\n", shortening, expected,
+              shortening / expected);
   EXPECT_NEAR(shortening, expected, 0.15 * expected) << "expected " << expected;
 }
 
@@ -233,6 +236,7 @@ TEST(MpmPlasticity, PastYieldKeepsAPermanentSetBelowYieldSpringsBack) {
   const double plastic = pressed_block_height_ratio(4.0);
   // yield / (2 mu) = 1: the press stays elastic
   const double elastic = pressed_block_height_ratio(4e3);
+  std::printf("  pressed 30%% and released: final height / initial %.3f past yield, %.3f below it\n", plastic, elastic);
   EXPECT_LT(plastic, 0.85) << "a plastic block keeps most of the 30% compression";
   EXPECT_GT(elastic, 0.95) << "an elastic block springs back";
 }
