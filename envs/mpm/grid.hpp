@@ -105,6 +105,22 @@ struct ParticleBins {
 void particle_balanced_part(const ParticleBins& bins, const std::vector<int>& units, int part, int parts,
                             std::int64_t& first, std::int64_t& last);
 
+// fn(p) for every particle, colour by colour; within a colour each thread takes its particle-
+// balanced part of the units, each unit's particles in ascending order. The one loop of every
+// scatter into the grid (P2G, G2P^T): fn may add to the nodes of p's stencil without atomics.
+template <class Fn>
+void for_each_particle_by_colour(const ParticleBins& bins, ThreadTeam& team, Fn&& fn) {
+  for (int c = 0; c < kColours; ++c) {
+    const std::vector<int>& units = bins.by_colour[c];
+    team.run_per_thread([&](int t) {
+      std::int64_t first, last;
+      particle_balanced_part(bins, units, t, team.size(), first, last);
+      for (std::int64_t uu = first; uu < last; ++uu)
+        for (int o = bins.unit_begin[units[uu]]; o < bins.unit_begin[units[uu] + 1]; ++o) fn(bins.order[o]);
+    });
+  }
+}
+
 // Zeroes mq (GridFields) or v (GridAdjoint) on the nodes of the given blocks.
 // Each thread clears the contiguous part of `blocks` it updates later (parallel_for_per_thread), so
 // the nodes stay in its core's cache.

@@ -80,40 +80,31 @@ void p2g(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins, Thre
   const double dx = cfg.dx, inv_dx = 1.0 / dx;
   const GridLayout& L = model.layout;
   GridFields& g = ws.grid;
-  for (int c = 0; c < kColours; ++c) {
-    const std::vector<int>& units = bins.by_colour[c];
-    team.run_per_thread([&](int t) {
-      std::int64_t first, last;
-      particle_balanced_part(bins, units, t, team.size(), first, last);
-      for (std::int64_t uu = first; uu < last; ++uu)
-      for (int o = bins.unit_begin[units[uu]]; o < bins.unit_begin[units[uu] + 1]; ++o) {
-        const int p = bins.order[o];
-        const Particle& P = ws.particles[p];
-        const Stencil s = make_stencil(P.x, inv_dx, L.n);
-        const double mp = model.mass[p];
-        const Mat3& A = ws.affine[p];
-        // (q_i, m_i) += w (m v + A dpos, m), dpos = (o - fx) dx: a base term and one column of
-        // dx A per axis
-        Vec4 base_term;
-        base_term << mp * P.v - dx * (A * s.fx), mp;
-        Vec4 a0, a1, a2;
-        a0 << dx * A.col(0), 0.0;
-        a1 << dx * A.col(1), 0.0;
-        a2 << dx * A.col(2), 0.0;
-        for (int i = 0; i < 3; ++i) {
-          const Vec4 ti = base_term + static_cast<double>(i) * a0;
-          for (int j = 0; j < 3; ++j) {
-            const Vec4 tij = ti + static_cast<double>(j) * a1;
-            const double wij = s.w[0][i] * s.w[1][j];
-            const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-            g.mq[row] += (wij * s.w[2][0]) * tij;
-            g.mq[row + 1] += (wij * s.w[2][1]) * (tij + a2);
-            g.mq[row + 2] += (wij * s.w[2][2]) * (tij + 2.0 * a2);
-          }
-        }
+  for_each_particle_by_colour(bins, team, [&](int p) {
+    const Particle& P = ws.particles[p];
+    const Stencil s = make_stencil(P.x, inv_dx, L.n);
+    const double mp = model.mass[p];
+    const Mat3& A = ws.affine[p];
+    // (q_i, m_i) += w (m v + A dpos, m), dpos = (o - fx) dx: a base term and one column of
+    // dx A per axis
+    Vec4 base_term;
+    base_term << mp * P.v - dx * (A * s.fx), mp;
+    Vec4 a0, a1, a2;
+    a0 << dx * A.col(0), 0.0;
+    a1 << dx * A.col(1), 0.0;
+    a2 << dx * A.col(2), 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const Vec4 ti = base_term + static_cast<double>(i) * a0;
+      for (int j = 0; j < 3; ++j) {
+        const Vec4 tij = ti + static_cast<double>(j) * a1;
+        const double wij = s.w[0][i] * s.w[1][j];
+        const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
+        g.mq[row] += (wij * s.w[2][0]) * tij;
+        g.mq[row + 1] += (wij * s.w[2][1]) * (tij + a2);
+        g.mq[row + 2] += (wij * s.w[2][2]) * (tij + 2.0 * a2);
       }
-    });
-  }
+    }
+  });
 }
 
 // 5. grid update on the active blocks

@@ -47,36 +47,27 @@ void g2p_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, cons
   const GridLayout& L = model.layout;
   const ParticleBins& bins = tape.bins;
   std::vector<Vec3>& vb = ws.grid_adj.v;
-  for (int c = 0; c < kColours; ++c) {
-    const std::vector<int>& units = bins.by_colour[c];
-    team.run_per_thread([&](int t) {
-      std::int64_t first, last;
-      particle_balanced_part(bins, units, t, team.size(), first, last);
-      for (std::int64_t uu = first; uu < last; ++uu)
-      for (int o = bins.unit_begin[units[uu]]; o < bins.unit_begin[units[uu] + 1]; ++o) {
-        const int p = bins.order[o];
-        const Vec3& x = tape.before[p].x;
-        const Stencil s = make_stencil(x, inv_dx, L.n);
-        const AdvectionAdjoint adv = advection_adjoint(cfg, x, after[p].v, ws.adj[p]);
-        ws.advection[p] = adv;
-        // (4 / dx^2) C'_bar dpos = (4 / dx) C'_bar (o - fx)
-        const Mat3 Cs = (4.0 * inv_dx) * ws.adj[p].C;
-        const Vec3 base_term = adv.v_bar - Cs * s.fx;
-        const Vec3 c0 = Cs.col(0), c1 = Cs.col(1), c2 = Cs.col(2);
-        for (int i = 0; i < 3; ++i) {
-          const Vec3 ti = base_term + static_cast<double>(i) * c0;
-          for (int j = 0; j < 3; ++j) {
-            const Vec3 tij = ti + static_cast<double>(j) * c1;
-            const double wij = s.w[0][i] * s.w[1][j];
-            const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-            vb[row] += (wij * s.w[2][0]) * tij;
-            vb[row + 1] += (wij * s.w[2][1]) * (tij + c2);
-            vb[row + 2] += (wij * s.w[2][2]) * (tij + 2.0 * c2);
-          }
-        }
+  for_each_particle_by_colour(bins, team, [&](int p) {
+    const Vec3& x = tape.before[p].x;
+    const Stencil s = make_stencil(x, inv_dx, L.n);
+    const AdvectionAdjoint adv = advection_adjoint(cfg, x, after[p].v, ws.adj[p]);
+    ws.advection[p] = adv;
+    // (4 / dx^2) C'_bar dpos = (4 / dx) C'_bar (o - fx)
+    const Mat3 Cs = (4.0 * inv_dx) * ws.adj[p].C;
+    const Vec3 base_term = adv.v_bar - Cs * s.fx;
+    const Vec3 c0 = Cs.col(0), c1 = Cs.col(1), c2 = Cs.col(2);
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 ti = base_term + static_cast<double>(i) * c0;
+      for (int j = 0; j < 3; ++j) {
+        const Vec3 tij = ti + static_cast<double>(j) * c1;
+        const double wij = s.w[0][i] * s.w[1][j];
+        const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
+        vb[row] += (wij * s.w[2][0]) * tij;
+        vb[row + 1] += (wij * s.w[2][1]) * (tij + c2);
+        vb[row + 2] += (wij * s.w[2][2]) * (tij + 2.0 * c2);
       }
-    });
-  }
+    }
+  });
 }
 
 // B. grid update^T on the active blocks: node v_bar -> q_bar, m_bar, written over the restored
