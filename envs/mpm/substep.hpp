@@ -1,17 +1,19 @@
 #pragma once
 // One MLS-MPM substep in PlasticineLab's order (reference/environment-facts.md 1.1), and its
 // reverse. Forward:
-//   1. stress: F_tmp = (I + dt C) F, SVD, return mapping, Kirchhoff stress (material.hpp), the
+//   1. bin particles by home block; clear the active blocks;
+//   2. stress: F_tmp = (I + dt C) F, SVD, return mapping, Kirchhoff stress (material.hpp), the
 //      affine momentum A = -(4 dt V / dx^2) tau + m C;
-//   2. bin particles by home block; clear the active blocks;
 //   3. P2G: m_i += w m_p, q_i += w (m_p v_p + A_p (x_i - x_p)), colour by colour (grid.hpp);
 //   4. primitive kinematics, pose f -> f + 1;
 //   5. grid update: v_i = q_i / m_i + dt g, primitive contact, walls and floor;
 //   6. G2P: v_p = sum w v_i, C_p = (4 / dx^2) sum w v_i (x_i - x_p)^T, x_p += dt v_p (clamped).
 // Reverse (substep_adjoint): G2P^T as a coloured scatter into grid adjoints, the grid update's
 // adjoint per node (contact adjoints reduced over blocks in block order), the kinematics'
-// adjoint, then per particle the P2G^T gather and the stress adjoint. Every loop that sums across
-// particles or nodes does so in an order that does not depend on the number of threads.
+// adjoint, then per particle the stress update again (U restored from the tape's SVD record), the
+// P2G^T gather and the stress adjoint. Every loop that sums across particles or nodes does so in
+// an order that does not depend on the number of threads; loops without sums split their range
+// into one part per thread (parallel_for_per_thread) to keep each part of space on one core.
 #include <chrono>
 
 #include "common/thread_team.hpp"
@@ -41,7 +43,8 @@ class PhaseClock {
   std::chrono::steady_clock::time_point last_;
 };
 
-// Loop grains (a function of the problem only, never of the thread count).
+// Grains of the reductions over particles and blocks (a function of the problem only, never of
+// the thread count).
 constexpr std::int64_t kParticleGrain = 512;
 constexpr std::int64_t kBlockGrain = 8;
 
