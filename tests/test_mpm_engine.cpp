@@ -118,6 +118,38 @@ TEST(MpmClosedForm, FreeFallFollowsTheDiscreteRecursion) {
   EXPECT_NEAR(y, y0 + dt * dt * g * n * (n + 1) / 2.0, 1e-11);
 }
 
+TEST(MpmGrid, PaddingBelowTheDomainChangesNothingButAllowsParticlesDownToZero) {
+  // pad = 1 adds a layer of nodes below position 0; a scene away from it runs as without (to
+  // round-off: the blocks, hence the particles' memory order and the scatter's summation order,
+  // shift by one node), and particles may start below dx (PlasticineLab's shapes start at y = 0)
+  auto run = [](int pad, double bottom) {
+    auto m = empty_model(32, 1.0 / 32, 2e-4, 10, Vec3(0.0, -9.81, 0.0));
+    m.config.pad = pad;
+    add_block(m, "block", testing::plastic(400.0, 0.2, 5.0), Vec3(0.4, bottom, 0.4), Vec3(0.6, bottom + 0.1, 0.6), 2);
+    m.finalize("test");
+    mpm::MpmWorkspace ws(m);
+    ws.reset_state(m);
+    for (int s = 0; s < 30; ++s) mpm::substep(m, ws, serial_team(), nullptr, nullptr);
+    return ws.particles;
+  };
+  const auto a = run(0, 0.2), b = run(1, 0.2);
+  ASSERT_EQ(a.size(), b.size());
+  auto mean = [](const std::vector<mpm::Particle>& ps, bool velocity) {
+    Vec3 m = Vec3::Zero();
+    for (const auto& p : ps) m += velocity ? p.v : p.x;
+    return Vec3(m / static_cast<double>(ps.size()));
+  };
+  EXPECT_LE((mean(a, false) - mean(b, false)).norm(), 1e-14);
+  EXPECT_LE((mean(a, true) - mean(b, true)).norm(), 1e-13);
+  EXPECT_GT(mean(a, true).norm(), 0.05) << "the block fell";
+  const auto c = run(1, 0.0);  // particles from y = 1/128 up
+  for (const auto& p : c) ASSERT_TRUE(p.x.allFinite());
+  double lowest = 1.0;
+  for (const auto& p : c) lowest = std::min(lowest, p.x.y());
+  EXPECT_GE(lowest, 0.0);
+  EXPECT_LT(lowest, 1.0 / 32) << "particles stay in the floor layer below dx";
+}
+
 TEST(MpmClosedForm, RestingCubeCompressesByItsWeight) {
   // An elastic cube (nu = 0: uniaxial stress) on a sticky floor under gravity. The stress at
   // height s above the floor is rho g (h - s), so the cube shortens by

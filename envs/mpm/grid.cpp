@@ -6,8 +6,9 @@
 
 namespace dsb::mpm {
 
-GridLayout::GridLayout(const std::array<int, 3>& nodes) : n(nodes) {
+GridLayout::GridLayout(const std::array<int, 3>& domain_nodes, int pad_nodes) : pad(pad_nodes) {
   for (int a = 0; a < 3; ++a) {
+    n[a] = domain_nodes[a] + pad;
     nb[a] = (n[a] + kBlock - 1) / kBlock;
     nu[a] = (n[a] + (1 << kUnitLog2) - 1) >> kUnitLog2;
   }

@@ -35,11 +35,12 @@ constexpr int kUnitLog2 = 2;             // scatter units: 4 nodes per axis (the
 constexpr int kColours = 8;
 
 struct GridLayout {
-  std::array<int, 3> n{};   // nodes per axis
+  std::array<int, 3> n{};   // nodes per axis (the domain's plus `pad` below it)
+  int pad = 0;              // node i is at position (i - pad) dx
   std::array<int, 3> nb{};  // blocks per axis
   std::array<int, 3> nu{};  // scatter units per axis
 
-  explicit GridLayout(const std::array<int, 3>& nodes);
+  GridLayout(const std::array<int, 3>& domain_nodes, int pad);
   GridLayout() = default;
   int nodes() const { return n[0] * n[1] * n[2]; }
   int blocks() const { return nb[0] * nb[1] * nb[2]; }

@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 
+#include "envs/mpm/grid.hpp"
 #include "envs/mpm/mpm_types.hpp"
 
 namespace dsb::mpm {
@@ -19,16 +20,17 @@ struct Stencil {
   double dw[3][3];          // d w[axis][offset] / d x_axis
 };
 
-// base is clamped into [0, n - 3] (NaN positions map to 0) so that a blown-up particle can never
-// index outside the grid; the NaN then spreads through the weights and the episode fails.
-inline Stencil make_stencil(const Vec3& x, double inv_dx, const std::array<int, 3>& n) {
+// base is the node index (position index + layout.pad), clamped into [0, n - 3] (NaN positions
+// map to 0) so that a blown-up particle can never index outside the grid; the NaN then spreads
+// through the weights and the episode fails.
+inline Stencil make_stencil(const Vec3& x, double inv_dx, const GridLayout& layout) {
   Stencil s;
   for (int a = 0; a < 3; ++a) {
     const double scaled = x[a] * inv_dx;
-    double b = std::floor(scaled - 0.5);
-    const double top = static_cast<double>(n[a] - 3);
-    b = !(b >= 0.0) ? 0.0 : (b > top ? top : b);
-    s.base[a] = static_cast<int>(b);
+    double b = std::floor(scaled - 0.5);  // in position units
+    const double lo = -static_cast<double>(layout.pad), top = static_cast<double>(layout.n[a] - 3 - layout.pad);
+    b = !(b >= lo) ? lo : (b > top ? top : b);
+    s.base[a] = static_cast<int>(b) + layout.pad;
     const double f = scaled - b;
     s.fx[a] = f;
     const double d0 = 1.5 - f, d1 = f - 1.0, d2 = f - 0.5;

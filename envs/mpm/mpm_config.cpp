@@ -21,6 +21,7 @@ void MpmConfig::validate(const char* owner) const {
     fail("floor_friction", "must be finite and >= 0, got " + std::to_string(floor_friction));
   if (!(std::isfinite(grid_mass_epsilon) && grid_mass_epsilon >= 0.0))
     fail("grid_mass_epsilon", "must be finite and >= 0");
+  if (pad < 0 || pad > 4) fail("pad", "must be 0..4, got " + std::to_string(pad));
 }
 
 nlohmann::json MpmConfig::to_json() const {
@@ -32,6 +33,7 @@ nlohmann::json MpmConfig::to_json() const {
           {"bound", bound},
           {"floor_friction", floor_friction},
           {"grid_mass_epsilon", grid_mass_epsilon},
+          {"pad", pad},
           {"scheme", "MLS-MPM, quadratic B-spline, APIC affine transfer, PlasticineLab substep order"}};
 }
 

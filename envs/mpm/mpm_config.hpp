@@ -25,11 +25,15 @@ struct MpmConfig {
   int bound = 3;                           // wall cells (PlasticineLab: 3)
   double floor_friction = 1.5;             // PlasticineLab ground_friction: 0 = slip, >= 10 = sticky
   double grid_mass_epsilon = 1e-12;        // nodes at or below this mass are empty (PlasticineLab)
+  // Extra grid nodes below index 0 on every axis (node i stores position (i - pad) dx): with
+  // pad = 1 particles may sit anywhere down to 0, as in PlasticineLab, whose shapes start at y = 0,
+  // and their stencils (base node floor(x / dx - 1/2) >= -1) still stay on the grid.
+  int pad = 0;
 
   // Particles' positions are clamped to [lo, hi] per axis after advection: hi = (n - bound) dx as
-  // PlasticineLab (1 - 3 dx on its unit cube); lo = dx where PlasticineLab has 0, so that a
-  // particle's stencil never leaves the grid (the walls keep particles 3 cells away anyway).
-  double clamp_low() const { return dx; }
+  // PlasticineLab (1 - 3 dx on its unit cube); lo = 0 as PlasticineLab with pad >= 1, else dx (so
+  // that a stencil never leaves the grid; the walls keep particles 3 cells away anyway).
+  double clamp_low() const { return pad >= 1 ? 0.0 : dx; }
   double clamp_high(int axis) const { return (grid[axis] - bound) * dx; }
 
   void validate(const char* owner) const;  // throws ConfigError naming the field

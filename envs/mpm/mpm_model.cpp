@@ -22,7 +22,7 @@ int MpmModel::action_offset(int primitive) const {
 
 void MpmModel::finalize(const std::string& owner) {
   config.validate(owner.c_str());
-  layout = GridLayout(config.grid);
+  layout = GridLayout(config.grid, config.pad);
   for (std::size_t m = 0; m < materials.size(); ++m) materials[m].validate(owner, "materials[" + std::to_string(m) + "]");
   const int n = particles();
   material_of.assign(n, -1);
@@ -53,7 +53,7 @@ void MpmModel::finalize(const std::string& owner) {
   std::vector<int> order;
   std::vector<int> home(n);
   for (int p = 0; p < n; ++p) {
-    const Stencil s = make_stencil(initial[p].x, inv_dx, layout.n);
+    const Stencil s = make_stencil(initial[p].x, inv_dx, layout);
     home[p] = layout.block(s.base[0] >> kBlockLog2, s.base[1] >> kBlockLog2, s.base[2] >> kBlockLog2);
   }
   std::vector<Particle> sorted(initial.begin(), initial.end());

@@ -65,7 +65,7 @@ void bin_particles(const MpmModel& model, ParticleBins& bins, ThreadTeam& team, 
   const GridLayout& L = model.layout;
   parallel_for_per_thread(team, model.particles(), [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t p = begin; p < end; ++p) {
-      const Stencil s = make_stencil(parts[p].x, inv_dx, L.n);
+      const Stencil s = make_stencil(parts[p].x, inv_dx, L);
       bins.home[p] = L.unit(s.base[0] >> kUnitLog2, s.base[1] >> kUnitLog2, s.base[2] >> kUnitLog2);
     }
   });
@@ -82,7 +82,7 @@ void p2g(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins, Thre
   GridFields& g = ws.grid;
   for_each_particle_by_colour(bins, team, [&](int p) {
     const Particle& P = ws.particles[p];
-    const Stencil s = make_stencil(P.x, inv_dx, L.n);
+    const Stencil s = make_stencil(P.x, inv_dx, L);
     const double mp = model.mass[p];
     const Mat3& A = ws.affine[p];
     // (q_i, m_i) += w (m v + A dpos, m), dpos = (o - fx) dx: a base term and one column of
@@ -125,9 +125,9 @@ void grid_update(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bi
         }
         // v = q / m + dt g
         Vec3 v = g.mq[n].head<3>() / m + dv_gravity;
-        const Vec3 x(i * cfg.dx, j * cfg.dx, k * cfg.dx);
+        const Vec3 x((i - L.pad) * cfg.dx, (j - L.pad) * cfg.dx, (k - L.pad) * cfg.dx);
         for (int pr = 0; pr < np; ++pr) v = collide(model.primitives[pr], ws.frames[pr], x, v);
-        const int I[3] = {i, j, k};
+        const int I[3] = {i - L.pad, j - L.pad, k - L.pad};  // position indices
         apply_boundary(cfg, I, v);
         g.v[n] = v;
       });
@@ -145,7 +145,7 @@ void g2p(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team) {
   parallel_for_per_thread(team, model.particles(), [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t p = begin; p < end; ++p) {
       Particle& P = ws.particles[p];
-      const Stencil s = make_stencil(P.x, inv_dx, L.n);
+      const Stencil s = make_stencil(P.x, inv_dx, L);
       // v = sum w v_i and B = sum w v_i o^T (integer offsets o), by axis: the z sums first
       Vec3 v = Vec3::Zero();
       Mat3 B = Mat3::Zero();

@@ -49,7 +49,7 @@ void g2p_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, cons
   std::vector<Vec3>& vb = ws.grid_adj.v;
   for_each_particle_by_colour(bins, team, [&](int p) {
     const Vec3& x = tape.before[p].x;
-    const Stencil s = make_stencil(x, inv_dx, L.n);
+    const Stencil s = make_stencil(x, inv_dx, L);
     const AdvectionAdjoint adv = advection_adjoint(cfg, x, after[p].v, ws.adj[p]);
     ws.advection[p] = adv;
     // (4 / dx^2) C'_bar dpos = (4 / dx) C'_bar (o - fx)
@@ -92,10 +92,10 @@ ContactAdjointSum grid_update_adjoint(const MpmModel& model, MpmWorkspace& ws, c
         }
         // forward again: v_0 = q / m + dt g, then each primitive
         const Vec3 q_over_m = g.mq[n].head<3>() / m;
-        const Vec3 x(i * cfg.dx, j * cfg.dx, k * cfg.dx);
+        const Vec3 x((i - L.pad) * cfg.dx, (j - L.pad) * cfg.dx, (k - L.pad) * cfg.dx);
         vs[0] = q_over_m + dv_gravity;
         for (int pr = 0; pr < np; ++pr) vs[pr + 1] = collide(model.primitives[pr], ws.frames[pr], x, vs[pr]);
-        const int I[3] = {i, j, k};
+        const int I[3] = {i - L.pad, j - L.pad, k - L.pad};  // position indices
         Vec3 bar = apply_boundary_adjoint(cfg, I, vs[np], vb[n]);
         for (int pr = np - 1; pr >= 0; --pr)
           bar = collide_adjoint(model.primitives[pr], ws.frames[pr], x, vs[pr], bar, acc.at_f[pr], acc.at_f1[pr]);
@@ -153,7 +153,7 @@ void particle_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
         // A = -k tau + m C
         const Mat3 A = -k_stress * tau + mp * P.C;
         const Vec3& v_new = after[p].v;
-        const Stencil s = make_stencil(P.x, inv_dx, L.n);
+        const Stencil s = make_stencil(P.x, inv_dx, L);
         const Mat3 Cs = (4.0 * inv_dx * inv_dx) * a.C;  // (4 / dx^2) C'_bar
         // per node n (offset o): the scalar whose product with grad w_n is x_bar's share,
         //   m_bar m_p + q_bar . (m v + A dpos) + v_n . (C_s dpos + v'_bar)
