@@ -40,7 +40,8 @@ void BudgetedObjective::check_point(std::span<const double> x) const {
                              std::to_string(x[i]) + " outside [-1, 1]");
 }
 
-double BudgetedObjective::record(std::span<const double> x, double loss, bool used_grad, double wall_s) {
+double BudgetedObjective::record(std::span<const double> x, double loss, bool used_grad, double wall_s,
+                                 double metric) {
   const bool failed = !std::isfinite(loss);
   if (failed) {
     loss = std::numeric_limits<double>::quiet_NaN();
@@ -49,7 +50,8 @@ double BudgetedObjective::record(std::span<const double> x, double loss, bool us
     best_ = loss;
     best_x_.assign(x.begin(), x.end());
   }
-  evals_.push_back({static_cast<std::int64_t>(evals_.size()), loss, best_, used_grad, wall_s});
+  evals_.push_back({static_cast<std::int64_t>(evals_.size()), loss, best_, used_grad, wall_s,
+                    failed ? std::numeric_limits<double>::quiet_NaN() : metric});
   if (counter_) counter_->fetch_add(1, std::memory_order_relaxed);
   return failed ? std::numeric_limits<double>::infinity() : loss;
 }
@@ -59,7 +61,7 @@ double BudgetedObjective::value(std::span<const double> x) {
   check_point(x);
   const auto start = std::chrono::steady_clock::now();
   const double loss = env_.loss(x, workspace(0), team_);
-  return record(x, loss, false, seconds_since(start));
+  return record(x, loss, false, seconds_since(start), env_.episode_metric(workspace(0)));
 }
 
 double BudgetedObjective::value_and_grad(std::span<const double> x, std::span<double> grad) {
@@ -78,7 +80,8 @@ double BudgetedObjective::value_and_grad(std::span<const double> x, std::span<do
     for (double g : grad) sq += g * g;
     grad_norms_.push_back(std::sqrt(sq));
   }
-  return record(x, finite ? loss : std::numeric_limits<double>::quiet_NaN(), true, seconds_since(start));
+  return record(x, finite ? loss : std::numeric_limits<double>::quiet_NaN(), true, seconds_since(start),
+                env_.episode_metric(workspace(0)));
 }
 
 void BudgetedObjective::values(std::span<const double> xs, std::span<double> out) {
@@ -104,7 +107,7 @@ void BudgetedObjective::values(std::span<const double> xs, std::span<double> out
   // each slot takes every slots-th point with its own workspace, serially inside the rollout
   // (a nested parallel loop of the env runs on the slot's thread): results do not depend on the slot
   struct Outcome {
-    double loss = 0.0, wall_s = 0.0;
+    double loss = 0.0, wall_s = 0.0, metric = 0.0;
     std::exception_ptr error;
   };
   std::vector<Outcome> outcomes(n);
@@ -115,6 +118,7 @@ void BudgetedObjective::values(std::span<const double> xs, std::span<double> out
       const auto start = std::chrono::steady_clock::now();
       try {
         outcomes[i].loss = env_.loss(point(i), *workspaces_[slot], team_);
+        outcomes[i].metric = env_.episode_metric(*workspaces_[slot]);
       } catch (...) {
         outcomes[i].error = std::current_exception();
       }
@@ -123,7 +127,7 @@ void BudgetedObjective::values(std::span<const double> xs, std::span<double> out
   });
   for (std::size_t i = 0; i < n; ++i) {
     if (outcomes[i].error) std::rethrow_exception(outcomes[i].error);
-    out[i] = record(point(i), outcomes[i].loss, false, outcomes[i].wall_s);
+    out[i] = record(point(i), outcomes[i].loss, false, outcomes[i].wall_s, outcomes[i].metric);
   }
   if (bad_point) std::rethrow_exception(bad_point);
   if (n < out.size()) throw BudgetExhausted{};

@@ -47,7 +47,7 @@ class BudgetedObjective : public Objective {
  private:
   void check_point(std::span<const double> x) const;
   Workspace& workspace(std::size_t slot);
-  double record(std::span<const double> x, double loss, bool used_grad, double wall_s);
+  double record(std::span<const double> x, double loss, bool used_grad, double wall_s, double metric);
 
   const Env& env_;
   std::int64_t budget_;

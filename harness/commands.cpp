@@ -83,15 +83,18 @@ int command_eval(const std::string& env_name, const std::string& x_text, bool wi
   if (with_grad && !env->differentiable())
     throw UsageError("--grad: env '" + env_name + "' is not differentiable");
   nlohmann::json out = {{"env", env_name}, {"x", x}};
+  const auto ws = env->make_workspace();
   if (with_grad) {
     std::vector<double> grad(env->dim());
-    out["loss"] = number(env->loss_and_grad(x, grad));
+    out["loss"] = number(env->loss_and_grad(x, grad, *ws, serial_team()));
     nlohmann::json g = nlohmann::json::array();
     for (double v : grad) g.push_back(number(v));
     out["grad"] = g;
   } else {
-    out["loss"] = number(env->loss(x));
+    out["loss"] = number(env->loss(x, *ws, serial_team()));
   }
+  // the env's second metric, when it has one (e.g. "metric": {"soft_iou": 0.71})
+  if (!env->info().metric.empty()) out["metric"] = {{env->info().metric, number(env->episode_metric(*ws))}};
   std::cout << out.dump() << "\n";
   return 0;
 }

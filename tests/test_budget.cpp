@@ -19,7 +19,7 @@ namespace {
 // a 1-D env that blows up (NaN) for x > 0.5
 class FragileEnv : public Env {
  public:
-  FragileEnv() : Env(EnvInfo{"fragile", 1, true, false, false, 0.0}) {}
+  FragileEnv() : Env(EnvInfo{"fragile", 1, true, false, false, 0.0, ""}) {}
   nlohmann::json config() const override { return {{"fragile", true}}; }
 
  protected:

@@ -33,7 +33,7 @@ class FunctionEnv final : public Env {
   using Value = std::function<double(std::span<const double>)>;
   using ValueAndGrad = std::function<double(std::span<const double>, std::span<double>)>;
   FunctionEnv(int dim, Value value, ValueAndGrad value_and_grad)
-      : Env(EnvInfo{"test-function", dim, static_cast<bool>(value_and_grad), false, false, 0.0}),
+      : Env(EnvInfo{"test-function", dim, static_cast<bool>(value_and_grad), false, false, 0.0, ""}),
         dim_(dim), value_(std::move(value)), value_and_grad_(std::move(value_and_grad)) {}
 
   nlohmann::json config() const override { return {{"dim", dim_}}; }

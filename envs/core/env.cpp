@@ -1,5 +1,6 @@
 #include "envs/core/env.hpp"
 
+#include <limits>
 #include <stdexcept>
 
 #include "common/parallel.hpp"
@@ -9,6 +10,8 @@ namespace dsb {
 double Env::rollout_with_grad(std::span<const double>, std::span<double>, Workspace&, ThreadTeam&) const {
   throw std::logic_error("env '" + name() + "' is not differentiable");
 }
+
+double Env::episode_metric(const Workspace&) const { return std::numeric_limits<double>::quiet_NaN(); }
 
 double Env::loss(std::span<const double> x) const {
   const auto ws = make_workspace();

@@ -31,6 +31,7 @@ struct EnvInfo {
   bool rl = false;             // has a per-step interface (make_rl)
   bool threaded = false;       // a rollout uses the threads of its team
   double cost_hint_s = 0.0;    // rough seconds of one gradient episode on one core (plans, ETAs)
+  std::string metric;          // name of an optional second per-episode metric ("" for none)
 };
 
 // Per-step interface for RL (reset / observe / step) over the same dynamics as loss().
@@ -85,6 +86,10 @@ class Env {
   // Convenience forms (tests, one-off commands): a fresh workspace, one thread.
   double loss(std::span<const double> x) const;
   double loss_and_grad(std::span<const double> x, std::span<double> grad) const;
+
+  // The optional second metric (info().metric) of the last rollout run in `ws`, e.g. the soft IoU
+  // of PlasticineLab's tasks; NaN when the env has none or the rollout failed. Stored per episode.
+  virtual double episode_metric(const Workspace& ws) const;
 
   // nullptr when the env has no per-step interface
   virtual std::unique_ptr<RlEnv> make_rl() const { return nullptr; }
