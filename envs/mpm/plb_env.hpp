@@ -1,0 +1,63 @@
+#pragma once
+// `plb-NAME`: a PlasticineLab task (plb_tasks.hpp) as an Env. Params: 5 segments x the
+// manipulators' commands of one env step (TripleMove 90, Assembly and Rope 30, the rest 15), each
+// segment held for 10 env steps; loss: PlasticineLab's trajectory objective with the raised contact
+// weight (plb_loss.hpp); gradient: the engine's checkpointed reverse pass; second metric: the soft
+// IoU of the final state; RL view as PlasticineLab's (200 particles' positions and velocities and
+// each primitive's pose). `plb-NAME-hN`: the same task with N env steps (N a multiple of 5).
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "envs/core/env.hpp"
+#include "envs/core/lazy_model.hpp"
+#include "envs/core/registry.hpp"
+#include "envs/mpm/mpm_workspace.hpp"
+#include "envs/mpm/plb_config.hpp"
+#include "envs/mpm/plb_loss.hpp"
+#include "envs/mpm/plb_scene.hpp"
+
+namespace dsb::mpm {
+
+struct PlbWorkspace : Workspace {
+  explicit PlbWorkspace(const MpmModel& model) : mpm(model), loss(model) {}
+  MpmWorkspace mpm;
+  PlbLossScratch loss;
+  std::vector<double> actions, actions_bar;  // env_steps x action dim
+};
+
+class PlbEnv : public Env {
+ public:
+  PlbEnv(std::string name, PlbConfig cfg);
+  nlohmann::json config() const override { return cfg_.to_json(); }
+  std::unique_ptr<Workspace> make_workspace() const override;
+  std::unique_ptr<RlEnv> make_rl() const override;
+  double episode_metric(const Workspace& ws) const override;
+
+  const PlbConfig& plb_config() const { return cfg_; }
+  const PlbModel& model() const { return model_.get(); }
+  // the engine's actions of every env step for params x (env_steps x action dim)
+  void actions(std::span<const double> x, std::vector<double>& out) const;
+  // the params that replay the task's reference motion as closely as segments allow: none in
+  // general (phases need not align with segments), so this gives the per-env-step actions instead
+  std::vector<double> reference_actions() const;
+
+ protected:
+  double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override;
+  double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
+                           ThreadTeam& team) const override;
+
+ private:
+  PlbConfig cfg_;
+  int action_dim_ = 0;  // commands of one env step
+  LazyModel<PlbModel> model_;
+};
+
+// the reference motion's per-env-step actions of a task (its phases laid end to end, cut or
+// padded with zeros to env_steps)
+std::vector<double> plb_reference_actions(const PlbTask& task, int env_steps);
+
+EnvFamily plb_family();
+
+}  // namespace dsb::mpm

@@ -1,0 +1,29 @@
+#pragma once
+// A PlasticineLab task's model: the MPM scene (plasticine sampled from the task's shapes with our
+// seeded RNG, PlasticineLab's material and constants, the manipulators) and the target with its
+// distance field, built once per env.
+#include <string>
+#include <vector>
+
+#include "envs/mpm/mpm_model.hpp"
+#include "envs/mpm/plb_config.hpp"
+#include "envs/mpm/target_grid.hpp"
+
+namespace dsb::mpm {
+
+struct PlbModel {
+  MpmModel mpm;
+  NodeGrid target;                 // target grid mass on the engine's nodes (pad included)
+  std::vector<double> target_sdf;  // per node: distance to the nearest node above the threshold
+  double target_sum = 0.0, target_max = 0.0;
+  std::vector<int> movable;        // primitives with commands (the contact term's)
+};
+
+// The scene alone (what the reference motion runs on).
+MpmModel build_plb_scene(const PlbConfig& cfg);
+// The scene and the target read from plb_target_path(cfg.task).
+PlbModel build_plb_model(const PlbConfig& cfg);
+
+std::string plb_target_path(const std::string& task);  // <data dir>/targets/plb-<task>.txt.gz
+
+}  // namespace dsb::mpm
