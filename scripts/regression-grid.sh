@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The frozen regression grid of CI: 4 cheap envs x every optimizer x 2 seeds x 30 episodes, and the
+# The frozen regression grid of CI: 4 cheap envs x every optimizer x 2 seeds x 30 episodes; the
 # MPM engine's `fluid` at a 10-env-step horizon (fluid-h10, 80 substeps) x random, gd, cmaes x 2
-# seeds x 5 episodes.
+# seeds x 5 episodes; and two PlasticineLab tasks at 5 env steps (plb-pinch-h5, plb-writer-h5) x
+# random, gd x 2 seeds x 3 episodes.
 #   scripts/regression-grid.sh check [BUILD_DIR]       run the grid, compare with the baseline (exit 1 on any difference)
 #   scripts/regression-grid.sh regenerate [BUILD_DIR]  run the grid, rewrite data/baselines/small-grid.csv
 # A change that alters results on purpose regenerates the baseline in the same commit and says why.
@@ -19,6 +20,8 @@ trap 'rm -rf "$work"' EXIT
   --seeds 2 --budget 30 --jobs 2 --quiet --db "$work/grid.sqlite"
 "$build/bin/harness" --env fluid-h10 --optimizer random,gd,cmaes \
   --seeds 2 --budget 5 --jobs 2 --quiet --db "$work/grid.sqlite"
+"$build/bin/harness" --env plb-pinch-h5,plb-writer-h5 --optimizer random,gd \
+  --seeds 2 --budget 3 --jobs 2 --quiet --db "$work/grid.sqlite"
 
 case $mode in
   check) exec "$build/bin/harness" check --db "$work/grid.sqlite" --baseline "$baseline" ;;

@@ -2,8 +2,8 @@
 # Same bits on every x86-64 CPU: a grid of every env x every optimizer, run twice, once as is and
 # once with glibc told to ignore AVX2, FMA and AVX-512 (so libm would pick its other exp/log/pow/
 # sin variants), must give one digest (sha256 of `harness export`). Prints both digests. The
-# particle envs (seconds per episode) run at a short horizon (fluid-h5) with a few episodes; the
-# others with 30.
+# particle envs (seconds per episode) run at a short horizon (fluid-h5, plb-pinch-h5) with a few
+# episodes; the others with 30.
 #   tests/check_cpu_features.sh BUILD_DIR
 # Exit 0: equal; 1: different (the differing (env, optimizer) pairs are listed); 77 (skipped):
 # this CPU has none of the masked features, so the comparison would prove nothing.
@@ -33,6 +33,7 @@ run() {  # run NAME [env assignments...]: grid into NAME.sqlite, export to NAME.
   shift
   env "$@" "$harness" --all --env "$light_envs" --seeds 2 --budget 30 --jobs 2 --quiet --db "$work/$name.sqlite"
   env "$@" "$harness" --all --env fluid-h5 --seeds 2 --budget 4 --jobs 2 --quiet --db "$work/$name.sqlite"
+  env "$@" "$harness" --all --env plb-pinch-h5 --seeds 2 --budget 2 --jobs 2 --quiet --db "$work/$name.sqlite"
   "$harness" export --db "$work/$name.sqlite" --out "$work/$name.csv" >/dev/null
 }
 run plain
