@@ -284,6 +284,42 @@ class TestDeletedAndFailed(ReportCase):
         self.check_medians()
 
 
+def _set_metric(con):
+    """Give branin's episodes a second metric (as PlasticineLab's soft IoU would be); sphere-2 keeps none."""
+    con.execute("UPDATE evals SET metric = 0.001 * episode + 0.01 * run_id "
+                "WHERE run_id IN (SELECT run_id FROM runs WHERE env = 'branin')")
+
+
+class TestMetric(ReportCase):
+    modify = staticmethod(_set_metric)
+
+    def test_metric_median_is_the_metric_at_each_runs_best_episode(self):
+        con = sqlite3.connect(self.db)
+        want = {}
+        for run_id, opt in con.execute("SELECT run_id, optimizer FROM runs WHERE env = 'branin' AND status = 'done'"):
+            ev = con.execute("SELECT loss, metric FROM evals WHERE run_id = ? AND loss IS NOT NULL "
+                             "ORDER BY episode", (run_id,)).fetchall()
+            best = min(l for l, _ in ev)
+            want.setdefault(opt, []).append(next(m for l, m in ev if l == best))
+        con.close()
+        keys = list(self.cells)
+        for env, budget in keys:
+            rows = {r["optimizer"]: r for r in read_csv(self.file(final_csv_name(env, budget, keys)))}
+            for opt, r in rows.items():
+                if env == "branin":
+                    self.assertTrue(math.isclose(float(r["metric_median"]), statistics.median(want[opt]),
+                                                 rel_tol=1e-12), f"{opt}: {r['metric_median']}")
+                else:
+                    self.assertEqual(r["metric_median"], "", f"{env}/{opt} has no metric")
+        with open(self.file("summary.md"), encoding="utf-8") as f:
+            sections = f.read().split("### ")
+        branin = [x for x in sections if x.startswith("branin")]
+        sphere = [x for x in sections if x.startswith("sphere-2")]
+        self.assertTrue(branin and "metric at best (median)" in branin[0])
+        self.assertTrue(sphere and "metric at best" not in sphere[0])
+        self.assertIn("metric at best (median)", self.html)
+
+
 class TestBadInput(unittest.TestCase):
     def setUp(self):
         self.tmp = tempfile.mkdtemp(prefix="dsb_report_bad_")

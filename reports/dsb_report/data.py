@@ -34,6 +34,13 @@ class Panel:
     best: np.ndarray          # [n_runs, budget] best loss so far after episode k+1; +inf = none yet
     first_loss: np.ndarray    # [n_runs] loss of episode 0 (NaN if failed or absent)
     optimizers: list = field(default_factory=list)
+    # [n_runs] the env's second metric (evals.metric, e.g. PlasticineLab's soft IoU) of the
+    # episode that reached the run's final best loss (the first such episode); NaN where none
+    metric_at_best: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def has_metric(self) -> bool:
+        return bool(np.any(np.isfinite(self.metric_at_best)))
 
     def rows(self, optimizer: str) -> np.ndarray:
         return np.flatnonzero(self.runs["optimizer"].to_numpy() == optimizer)
@@ -117,6 +124,20 @@ def _best_matrix(runs: pd.DataFrame, ev: pd.DataFrame, budget: int):
     return best, first
 
 
+def _metric_at_best(runs: pd.DataFrame, ev: pd.DataFrame, budget: int) -> np.ndarray:
+    out = np.full(len(runs), np.nan)
+    if "metric" not in ev.columns or ev.empty:
+        return out
+    for i, rid in enumerate(runs["run_id"].to_numpy()):
+        e = ev[(ev["run_id"] == rid) & (ev["episode"] >= 0) & (ev["episode"] < budget)]
+        loss = e["loss"].to_numpy(dtype=float)
+        if not np.any(np.isfinite(loss)):
+            continue
+        k = int(np.nanargmin(loss))   # the first episode of the smallest loss
+        out[i] = float(e["metric"].to_numpy(dtype=float)[k])
+    return out
+
+
 def load(path: str) -> Data:
     con = connect_ro(path)
     try:
@@ -126,9 +147,12 @@ def load(path: str) -> Data:
         if absent:
             raise DataError(f"'{path}': table runs lacks column(s) {', '.join(absent)}")
         runs = pd.read_sql_query(f"SELECT {', '.join(RUN_COLUMNS)} FROM runs", con)
+        ev_cols = [r[1] for r in con.execute("PRAGMA table_info(evals)")]
+        metric = ", e.metric" if "metric" in ev_cols else ""  # schema version 2 on
         ev = pd.read_sql_query(
-            "SELECT e.run_id, e.episode, e.loss, e.best_loss FROM evals e "
-            "JOIN runs r ON r.run_id = e.run_id WHERE r.status = 'done'", con)
+            f"SELECT e.run_id, e.episode, e.loss, e.best_loss{metric} FROM evals e "
+            "JOIN runs r ON r.run_id = e.run_id WHERE r.status = 'done' "
+            "ORDER BY e.run_id, e.episode", con)
     except sqlite3.Error as e:
         raise DataError(f"cannot read database '{path}': {e}") from None
     finally:
@@ -137,6 +161,8 @@ def load(path: str) -> Data:
         runs[c] = pd.to_numeric(runs[c], errors="coerce").astype(float)
     ev["loss"] = pd.to_numeric(ev["loss"], errors="coerce").astype(float)
     ev["best_loss"] = pd.to_numeric(ev["best_loss"], errors="coerce").astype(float)
+    if "metric" in ev.columns:
+        ev["metric"] = pd.to_numeric(ev["metric"], errors="coerce").astype(float)
     runs = runs.sort_values(["env", "optimizer", "seed", "budget", "run_id"]).reset_index(drop=True)
 
     selected, ignored = _choose_variants(runs[runs["status"] == "done"])
@@ -144,10 +170,12 @@ def load(path: str) -> Data:
     budgets_per_env = selected.groupby("env")["budget"].nunique().to_dict()
     for (env, budget), g in selected.groupby(["env", "budget"], sort=True):
         g = g.sort_values(["optimizer", "seed"]).reset_index(drop=True)
-        best, first = _best_matrix(g, ev[ev["run_id"].isin(g["run_id"])], int(budget))
+        gev = ev[ev["run_id"].isin(g["run_id"])]
+        best, first = _best_matrix(g, gev, int(budget))
         slug = slugify(env if budgets_per_env[env] == 1 else f"{env}_b{budget}")
         panels.append(Panel(env, int(budget), slug, g, best, first,
-                            sorted(g["optimizer"].unique())))
+                            sorted(g["optimizer"].unique()),
+                            _metric_at_best(g, gev, int(budget))))
     return Data(db_path=path, db_size=os.path.getsize(path), meta=meta, runs=runs,
                 selected=selected, ignored=ignored, panels=panels,
                 optimizers=sorted(runs["optimizer"].unique()))

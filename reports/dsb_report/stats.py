@@ -103,9 +103,17 @@ def final_table(panel, all_runs: pd.DataFrame) -> pd.DataFrame:
             ci95_low=lo, ci95_high=hi,
             min=float(np.min(v)) if fin else np.nan,
             max=float(np.max(v)) if fin else np.nan,
-            median_wall_s=float(sel["wall_s"].median()) if fin else np.nan))
+            median_wall_s=float(sel["wall_s"].median()) if fin else np.nan,
+            metric_median=_metric_median(panel, opt)))
     df = pd.DataFrame(rows)
     return _add_significance(panel, df)
+
+
+def _metric_median(panel, optimizer: str) -> float:
+    """Median over seeds of the env's second metric at each run's best episode (NaN: none)."""
+    m = panel.metric_at_best[panel.rows(optimizer)] if panel.metric_at_best.size else np.zeros(0)
+    m = m[np.isfinite(m)]
+    return float(np.median(m)) if m.size else np.nan
 
 
 def _add_significance(panel, df: pd.DataFrame) -> pd.DataFrame:

@@ -8,7 +8,7 @@ import pandas as pd
 FINAL_COLUMNS = ["env", "budget", "optimizer", "n_seeds", "failed_runs", "running_runs",
                  "failed_episodes", "median", "q25", "q75", "mean", "std", "ci95_low", "ci95_high",
                  "min", "max", "median_wall_s", "is_best", "p_raw", "p_holm",
-                 "indistinguishable_from_best"]
+                 "indistinguishable_from_best", "metric_median"]
 SIGNIFICANCE_COLUMNS = ["env", "optimizer", "p_raw", "p_holm", "indistinguishable_from_best"]
 
 
@@ -50,14 +50,19 @@ def md_table(headers: list, rows: list) -> str:
 
 
 def final_md_rows(table: pd.DataFrame) -> tuple:
+    """Rows of a final table; a last column with the env's second metric (median over seeds at
+    each run's best episode, e.g. PlasticineLab's soft IoU) when any run recorded one."""
     headers = ["optimizer", "n", "failed runs", "median", "q25", "q75", "mean", "std",
                "95% CI (t)", "p (Holm)", "vs best"]
+    metric = "metric_median" in table.columns and bool(table["metric_median"].notna().any())
+    if metric:
+        headers.append("metric at best (median)")
     rows = []
     for _, r in table.iterrows():
         ci = "—" if math.isnan(r["ci95_low"]) else f"[{fmt(r['ci95_low'])}, {fmt(r['ci95_high'])}]"
         rows.append([r["optimizer"], str(r["n_seeds"]), str(r["failed_runs"]), fmt(r["median"]),
                      fmt(r["q25"]), fmt(r["q75"]), fmt(r["mean"]), fmt(r["std"]), ci,
-                     fmt(r["p_holm"], 3), mark(r)])
+                     fmt(r["p_holm"], 3), mark(r)] + ([fmt(r["metric_median"], 4)] if metric else []))
     return headers, rows
 
 
