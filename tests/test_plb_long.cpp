@@ -46,22 +46,42 @@ TEST(PlbLong, TheLossRanksTheReferenceMotionBelowZeroAndRandomActions) {
 }
 
 TEST(PlbLong, FullHorizonGradientMatchesCentralDifferences) {
-  // pinch over all 50 env steps (950 substeps); the loss is ~100, so rounding noise in the
-  // differences is ~1e-6: accept |analytic - central| <= 1e-5 + 1e-4 |central|
+  // pinch over all 50 env steps (950 substeps) at a seeded point. The loss (about 117) is a sum of
+  // kinks and tiny jumps over 50 env steps x 262,144 nodes (|m - t|, Coulomb friction, the yield
+  // surface, the closest particle of the contact term): a difference window of +-1e-7 already
+  // crosses one at this point (coordinate 1: right difference 121.1, left 173.513, analytic
+  // 173.509; +-1e-6: 20.3 and 218.0), +-1e-8 crosses none (173.5093, 173.5085 vs 173.5087). So
+  // h = 1e-8 (rounding noise ~ 2.6e-14 / 1e-8 = 3e-6, 1e-8 of the largest component), and a
+  // coordinate whose window still crosses a switch passes when the analytic value equals one of
+  // its one-sided differences (the piece it is evaluated in); at most 2 of 15 may.
   const auto& env = plb("plb-pinch");
   GradientCheckOptions options;
-  options.step = 1e-7;
+  options.step = 1e-8;
   options.tolerance = 1e-4;
-  options.absolute_floor = 1e-1;
   Rng rng(77);
   std::vector<double> x(env.dim());
   for (auto& v : x) v = rng.uniform(-1.0, 1.0);
   const auto r = check_gradient(env, x, options);
-  std::printf("  pinch, 50 env steps: |grad| %.3e, worst absolute error %.2e, worst relative error %.2e\n",
-              r.gradient_norm, r.worst_absolute_error, r.worst_relative_error);
+  std::printf("  pinch, 50 env steps: loss %.6f, |grad| %.3e, worst absolute error %.2e, worst relative error %.2e\n",
+              r.loss, r.gradient_norm, r.worst_absolute_error, r.worst_relative_error);
   EXPECT_TRUE(r.value_agrees);
-  EXPECT_TRUE(r.passed) << "worst coordinate " << r.worst_coordinate;
+  EXPECT_TRUE(r.finite);
+  const double floor = 1e-3 * r.max_abs_central;
+  int one_sided = 0;
+  for (std::size_t i = 0; i < r.coordinates.size(); ++i) {
+    const auto& c = r.coordinates[i];
+    if (c.agrees) continue;
+    const auto near = [&](double d) { return std::abs(c.analytic - d) <= 1e-4 * (std::abs(d) + floor); };
+    const bool piece = near(c.differences.left) || near(c.differences.right);
+    std::printf("  coordinate %zu: analytic %.8g, central %.8g, left %.8g, right %.8g%s\n", i, c.analytic,
+                c.differences.central, c.differences.left, c.differences.right,
+                piece ? " (a switch inside the window; matches one side)" : "");
+    EXPECT_TRUE(piece) << "coordinate " << i;
+    one_sided += piece;
+  }
+  EXPECT_LE(one_sided, 2);
 }
 
 }  // namespace
 }  // namespace dsb
+
