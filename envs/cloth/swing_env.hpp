@@ -1,0 +1,111 @@
+#pragma once
+// The six `swing-*` tasks (swing_config.hpp) as Envs on the mass-spring cloth engine:
+//   swing-stiffness-{single,corner,mesh}  16 params: the log structural stiffness of each of
+//       4 x 4 patches of the cloth, x in [-1, 1] -> log k in [log k_low, log k_high] affinely;
+//       a spring belongs to the patch that holds its midpoint (grid coordinates, integer
+//       arithmetic: patch column = min(3, 4 (c_i + c_j) / (2 (cols - 1))), rows alike), and every
+//       spring of a patch (structural k, shear shear_ratio k, bending bending_ratio k) scales
+//       with it. The cloth starts at rest.
+//   swing-velocity-{single,corner,mesh}   3 params: the initial velocity of every vertex (the
+//       throw), x in [-1, 1]^3 -> [v_low, v_high] per axis; every patch at param 0.
+// Losses (the seed's definitions, reference/environment-facts.md "Swing"), at the final state:
+//   single  |c - c*|, c the cloth's centre of mass (the seed's "final centre of mass to goal")
+//   corner  mean over the 4 corner vertices of |x_c - x_c*|
+//   mesh    mean over all vertices of |x_i - x_i*| (the seed's "mean vertex distance to a target
+//           mesh"; chosen here: vertex-to-same-vertex distance, no correspondence search)
+// Targets (*): the final state of the env's own rollout at its documented reference params
+// (SwingConfig::stiffness_reference, velocity_reference), simulated when the model is built, so
+// the loss is exactly 0 there (same code path, same bits). The gradient comes from the engine's
+// reverse pass (dLoss/dk per spring, dLoss/dv0 per vertex) and the chain rule to the normalized
+// params; the distance's gradient at a zero distance is taken as 0.
+//
+// No RL view (make_rl returns nullptr): the params are episode constants (stiffness, the initial
+// velocity), not per-step controls, so there is no action to take at each step; the swing itself
+// is scripted.
+#include <array>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "envs/cloth/cloth_dynamics.hpp"
+#include "envs/cloth/cloth_model.hpp"
+#include "envs/cloth/swing_config.hpp"
+#include "envs/core/env.hpp"
+#include "envs/core/lazy_model.hpp"
+#include "envs/core/registry.hpp"
+
+namespace dsb::cloth {
+
+enum class SwingParams { stiffness, velocity };
+enum class SwingLoss { single, corner, mesh };
+
+// constants of one task, built from a validated config
+struct SwingModel {
+  ClothModel cloth;
+  std::vector<Vec3> anchor_path;    // (steps + 1) x 2: the two held corners
+  int steps = 0;
+  std::vector<int> spring_patch;     // (n_springs) patch index row * 4 + col in [0, 16)
+  std::vector<double> spring_ratio;  // (n_springs) 1, shear_ratio or bending_ratio
+  double log_k_low = 0.0, log_k_high = 0.0;
+  std::array<int, 4> corners{};      // vertex indices of the 4 corners
+  std::vector<double> fixed_stiffness;  // per spring, the velocity tasks' (every patch at param 0)
+  // targets: the final state at the reference params
+  std::vector<Vec3> target;          // (n) every vertex
+  Vec3 target_com = Vec3::Zero();
+};
+
+// buffers of one rollout
+struct SwingWorkspace : Workspace {
+  ClothTape tape;
+  ClothState state;
+  std::vector<Vec3> force;         // (n) scratch
+  std::vector<double> stiffness;   // (n_springs)
+  ClothAdjoint final_bar;
+  ClothGradient grad;
+};
+
+class SwingEnv : public Env {
+ public:
+  SwingEnv(std::string name, SwingParams params, SwingLoss loss, SwingConfig cfg = {});
+  nlohmann::json config() const override;
+  std::unique_ptr<Workspace> make_workspace() const override;
+  // no per-step interface: the params are episode constants, not controls (see above)
+  std::unique_ptr<RlEnv> make_rl() const override { return nullptr; }
+
+  const SwingConfig& swing_config() const { return cfg_; }
+  SwingParams params() const { return params_; }
+  SwingLoss loss_kind() const { return loss_; }
+  const SwingModel& model() const { return model_.get(); }
+  // the reference params (normalized) that produce the targets
+  std::vector<double> reference() const;
+  // per-spring stiffness (N/m) and initial state for normalized params x
+  std::vector<double> stiffness(std::span<const double> x) const;
+  ClothState initial_state(std::span<const double> x) const;
+  ClothState final_state(std::span<const double> x) const;
+  // loss of a final state (NaN when it is not finite)
+  double final_loss(const ClothState& s) const;
+  // per step and vertex (steps x n, row-major), 1 where the floor projected the vertex's velocity
+  // (it started the step at or below the floor moving into it): tests compare these patterns to
+  // stay away from contact switches
+  std::vector<char> contact_pattern(std::span<const double> x) const;
+
+ protected:
+  double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override;
+  double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
+                           ThreadTeam& team) const override;
+
+ private:
+  void fill_stiffness(const SwingModel& m, std::span<const double> x, std::vector<double>& k) const;
+  void fill_initial_state(const SwingModel& m, std::span<const double> x, ClothState& s) const;
+
+  SwingConfig cfg_;
+  SwingParams params_;
+  SwingLoss loss_;
+  LazyModel<SwingModel> model_;
+};
+
+// family entry for the registry: swing-{stiffness,velocity}-{single,corner,mesh}
+EnvFamily swing_family();
+
+}  // namespace dsb::cloth
