@@ -4,6 +4,7 @@
 #include <mutex>
 
 #include "common/error.hpp"
+#include "envs/cloth/flip_env.hpp"
 #include "envs/cloth/swing_env.hpp"
 #include "envs/mpm/fluid_env.hpp"
 #include "envs/mpm/plb_env.hpp"
@@ -24,6 +25,7 @@ const std::vector<EnvFamily>& env_families() {
     f.push_back(pinball_family(4, 4));
     f.push_back(bounce_family());
     f.push_back(cloth::swing_family());
+    f.push_back(cloth::flip_family());
     f.push_back(mpm::fluid_family());
     f.push_back(mpm::plb_family());
     for (auto& s : synthetic_families()) f.push_back(std::move(s));
