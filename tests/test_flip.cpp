@@ -27,6 +27,7 @@
 #include "envs/core/lazy_model.hpp"
 #include "envs/core/registry.hpp"
 #include "support/harness_process.hpp"
+#include "tests/support/contact_window.hpp"
 
 namespace dsb {
 namespace {
@@ -314,18 +315,7 @@ TEST(FlipTask, OptimizersFindFlips) {
   }
 }
 
-// A point is smooth at scale h when the per-step contact pattern (pan and floor) is the same at x
-// +- h along every coordinate (no contact starts or ends inside the difference window).
-bool smooth_at(const FlipEnv& env, const std::vector<double>& x, double h) {
-  const auto pattern = env.contact_pattern(x);
-  for (int i = 0; i < env.dim(); ++i)
-    for (double s : {-h, h}) {
-      auto y = x;
-      y[i] += s;
-      if (env.contact_pattern(y) != pattern) return false;
-    }
-  return true;
-}
+using testing::smooth_at;
 
 TEST(FlipGradient, MatchesCentralDifferencesAwayFromContactSwitches) {
   // seeded points in [-0.4, 0.4]^15 (the pancake tossed about, landing in the pan or not); points

@@ -25,6 +25,7 @@
 #include "envs/core/lazy_model.hpp"
 #include "envs/core/registry.hpp"
 #include "support/harness_process.hpp"
+#include "tests/support/contact_window.hpp"
 
 namespace dsb {
 namespace {
@@ -187,18 +188,7 @@ TEST(SwingLoss, ZeroAtTheReferenceParamsOnAllSix) {
   }
 }
 
-// A point is smooth at scale h when the per-step floor contact pattern is the same at x +- h
-// along every coordinate (no contact starts or ends inside the difference window).
-bool smooth_at(const SwingEnv& env, const std::vector<double>& x, double h) {
-  const auto pattern = env.contact_pattern(x);
-  for (int i = 0; i < env.dim(); ++i)
-    for (double s : {-h, h}) {
-      auto y = x;
-      y[i] += s;
-      if (env.contact_pattern(y) != pattern) return false;
-    }
-  return true;
-}
+using testing::smooth_at;
 
 TEST(SwingGradient, MatchesCentralDifferencesAwayFromContactSwitches) {
   // 3 seeded points per task in [-0.8, 0.8]^d. Points whose difference window crosses a contact
