@@ -485,6 +485,25 @@ int contacts_of(const Problem& p) {
 // h = 1e-6) and the round-off ~1e-10 absolute against floors >= 1e-5: both well below 1e-4.
 constexpr double kGradTolerance = 1e-4;
 
+TEST(ClothTapeTest, ContactFlagsAreTheProjectionsThatActed) {
+  // the reverse pass samples a surface again only where the tape's flag says it acted: the flags
+  // must equal the independent replay above, bit k for surface k
+  const Problem p = make_problem(true, 4);
+  ClothTape tape;
+  loss_of(p, tape);
+  const auto pattern = contact_pattern(p, tape);
+  const std::size_t ns = p.model.surfaces.size();
+  int set = 0;
+  for (int t = 0; t < p.steps; ++t)
+    for (int i = 0; i < p.model.vertices(); ++i)
+      for (std::size_t k = 0; k < ns; ++k) {
+        const bool flag = (tape.contact(t)[i] >> k) & 1u;
+        ASSERT_EQ(flag, pattern[(std::size_t(t) * p.model.vertices() + i) * ns + k] == 1) << t << " " << i;
+        set += flag;
+      }
+  EXPECT_GT(set, 100);
+}
+
 TEST(ClothGradient, MatchesCentralDifferencesWithoutContact) {
   const Problem p = make_problem(false, 3);
   std::printf("[cloth] gradient, no contact:\n");

@@ -11,7 +11,8 @@ namespace dsb::cloth {
 
 namespace {
 
-constexpr int kMaxSurfaces = 8;  // contact chain per vertex kept on the stack in the reverse pass
+// contact chain per vertex kept on the stack in the reverse pass; one bit each in the tape's flags
+constexpr int kMaxSurfaces = 8;
 
 void check_inputs(const ClothModel& m, const ClothInputs& in) {
   if (in.stiffness.size() != m.springs.size())
@@ -50,7 +51,8 @@ std::vector<Vec3> anchor_path_from(const ClothModel& m, int steps,
   return path;
 }
 
-void cloth_forces(const ClothModel& m, std::span<const double> stiffness, const ClothState& s, std::span<Vec3> f) {
+void cloth_forces(const ClothModel& m, std::span<const double> stiffness, const ClothState& s, std::span<Vec3> f,
+                  std::span<SpringLength> lengths) {
   const int n = m.vertices();
   // gravity: f_i = m_i g
   for (int i = 0; i < n; ++i) f[i] = m.mass[i] * m.gravity;
@@ -59,7 +61,9 @@ void cloth_forces(const ClothModel& m, std::span<const double> stiffness, const 
     const Spring& sp = m.springs[k];
     const Vec3 d = s.x[sp.j] - s.x[sp.i];
     const double l = d.norm();
-    const Vec3 e = d / l;
+    const double inv_l = 1.0 / l;  // one division per spring, not three
+    if (!lengths.empty()) lengths[k] = {l, inv_l};
+    const Vec3 e = d * inv_l;
     const double vr = (s.v[sp.j] - s.v[sp.i]).dot(e);
     const double F = stiffness[k] * (l - sp.rest_length) + sp.damping * vr;
     f[sp.i] += F * e;
@@ -68,26 +72,32 @@ void cloth_forces(const ClothModel& m, std::span<const double> stiffness, const 
 }
 
 void cloth_step(const ClothModel& m, const ClothInputs& in, int t, ClothState& s, std::span<Vec3> force,
-                std::span<Vec3> pre_contact_v) {
+                const StepRecord& record) {
   const int n = m.vertices();
   const double dt = m.dt;
   pin_anchors(m, in, t, s);
-  cloth_forces(m, in.stiffness, s, force);
+  cloth_forces(m, in.stiffness, s, force, record.spring_length);
   // symplectic Euler velocity with global damping: v' = exp(-damping dt) (v + dt f / m)
   const double drag = dm::exp(-m.damping * dt);
   for (int i = 0; i < n; ++i) s.v[i] = drag * (s.v[i] + (dt / m.mass[i]) * force[i]);
-  if (!pre_contact_v.empty())
-    for (int i = 0; i < n; ++i) pre_contact_v[i] = s.v[i];
+  if (!record.pre_contact_v.empty())
+    for (int i = 0; i < n; ++i) record.pre_contact_v[i] = s.v[i];
   // contact at the step's start position: remove the inward normal part of the relative velocity
   const double keep = m.tangential_keep;
+  const int ns = static_cast<int>(m.surfaces.size());
   for (int i = 0; i < n; ++i) {
-    for (const auto& surface : m.surfaces) {
-      const SurfaceSample q = surface->sample(t, s.x[i]);
+    std::uint8_t acted = 0;
+    for (int k = 0; k < ns; ++k) {
+      const SurfaceSample q = m.surfaces[k]->sample(t, s.x[i]);
       if (!(q.distance <= 0.0)) continue;
       const Vec3 w = s.v[i] - q.velocity;
       const double wn = w.dot(q.normal);
-      if (wn < 0.0) s.v[i] = q.velocity + keep * (w - wn * q.normal);
+      if (wn < 0.0) {
+        s.v[i] = q.velocity + keep * (w - wn * q.normal);
+        acted |= std::uint8_t(1u << k);
+      }
     }
+    if (!record.contact.empty()) record.contact[i] = acted;
   }
   // positions with the new velocities: x' = x + dt v'
   for (int i = 0; i < n; ++i) s.x[i] += dt * s.v[i];
@@ -105,9 +115,12 @@ void ClothAdjoint::reset(int n) {
   v.assign(n, Vec3::Zero());
 }
 
-void cloth_step_adjoint(const ClothModel& m, const ClothInputs& in, int t, std::span<const Vec3> x_t,
-                        std::span<const Vec3> v_t, std::span<const Vec3> pre_contact_v, ClothAdjoint& adj,
-                        ClothGradient& grad, std::span<Vec3> f_bar) {
+void cloth_step_adjoint(const ClothModel& m, const ClothInputs& in, ClothTape& tape, int t, ClothAdjoint& adj,
+                        ClothGradient& grad) {
+  const std::span<const Vec3> x_t = tape.x(t), v_t = tape.v(t), pre_contact_v = tape.pre_contact_v(t);
+  const std::span<const std::uint8_t> contact = tape.contact(t);
+  const std::span<const SpringLength> lengths = tape.spring_length(t);
+  const std::span<Vec3> f_bar = tape.scratch();
   const int n = m.vertices();
   const double dt = m.dt;
   const std::size_t na = m.anchors.size();
@@ -126,25 +139,21 @@ void cloth_step_adjoint(const ClothModel& m, const ClothInputs& in, int t, std::
   for (int i = 0; i < n; ++i) {
     // reverse of x' = x + dt v': dL/dv' (total) = v'_bar + dt x'_bar; x_bar = x'_bar
     Vec3 ob = adj.v[i] + dt * adj.x[i];
-    // contact chain replayed from the pre-contact velocity: vin[k] enters surface k
+    // contact chain replayed from the pre-contact velocity through the surfaces that acted (the
+    // others are the identity): vin[k] enters surface k
+    const unsigned acted = contact[i];
     std::array<Vec3, kMaxSurfaces> vin;
-    std::array<bool, kMaxSurfaces> active{};
-    bool any = false;
     Vec3 vi = pre_contact_v[i];
-    for (int k = 0; k < ns; ++k) {
+    for (int k = 0; acted != 0 && k < ns; ++k) {
+      if (!(acted & (1u << k))) continue;
       vin[k] = vi;
       const SurfaceSample q = m.surfaces[k]->sample(t, x_t[i]);
-      if (!(q.distance <= 0.0)) continue;
       const Vec3 w = vi - q.velocity;
-      const double wn = w.dot(q.normal);
-      if (wn < 0.0) {
-        active[k] = any = true;
-        vi = q.velocity + keep * (w - wn * q.normal);
-      }
+      vi = q.velocity + keep * (w - w.dot(q.normal) * q.normal);
     }
     // reverse of v = u + c (w - (w . n) n), w = vin - u, surfaces in reverse order
-    for (int k = ns - 1; any && k >= 0; --k) {
-      if (!active[k]) continue;  // identity
+    for (int k = ns - 1; acted != 0 && k >= 0; --k) {
+      if (!(acted & (1u << k))) continue;
       const SurfaceSample q = m.surfaces[k]->sample(t, x_t[i]);
       const Vec3& nrm = q.normal;
       const Vec3 w = vin[k] - q.velocity;
@@ -162,31 +171,32 @@ void cloth_step_adjoint(const ClothModel& m, const ClothInputs& in, int t, std::
     adj.v[i] = drag * ob;
     f_bar[i] = (drag * dt / m.mass[i]) * ob;
   }
-  // reverse of the spring forces f_i += F e, f_j -= F e
+  // reverse of the spring forces f_i += F e, f_j -= F e, F = k (l - L0) + c vr, vr = (v_j - v_i) . e,
+  // e = d / l, l = |d|, d = x_j - x_i:
+  //   F_bar = e . g with g = f_bar_i - f_bar_j;  k_bar = F_bar (l - L0);  c_bar = F_bar vr;
+  //   v_bar_j = -v_bar_i = c F_bar e;
+  //   d_bar = (I - e e^T) e_bar / l + k F_bar e with e_bar = F g + c F_bar dv, whose part along e
+  //   is F F_bar + c F_bar vr: d_bar = (F g + c F_bar dv) / l + (k F_bar - (F F_bar + c F_bar vr) / l) e
   for (std::size_t s = 0; s < m.springs.size(); ++s) {
     const Spring& sp = m.springs[s];
     const Vec3 d = x_t[sp.j] - x_t[sp.i];
-    const double l = d.norm();
-    const Vec3 e = d / l;
+    const double l = lengths[s].length, inv_l = lengths[s].inverse;  // cloth_forces' bits
+    const Vec3 e = d * inv_l;
     const Vec3 dv = v_t[sp.j] - v_t[sp.i];
     const double vr = dv.dot(e);
     const double k = in.stiffness[s];
-    const double F = k * (l - sp.rest_length) + sp.damping * vr;
+    const double stretch = l - sp.rest_length;
+    const double F = k * stretch + sp.damping * vr;
     const Vec3 g = f_bar[sp.i] - f_bar[sp.j];
-    // F_bar = e . g, e_bar = F g
     const double F_bar = e.dot(g);
-    Vec3 e_bar = F * g;
-    // F = k (l - L0) + c vr
-    grad.stiffness[s] += F_bar * (l - sp.rest_length);
+    grad.stiffness[s] += F_bar * stretch;
     grad.damping[s] += F_bar * vr;
-    const double l_bar = F_bar * k;
     const double vr_bar = F_bar * sp.damping;
-    // vr = (v_j - v_i) . e
-    adj.v[sp.j] += vr_bar * e;
-    adj.v[sp.i] -= vr_bar * e;
-    e_bar += vr_bar * dv;
-    // e = d / l, l = |d|: d_bar = (I - e e^T) e_bar / l + l_bar e
-    const Vec3 d_bar = (e_bar - e_bar.dot(e) * e) / l + l_bar * e;
+    const double along = F_bar * k - (F * F_bar + vr_bar * vr) * inv_l;
+    const Vec3 d_bar = (F * inv_l) * g + (vr_bar * inv_l) * dv + along * e;
+    const Vec3 ve = vr_bar * e;
+    adj.v[sp.j] += ve;
+    adj.v[sp.i] -= ve;
     adj.x[sp.j] += d_bar;
     adj.x[sp.i] -= d_bar;
   }
@@ -199,8 +209,9 @@ void cloth_step_adjoint(const ClothModel& m, const ClothInputs& in, int t, std::
   }
 }
 
-void ClothTape::reset(int vertices, int steps) {
+void ClothTape::reset(int vertices, int springs, int steps) {
   n_ = vertices;
+  springs_ = springs;
   steps_ = steps;
   const std::size_t states = std::size_t(steps + 1) * vertices;
   if (x_.size() < states) {
@@ -208,6 +219,8 @@ void ClothTape::reset(int vertices, int steps) {
     v_.resize(states);
   }
   if (vp_.size() < std::size_t(steps) * vertices) vp_.resize(std::size_t(steps) * vertices);
+  if (contact_.size() < std::size_t(steps) * vertices) contact_.resize(std::size_t(steps) * vertices);
+  if (lengths_.size() < std::size_t(steps) * springs) lengths_.resize(std::size_t(steps) * springs);
   if (scratch_.size() < std::size_t(vertices)) scratch_.resize(vertices);
 }
 
@@ -217,13 +230,13 @@ ClothState cloth_rollout(const ClothModel& m, const ClothInputs& in, const Cloth
   if (in.anchor_path.size() < std::size_t(path_rows_needed(m, steps)) * m.anchors.size())
     throw std::invalid_argument("cloth: anchor_path has fewer rows than the episode reads");
   const int n = m.vertices();
-  tape.reset(n, steps);
+  tape.reset(n, static_cast<int>(m.springs.size()), steps);
   ClothState s = s0;
   for (int t = 0; t < steps; ++t) {
     pin_anchors(m, in, t, s);
     std::copy(s.x.begin(), s.x.end(), tape.x(t).begin());
     std::copy(s.v.begin(), s.v.end(), tape.v(t).begin());
-    cloth_step(m, in, t, s, tape.scratch(), tape.pre_contact_v(t));
+    cloth_step(m, in, t, s, tape.scratch(), tape.record(t));
   }
   std::copy(s.x.begin(), s.x.end(), tape.x(steps).begin());
   std::copy(s.v.begin(), s.v.end(), tape.v(steps).begin());
@@ -244,7 +257,7 @@ void cloth_rollout_adjoint(const ClothModel& m, const ClothInputs& in, ClothTape
   ClothAdjoint adj = final_bar;
   if (per_step) per_step(T, tape.x(T), tape.v(T), adj);
   for (int t = T - 1; t >= 0; --t) {
-    cloth_step_adjoint(m, in, t, tape.x(t), tape.v(t), tape.pre_contact_v(t), adj, grad, tape.scratch());
+    cloth_step_adjoint(m, in, tape, t, adj, grad);
     if (per_step) per_step(t, tape.x(t), tape.v(t), adj);
   }
   // the recorded x(0) of an anchor held in step 0 is its pinned position p(0): what the loss

@@ -20,6 +20,7 @@
 // contact switch distance = 0 or w_n = 0) it is the one-sided derivative of the branch the
 // forward pass took: the distance and the sign test only gate, so a contact that just started or
 // ended contributes nothing of the switch itself (same convention as envs/rigid/contact.hpp).
+#include <cstdint>
 #include <functional>
 #include <span>
 #include <vector>
@@ -40,14 +41,27 @@ struct ClothInputs {
 std::vector<Vec3> anchor_path_from(const ClothModel& m, int steps,
                                    const std::function<Vec3(int anchor, double t)>& position);
 
-// Spring and gravity forces f_i (n) at state s (anchors not pinned here): the forces step's.
-void cloth_forces(const ClothModel& m, std::span<const double> stiffness, const ClothState& s,
-                  std::span<Vec3> f);
+// A spring's length l = |x_j - x_i| and 1 / l at the start of a step, as the forces used them.
+struct SpringLength {
+  double length = 0.0, inverse = 0.0;
+};
 
-// One step t in place. `force` is scratch (n). When `pre_contact_v` (n) is given it receives the
-// velocity after forces and damping, before contact (what the reverse pass needs).
+// What one step leaves for the reverse pass (spans into a ClothTape; empty: not recorded).
+struct StepRecord {
+  std::span<Vec3> pre_contact_v;          // velocity after forces and damping, before contact (n)
+  std::span<std::uint8_t> contact;        // bit k where surface k projected the velocity (n)
+  std::span<SpringLength> spring_length;  // (n_springs): the reverse pass takes no square root
+};
+
+// Spring and gravity forces f_i (n) at state s (anchors not pinned here): the forces step's.
+// When `lengths` (n_springs) is given it receives each spring's length and inverse.
+void cloth_forces(const ClothModel& m, std::span<const double> stiffness, const ClothState& s,
+                  std::span<Vec3> f, std::span<SpringLength> lengths = {});
+
+// One step t in place. `force` is scratch (n); `record`, when given, receives what the reverse
+// pass needs.
 void cloth_step(const ClothModel& m, const ClothInputs& in, int t, ClothState& s, std::span<Vec3> force,
-                std::span<Vec3> pre_contact_v = {});
+                const StepRecord& record = {});
 
 // dLoss/d(state) at one time
 struct ClothAdjoint {
@@ -64,21 +78,14 @@ struct ClothGradient {
   std::vector<std::vector<double>> surface_params;  // per surface (param_count each)
 };
 
-// Reverse of step t. `x_t` are the positions the step started from after pinning, `v_t` its
-// velocities, `pre_contact_v` what cloth_step wrote there (all (n), from the tape). `adj` holds
-// dLoss/d(state after the step) on entry and dLoss/d(state before) on exit; stiffness, damping,
-// anchor path and surface gradients are added to `grad` (sized by the caller). `scratch` (n).
-void cloth_step_adjoint(const ClothModel& m, const ClothInputs& in, int t, std::span<const Vec3> x_t,
-                        std::span<const Vec3> v_t, std::span<const Vec3> pre_contact_v, ClothAdjoint& adj,
-                        ClothGradient& grad, std::span<Vec3> scratch);
-
-// The history of one episode: states 0..T and the pre-contact velocities of steps 0..T-1.
-// Memory 9 doubles = 72 bytes per vertex per step (plus one state): the 20 x 20 cm swing cloth
-// at 15 x 15 vertices over 1,000 steps holds 16 MB, so it is stored whole, not checkpointed.
+// The history of one episode: states 0..T and the StepRecord of steps 0..T-1. Memory per step
+// 73 bytes per vertex (x, v, pre-contact v, flags) and 16 per spring (length, inverse): the swing
+// cloth (81 vertices, 398 springs, 1,600 steps) holds 19.6 MB, the pancake (81, 398, 1,000
+// steps) 12.3 MB, so it is stored whole, not checkpointed (bench_cloth: peak RSS 22 and 14 MB).
 // Buffers are kept between episodes (no allocation once the size is reached).
 class ClothTape {
  public:
-  void reset(int vertices, int steps);
+  void reset(int vertices, int springs, int steps);
   int steps() const { return steps_; }
   int vertices() const { return n_; }
   std::span<Vec3> x(int t) { return {x_.data() + std::size_t(t) * n_, std::size_t(n_)}; }   // after pinning
@@ -87,17 +94,38 @@ class ClothTape {
   std::span<const Vec3> x(int t) const { return {x_.data() + std::size_t(t) * n_, std::size_t(n_)}; }
   std::span<const Vec3> v(int t) const { return {v_.data() + std::size_t(t) * n_, std::size_t(n_)}; }
   std::span<const Vec3> pre_contact_v(int t) const { return {vp_.data() + std::size_t(t) * n_, std::size_t(n_)}; }
+  // bit k set where surface k projected the vertex's velocity in step t (n)
+  std::span<std::uint8_t> contact(int t) { return {contact_.data() + std::size_t(t) * n_, std::size_t(n_)}; }
+  std::span<const std::uint8_t> contact(int t) const {
+    return {contact_.data() + std::size_t(t) * n_, std::size_t(n_)};
+  }
+  std::span<const SpringLength> spring_length(int t) const {
+    return {lengths_.data() + std::size_t(t) * springs_, std::size_t(springs_)};
+  }
+  // where step t writes its record
+  StepRecord record(int t) {
+    return {pre_contact_v(t), contact(t), {lengths_.data() + std::size_t(t) * springs_, std::size_t(springs_)}};
+  }
   std::span<Vec3> scratch() { return {scratch_.data(), scratch_.size()}; }
 
  private:
-  int n_ = 0, steps_ = 0;
+  int n_ = 0, springs_ = 0, steps_ = 0;
   std::vector<Vec3> x_, v_, vp_, scratch_;
+  std::vector<std::uint8_t> contact_;
+  std::vector<SpringLength> lengths_;
 };
 
 // Runs `steps` steps from s0, recording every state on the tape (tape.x(t), tape.v(t) is the
 // state at time t; x(t) of a held anchor is its pinned position). Returns the final state.
 ClothState cloth_rollout(const ClothModel& m, const ClothInputs& in, const ClothState& s0, int steps,
                          ClothTape& tape);
+
+// Reverse of step t of the episode on `tape` (the state it started from after pinning and its
+// record; surfaces are sampled again only where they acted). `adj` holds dLoss/d(state after the
+// step) on entry and dLoss/d(state before) on exit; stiffness, damping, anchor path and surface
+// gradients are added to `grad` (sized by the caller). Uses the tape's scratch.
+void cloth_step_adjoint(const ClothModel& m, const ClothInputs& in, ClothTape& tape, int t, ClothAdjoint& adj,
+                        ClothGradient& grad);
 
 // Runs the episode recorded on `tape` backwards. `final_bar` is dLoss/d(final state); when
 // `per_step` is given it is called at every t = T, T-1, ..., 0 with the state at time t and may

@@ -189,7 +189,7 @@ std::unique_ptr<Workspace> FlipEnv::make_workspace() const {
   ws->cloth = cloth_with_pan(m, ws->pan);
   const int n = m.cloth.vertices();
   ws->path.resize(std::size_t(m.steps) + 1);
-  ws->tape.reset(n, m.steps);
+  ws->tape.reset(n, static_cast<int>(m.cloth.springs.size()), m.steps);
   ws->force.resize(n);
   ws->final_bar.reset(n);
   return ws;
@@ -287,25 +287,11 @@ std::vector<char> FlipEnv::contact_pattern(std::span<const double> x) const {
   ws.pan->set_path(ws.path, ws.cloth.dt);
   cloth_rollout(ws.cloth, ClothInputs{m.stiffness, {}}, rest_state(ws.cloth), m.steps, ws.tape);
   const int n = ws.cloth.vertices();
+  // the surfaces that acted on each vertex in each step, as cloth_step recorded them
   std::vector<char> flags(std::size_t(m.steps) * n, 0);
-  // replay the contact chain of cloth_step from the recorded pre-contact velocities
-  const double keep = ws.cloth.tangential_keep;
   for (int t = 0; t < m.steps; ++t) {
-    const auto xt = ws.tape.x(t);
-    const auto vp = ws.tape.pre_contact_v(t);
-    for (int i = 0; i < n; ++i) {
-      Vec3 v = vp[i];
-      for (std::size_t k = 0; k < ws.cloth.surfaces.size(); ++k) {
-        const SurfaceSample q = ws.cloth.surfaces[k]->sample(t, xt[i]);
-        if (!(q.distance <= 0.0)) continue;
-        const Vec3 w = v - q.velocity;
-        const double wn = w.dot(q.normal);
-        if (wn < 0.0) {
-          v = q.velocity + keep * (w - wn * q.normal);
-          flags[std::size_t(t) * n + i] |= static_cast<char>(k + 1);
-        }
-      }
-    }
+    const auto acted = ws.tape.contact(t);
+    std::copy(acted.begin(), acted.end(), flags.begin() + std::size_t(t) * n);
   }
   return flags;
 }

@@ -87,8 +87,9 @@ class FlipEnv : public Env {
   // the unit normal (x_{row end} - x_0) x (x_{col end} - x_0) of the corners dotted with the pan's
   // axis at pose `pan`: +1 for the pancake as it starts (flat, face up), -1 flat and turned over
   double orientation(const ClothState& s, const PanPose& pan) const;
-  // per step and vertex (steps x n, row-major): 1 where the pan projected the vertex's velocity, 2
-  // the floor, 3 both, 0 neither (tests compare these patterns to stay away from contact switches)
+  // per step and vertex (steps x n, row-major), the tape's contact flags: bit 0 where the pan
+  // projected the vertex's velocity, bit 1 the floor (tests compare these patterns to stay away
+  // from contact switches)
   std::vector<char> contact_pattern(std::span<const double> x) const;
   // the RL actions (horizon x 3, row-major) that replay params x
   std::vector<double> rl_actions(std::span<const double> x) const;

@@ -166,7 +166,7 @@ std::unique_ptr<Workspace> SwingEnv::make_workspace() const {
   const SwingModel& m = model();
   auto ws = std::make_unique<SwingWorkspace>();
   const int n = m.cloth.vertices();
-  ws->tape.reset(n, m.steps);
+  ws->tape.reset(n, static_cast<int>(m.cloth.springs.size()), m.steps);
   ws->force.resize(n);
   ws->stiffness.resize(m.cloth.springs.size());
   ws->final_bar.reset(n);
@@ -242,13 +242,10 @@ std::vector<char> SwingEnv::contact_pattern(std::span<const double> x) const {
   cloth_rollout(m.cloth, ClothInputs{k, m.anchor_path}, s0, m.steps, tape);
   const int n = m.cloth.vertices();
   std::vector<char> flags(std::size_t(m.steps) * n, 0);
-  // the floor acts in step t when the step starts at or below it and the velocity after forces
-  // points into it (the only surface)
+  // the floor (the only surface) acted in step t, as cloth_step recorded it
   for (int t = 0; t < m.steps; ++t) {
-    const auto xt = tape.x(t);
-    const auto vp = tape.pre_contact_v(t);
-    for (int i = 0; i < n; ++i)
-      flags[std::size_t(t) * n + i] = xt[i].y() - cfg_.floor_height <= 0.0 && vp[i].y() < 0.0;
+    const auto acted = tape.contact(t);
+    std::copy(acted.begin(), acted.end(), flags.begin() + std::size_t(t) * n);
   }
   return flags;
 }
