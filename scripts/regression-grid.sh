@@ -2,7 +2,8 @@
 # The frozen regression grid of CI: 4 cheap envs x every optimizer x 2 seeds x 30 episodes; the
 # MPM engine's `fluid` at a 10-env-step horizon (fluid-h10, 80 substeps) x random, gd, cmaes x 2
 # seeds x 5 episodes; and two PlasticineLab tasks at 5 env steps (plb-pinch-h5, plb-writer-h5) x
-# random, gd x 2 seeds x 3 episodes.
+# random, gd x 2 seeds x 3 episodes; and two cloth tasks (swing-stiffness-corner, flip) x random,
+# gd, cmaes, nlopt-lbfgs x 2 seeds x 10 episodes.
 #   scripts/regression-grid.sh check [BUILD_DIR]       run the grid, compare with the baseline (exit 1 on any difference)
 #   scripts/regression-grid.sh regenerate [BUILD_DIR]  run the grid, rewrite data/baselines/small-grid.csv
 # A change that alters results on purpose regenerates the baseline in the same commit and says why.
@@ -22,6 +23,8 @@ trap 'rm -rf "$work"' EXIT
   --seeds 2 --budget 5 --jobs 2 --quiet --db "$work/grid.sqlite"
 "$build/bin/harness" --env plb-pinch-h5,plb-writer-h5 --optimizer random,gd \
   --seeds 2 --budget 3 --jobs 2 --quiet --db "$work/grid.sqlite"
+"$build/bin/harness" --env swing-stiffness-corner,flip --optimizer random,gd,cmaes,nlopt-lbfgs \
+  --seeds 2 --budget 10 --jobs 2 --quiet --db "$work/grid.sqlite"
 
 case $mode in
   check) exec "$build/bin/harness" check --db "$work/grid.sqlite" --baseline "$baseline" ;;
