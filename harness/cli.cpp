@@ -181,6 +181,11 @@ int harness_main(int argc, char** argv) {
   landscape->add_option("--res", ls_res, "grid points per axis, N")->required();
   landscape->add_option("--center", ls_center, "comma-separated point for the other coordinates (default 0)");
   landscape->add_option("--out", ls_out, "CSV file to write")->required();
+  GradientCheckOptions ls_check;
+  ls_check.step = 0.0;
+  landscape->add_option("--check-step", ls_check.step,
+                        "also check both gradient components against central differences with this step");
+  landscape->add_option("--tol", ls_check.tolerance, "largest accepted relative error of the check (default 1e-4)");
 
   std::vector<std::string> cc_envs;
   auto* crosscheck = app.add_subcommand("crosscheck", "in-house vs MuJoCo vs Bullet: table of deviations");
@@ -214,7 +219,9 @@ int harness_main(int argc, char** argv) {
   try {
     if (list->parsed()) return command_list();
     if (plan->parsed()) return command_plan(plan_args);
-    if (landscape->parsed()) return command_landscape(ls_env, ls_dims, ls_res, ls_center, ls_out);
+    if (landscape->parsed())
+      return command_landscape(ls_env, ls_dims, ls_res, ls_center, ls_out,
+                               landscape->count("--check-step") > 0 ? std::optional(ls_check) : std::nullopt);
     if (crosscheck->parsed()) {
       if (!crosscheck_available())
         throw UsageError("crosscheck: this build has neither MuJoCo nor Bullet (DSB_WITH_MUJOCO, DSB_WITH_BULLET)");

@@ -100,7 +100,8 @@ int command_eval(const std::string& env_name, const std::string& x_text, bool wi
 }
 
 int command_landscape(const std::string& env_name, const std::string& dims, int resolution,
-                      const std::string& center, const std::string& out_path) {
+                      const std::string& center, const std::string& out_path,
+                      const std::optional<GradientCheckOptions>& check) {
   const auto env = make_env(env_name);
   const int n = env->dim();
   const auto d = parse_number_list("--dims", dims);
@@ -109,12 +110,22 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
     throw UsageError(fmt::format("--dims: '{}' must be two different indices in 0..{}", dims, n - 1));
   if (resolution < 2 || resolution > 2000)
     throw UsageError(fmt::format("--res must be in 2..2000, got {}", resolution));
+  if (check) {
+    if (!env->differentiable()) throw UsageError("--check-step: env '" + env_name + "' has no gradient to check");
+    try {
+      check->validate();
+    } catch (const ConfigError& e) {
+      throw UsageError(std::string("--check-step/--tol: ") + e.what());
+    }
+  }
   std::vector<double> x(n, 0.0);
   if (!center.empty()) x = checked_point(*env, center, "--center");
   std::ofstream out(out_path);
   if (!out) throw UsageError("--out: cannot write '" + out_path + "'");
   const int i = static_cast<int>(d[0]), j = static_cast<int>(d[1]);
-  out << "i,j,xi,xj,loss,grad_i,grad_j\n";
+  const int slice[2] = {i, j};
+  int agreeing = 0;
+  out << "i,j,xi,xj,loss,grad_i,grad_j" << (check ? ",fd_i,fd_j,rel_err,agrees" : "") << "\n";
   std::vector<double> grad(n);
   const auto ws = env->make_workspace();  // one workspace for every grid point
   auto num = [](double v) { return std::isfinite(v) ? fmt::format("{:.17g}", v) : std::string("nan"); };
@@ -124,7 +135,17 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
       x[i] = -1.0 + 2.0 * a / (resolution - 1);
       x[j] = -1.0 + 2.0 * b / (resolution - 1);
       out << a << ',' << b << ',' << num(x[i]) << ',' << num(x[j]) << ',';
-      if (env->differentiable()) {
+      if (check) {
+        // the point's loss and gradient, and central differences along i and j (loss() path)
+        const GradientCheckResult r = check_gradient_along(*env, *ws, x, slice, *check);
+        const auto& ci = r.coordinates[0];
+        const auto& cj = r.coordinates[1];
+        const bool agrees = r.passed;
+        agreeing += agrees;
+        out << num(r.loss) << ',' << num(ci.analytic) << ',' << num(cj.analytic) << ','
+            << num(ci.differences.central) << ',' << num(cj.differences.central) << ','
+            << num(r.worst_relative_error) << ',' << (agrees ? 1 : 0) << '\n';
+      } else if (env->differentiable()) {
         const double loss = env->loss_and_grad(x, grad, *ws, serial_team());
         out << num(loss) << ',' << num(grad[i]) << ',' << num(grad[j]) << '\n';
       } else {
@@ -136,6 +157,11 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
   if (!out) throw UsageError("--out: writing '" + out_path + "' failed");
   std::cerr << fmt::format("harness: wrote {} grid points of {} (dims {}, {}) to {}\n", resolution * resolution,
                            env_name, i, j, out_path);
+  if (check)
+    std::cerr << fmt::format("harness: the gradient along dims {}, {} agrees with central differences (step {:g}, "
+                             "tolerance {:g}) at {} of {} points ({:.1f}%)\n",
+                             i, j, check->step, check->tolerance, agreeing, resolution * resolution,
+                             100.0 * agreeing / (resolution * resolution));
   return 0;
 }
 

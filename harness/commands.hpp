@@ -2,6 +2,7 @@
 // The harness's commands other than `run`: list, eval, gradcheck, landscape, check, export,
 // report. Each returns the exit code.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,8 +20,12 @@ int command_gradcheck(const std::string& env_name, const GradientSurveyOptions& 
 // Loss and the two gradient components on an N x N grid over a 2-D slice of the normalized box
 // (dims I, J from -1 to 1; other coordinates at the centre, default 0). CSV with header
 // i,j,xi,xj,loss,grad_i,grad_j and N^2 rows (gradients empty for a non-differentiable env).
+// With `check` (a differentiable env) each point's two components are also checked against
+// central differences (check_gradient_along): columns fd_i,fd_j,rel_err,agrees are added (rel_err
+// the worse of the two, agrees 1 or 0) and the share of agreeing points is printed.
 int command_landscape(const std::string& env_name, const std::string& dims, int resolution,
-                      const std::string& center, const std::string& out_path);
+                      const std::string& center, const std::string& out_path,
+                      const std::optional<GradientCheckOptions>& check = std::nullopt);
 
 // Regression gate: compares the database's result table with a baseline CSV. 0 equal, 1 any
 // difference (diff printed), 2 malformed baseline or unreadable database.

@@ -68,17 +68,22 @@ def run_report(db, out, *extra, python=(sys.executable,)):
                           capture_output=True, text=True, timeout=600)
 
 
-def write_sphere_landscape(directory, n=15):
-    """sphere on dims 0, 1 of a 2-D box: loss x0^2 + x1^2, gradient 2 x, on an n x n grid."""
-    path = os.path.join(directory, "sphere-2_0_1.csv")
+def write_sphere_landscape(directory, n=15, checked=False):
+    """sphere on dims 0, 1 of a 2-D box: loss x0^2 + x1^2, gradient 2 x, on an n x n grid.
+    checked: with the columns of `harness landscape --check-step` (sphere-2_1_0.csv), where the
+    points of the first row (a = 0) are marked as disagreeing."""
+    path = os.path.join(directory, "sphere-2_1_0.csv" if checked else "sphere-2_0_1.csv")
     with open(path, "w", newline="") as f:
         w = csv.writer(f, lineterminator="\n")
-        w.writerow(["i", "j", "xi", "xj", "loss", "grad_i", "grad_j"])
+        w.writerow(["i", "j", "xi", "xj", "loss", "grad_i", "grad_j"]
+                   + (["fd_i", "fd_j", "rel_err", "agrees"] if checked else []))
         for a in range(n):
             for b in range(n):
                 xi, xj = -1 + 2 * a / (n - 1), -1 + 2 * b / (n - 1)
-                w.writerow([0, 1, repr(xi), repr(xj), repr(xi * xi + xj * xj), repr(2 * xi),
-                            repr(2 * xj)])
+                row = [0, 1, repr(xi), repr(xj), repr(xi * xi + xj * xj), repr(2 * xi), repr(2 * xj)]
+                if checked:
+                    row += [repr(2 * xi), repr(2 * xj), "0.5" if a == 0 else "0", 0 if a == 0 else 1]
+                w.writerow(row)
     return path
 
 
@@ -127,6 +132,7 @@ class ReportCase(unittest.TestCase):
         cls.land = os.path.join(cls.tmp, "landscapes")
         os.makedirs(cls.land)
         write_sphere_landscape(cls.land)
+        write_sphere_landscape(cls.land, checked=True)
         cls.out = os.path.join(cls.tmp, "report")
         cls.proc = run_report(cls.db, cls.out, "--landscapes", cls.land, "--build-type", "TestBuild")
         if cls.proc.returncode != 0:
@@ -162,6 +168,13 @@ class ReportCase(unittest.TestCase):
 
 
 class TestReport(ReportCase):
+    def test_checked_landscape_marks_and_counts_disagreeing_points(self):
+        # sphere-2_1_0.csv: 15 of 225 points flagged as disagreeing (the first row)
+        self.assert_nonempty("landscape_sphere-2_1_0.png")
+        self.assertIn("gradient agrees with central differences at 210 of 225 points", self.html)
+        # the unchecked slice says nothing about agreement
+        self.assertEqual(self.html.count("gradient agrees with central differences at"), 1)
+
     def test_promised_files_exist(self):
         for name in ["index.html", "summary.md", "ranks.png", "ranks.csv", "ecdf.png", "ecdf.csv",
                      "significance.csv", "missing.csv", "landscape_sphere-2_0_1.png"]:

@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <sqlite3.h>
 
+#include "envs/core/gradient_check.hpp"
 #include "envs/core/registry.hpp"
 #include "harness/grid.hpp"
 #include "support/harness_process.hpp"
@@ -330,6 +331,52 @@ TEST_F(HarnessCli, LandscapeWritesTheGridWithLossAndGradient) {
   }
   EXPECT_EQ(harness("landscape --env branin --dims 0,1 --res 1 --out " + out).code, 2);
   EXPECT_EQ(harness("landscape --env branin --dims 0,1 --res 5 --center 0.1 --out " + out).code, 2);
+}
+
+TEST_F(HarnessCli, LandscapeChecksTheGradientAtEveryPoint) {
+  const std::string out = db("land_check.csv");
+  const auto r = harness("landscape --env branin --dims 0,1 --res 6 --check-step 1e-6 --out " + out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("agrees with central differences (step 1e-06, tolerance 0.0001) at 36 of 36 points"),
+            std::string::npos)
+      << r.err;
+  std::ifstream in(out);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "i,j,xi,xj,loss,grad_i,grad_j,fd_i,fd_j,rel_err,agrees");
+  const auto env = make_env("branin");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::vector<double> v;
+    for (std::string f; std::getline(s, f, ',');) v.push_back(std::stod(f));
+    ASSERT_EQ(v.size(), 11u);
+    const std::vector<double> x{v[2], v[3]};
+    std::vector<double> g(2);
+    EXPECT_EQ(v[4], env->loss_and_grad(x, g)) << line;
+    EXPECT_EQ(v[5], g[0]);
+    EXPECT_EQ(v[6], g[1]);
+    // the differences are the checker's own, and agree with branin's exact gradient
+    const auto fi = finite_differences(*env, x, 0, 1e-6);
+    const auto fj = finite_differences(*env, x, 1, 1e-6);
+    EXPECT_EQ(v[7], fi.central);
+    EXPECT_EQ(v[8], fj.central);
+    EXPECT_LE(v[9], 1e-4) << line;
+    EXPECT_EQ(v[10], 1.0);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 36);
+  // a tolerance below what central differences reach: some points no longer agree, and say so
+  const auto tight = harness("landscape --env branin --dims 0,1 --res 6 --check-step 1e-6 --tol 1e-12 --out " + out);
+  ASSERT_EQ(tight.code, 0) << tight.err;
+  EXPECT_EQ(tight.err.find("at 36 of 36"), std::string::npos) << tight.err;
+  // bad check options: one line naming the value, exit 2
+  for (const std::string& bad : {std::string("--check-step 0"), std::string("--check-step 0.5"),
+                                 std::string("--check-step 1e-6 --tol -1")}) {
+    const auto b = harness("landscape --env branin --dims 0,1 --res 3 " + bad + " --out " + out);
+    EXPECT_EQ(b.code, 2) << bad;
+    EXPECT_EQ(std::count(b.err.begin(), b.err.end(), '\n'), 1) << b.err;
+  }
 }
 
 TEST_F(HarnessCli, ShardsPartitionTheGrid) {

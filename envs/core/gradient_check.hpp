@@ -93,6 +93,12 @@ struct GradientCheckResult {
 // or outside the box, and ConfigError for invalid options.
 GradientCheckResult check_gradient(const Env& env, std::span<const double> x,
                                    const GradientCheckOptions& options = {});
+// The same check along the given coordinates only (2 size + 1 loss() calls; `coordinates` of the
+// result follow their order, worst_coordinate names the env's coordinate, max_abs_central and the
+// relative errors' floor are over these coordinates, gradient_norm is the whole gradient's), with
+// every rollout on `ws` (a 2-D landscape checks its two directions at each grid point this way).
+GradientCheckResult check_gradient_along(const Env& env, Workspace& ws, std::span<const double> x,
+                                         std::span<const int> coordinates, const GradientCheckOptions& options);
 
 struct GradientSurveyOptions {
   GradientCheckOptions check;

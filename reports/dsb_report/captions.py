@@ -40,7 +40,8 @@ LANDSCAPE = ("Colors: the loss on a 2-D slice of the normalized box through dime
              "(the other coordinates as `harness landscape` fixed them). Arrows: the descent "
              "direction (minus the gradient) on at most 20 × 20 grid points, drawn with unit "
              "length; arrow color: log10 of the gradient magnitude, so flat regions and cliffs "
-             "stand out.")
+             "stand out. Red crosses (slices made with `--check-step`): points where the "
+             "gradient disagrees with central differences of the loss.")
 
 MISSING = ("Expected grid: every (env, optimizer) pair with at least one run in the database, times "
            "seed indices 0..{max_seed}, times the budgets present for that env. Every expected run "

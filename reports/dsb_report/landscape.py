@@ -1,8 +1,11 @@
 """Loss landscapes on 2-D slices from `harness landscape` CSVs: heat map + gradient arrows.
 
-Input: DIR/<env>_<i>_<j>.csv with header i,j,xi,xj,loss,grad_i,grad_j and one row per grid point.
-Output: landscape_<env>_<i>_<j>.png. Arrows show the descent direction (minus the gradient) on at
-most MAX_ARROWS x MAX_ARROWS points, drawn with unit length and colored by log10 |gradient|.
+Input: DIR/<env>_<i>_<j>.csv with header i,j,xi,xj,loss,grad_i,grad_j and one row per grid point
+(`harness landscape --check-step H` adds fd_i,fd_j,rel_err,agrees: the gradient checked against
+central differences at every point). Output: landscape_<env>_<i>_<j>.png. Arrows show the descent
+direction (minus the gradient) on at most MAX_ARROWS x MAX_ARROWS points, drawn with unit length and
+colored by log10 |gradient|; where the file has the check, every point whose gradient disagrees with
+central differences is marked with a small red cross.
 """
 from __future__ import annotations
 
@@ -74,10 +77,21 @@ def plot(env: str, i: int, j: int, csv_path: str, out_path: str) -> str:
                       pivot="middle", scale=1.1 * max(xs.size / si, ys.size / sj), width=0.005,
                       edgecolor="black", linewidth=0.4)
         fig.colorbar(q, ax=ax, label="log10 |gradient|", pad=0.02)
+    checked = ""
+    if "agrees" in df.columns:
+        agrees = pd.to_numeric(df["agrees"], errors="coerce")
+        bad = df[agrees != 1]
+        ax.plot(bad["xi"], bad["xj"], linestyle="none", marker="x", markersize=3, color="red",
+                markeredgewidth=0.8)
+        checked = (f"gradient agrees with central differences at {int((agrees == 1).sum())} of "
+                   f"{len(df)} points")
     ax.set_xlabel(f"x[{i}] (normalized)")
     ax.set_ylabel(f"x[{j}] (normalized)")
     arrows = "arrows: −gradient (descent), unit length" if has_grad else "no gradient in file"
+    if checked:
+        arrows += f"; red ×: disagrees ({checked.split(' at ')[1]} agree)"
     ax.set_title(f"{env}: loss on the slice x[{i}], x[{j}]\n{arrows}")
     ax.set_aspect("auto")
     save(fig, out_path)
-    return f"{xs.size} x {ys.size} grid, {'with' if has_grad else 'without'} gradients"
+    return (f"{xs.size} x {ys.size} grid, {'with' if has_grad else 'without'} gradients"
+            + (f"; {checked}" if checked else ""))
