@@ -102,6 +102,7 @@ int command_eval(const std::string& env_name, const std::string& x_text, bool wi
 int command_landscape(const std::string& env_name, const std::string& dims, int resolution,
                       const std::string& center, const std::string& out_path,
                       const std::optional<GradientCheckOptions>& check) {
+  const double kAlignedCos = std::cos(25.0 * 3.14159265358979323846 / 180.0);  // 0.906
   const auto env = make_env(env_name);
   const int n = env->dim();
   const auto d = parse_number_list("--dims", dims);
@@ -124,7 +125,7 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
   if (!out) throw UsageError("--out: cannot write '" + out_path + "'");
   const int i = static_cast<int>(d[0]), j = static_cast<int>(d[1]);
   const int slice[2] = {i, j};
-  int agreeing = 0;
+  int agreeing = 0, aligned = 0, opposed = 0, compared = 0;
   out << "i,j,xi,xj,loss,grad_i,grad_j" << (check ? ",fd_i,fd_j,rel_err,agrees" : "") << "\n";
   std::vector<double> grad(n);
   const auto ws = env->make_workspace();  // one workspace for every grid point
@@ -142,6 +143,14 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
         const auto& cj = r.coordinates[1];
         const bool agrees = r.passed;
         agreeing += agrees;
+        // the slice's 2-D gradient against the differences' direction: cos of the angle between
+        const double dot = ci.analytic * ci.differences.central + cj.analytic * cj.differences.central;
+        const double norms = std::hypot(ci.analytic, cj.analytic) * std::hypot(ci.differences.central, cj.differences.central);
+        if (std::isfinite(dot) && std::isfinite(norms) && norms > 0.0) {
+          ++compared;
+          aligned += dot / norms > kAlignedCos;
+          opposed += dot < 0.0;
+        }
         out << num(r.loss) << ',' << num(ci.analytic) << ',' << num(cj.analytic) << ','
             << num(ci.differences.central) << ',' << num(cj.differences.central) << ','
             << num(r.worst_relative_error) << ',' << (agrees ? 1 : 0) << '\n';
@@ -162,6 +171,10 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
                              "tolerance {:g}) at {} of {} points ({:.1f}%)\n",
                              i, j, check->step, check->tolerance, agreeing, resolution * resolution,
                              100.0 * agreeing / (resolution * resolution));
+  if (check && compared > 0)
+    std::cerr << fmt::format("harness: its direction in the slice is within 25 degrees of the differences' at {} "
+                             "({:.1f}%) and opposed (cos < 0) at {} ({:.1f}%) of {} points with both nonzero\n",
+                             aligned, 100.0 * aligned / compared, opposed, 100.0 * opposed / compared, compared);
   return 0;
 }
 

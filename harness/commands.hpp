@@ -22,7 +22,8 @@ int command_gradcheck(const std::string& env_name, const GradientSurveyOptions& 
 // i,j,xi,xj,loss,grad_i,grad_j and N^2 rows (gradients empty for a non-differentiable env).
 // With `check` (a differentiable env) each point's two components are also checked against
 // central differences (check_gradient_along): columns fd_i,fd_j,rel_err,agrees are added (rel_err
-// the worse of the two, agrees 1 or 0) and the share of agreeing points is printed.
+// the worse of the two, agrees 1 or 0) and the share of agreeing points is printed, with how often
+// the 2-D gradient points within 25 degrees of the differences' direction and how often against it.
 int command_landscape(const std::string& env_name, const std::string& dims, int resolution,
                       const std::string& center, const std::string& out_path,
                       const std::optional<GradientCheckOptions>& check = std::nullopt);
