@@ -102,7 +102,6 @@ int command_eval(const std::string& env_name, const std::string& x_text, bool wi
 int command_landscape(const std::string& env_name, const std::string& dims, int resolution,
                       const std::string& center, const std::string& out_path,
                       const std::optional<GradientCheckOptions>& check) {
-  const double kAlignedCos = std::cos(25.0 * 3.14159265358979323846 / 180.0);  // 0.906
   const auto env = make_env(env_name);
   const int n = env->dim();
   const auto d = parse_number_list("--dims", dims);
@@ -143,13 +142,11 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
         const auto& cj = r.coordinates[1];
         const bool agrees = r.passed;
         agreeing += agrees;
-        // the slice's 2-D gradient against the differences' direction: cos of the angle between
-        const double dot = ci.analytic * ci.differences.central + cj.analytic * cj.differences.central;
-        const double norms = std::hypot(ci.analytic, cj.analytic) * std::hypot(ci.differences.central, cj.differences.central);
-        if (std::isfinite(dot) && std::isfinite(norms) && norms > 0.0) {
+        // the slice's 2-D gradient against the differences' direction
+        if (!std::isnan(r.direction_cosine)) {
           ++compared;
-          aligned += dot / norms > kAlignedCos;
-          opposed += dot < 0.0;
+          aligned += r.direction_cosine > kAlignedCosine;
+          opposed += r.direction_cosine < 0.0;
         }
         out << num(r.loss) << ',' << num(ci.analytic) << ',' << num(cj.analytic) << ','
             << num(ci.differences.central) << ',' << num(cj.differences.central) << ','

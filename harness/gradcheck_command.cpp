@@ -36,13 +36,13 @@ void print_table(const std::string& env_name, int dim, const GradientSurveyOptio
   std::cout << fmt::format("gradcheck {} (dim {}): central differences with step {}, points uniform in "
                            "[-{}, {}]^{}, seed {}\n",
                            env_name, dim, c.step, o.amplitude, o.amplitude, dim, o.seed);
-  std::cout << fmt::format("{:>5} {:>14} {:>12} {:>12} {:>12} {:>12} {:>6}  {}\n", "point", "loss", "|grad|",
-                           "max|fd|", "max abs err", "max rel err", "coord", "status");
+  std::cout << fmt::format("{:>5} {:>14} {:>12} {:>12} {:>12} {:>12} {:>6} {:>8}  {}\n", "point", "loss", "|grad|",
+                           "max|fd|", "max abs err", "max rel err", "coord", "cos", "status");
   for (int p = 0; p < s.points; ++p) {
     const auto& r = s.checks[p];
-    std::cout << fmt::format("{:>5} {:>14.6e} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e} {:>6}  {}\n", p, r.loss,
-                             r.gradient_norm, r.max_abs_central, r.worst_absolute_error, r.worst_relative_error,
-                             r.worst_coordinate, status(r));
+    std::cout << fmt::format("{:>5} {:>14.6e} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e} {:>6} {:>8.4f}  {}\n", p,
+                             r.loss, r.gradient_norm, r.max_abs_central, r.worst_absolute_error,
+                             r.worst_relative_error, r.worst_coordinate, r.direction_cosine, status(r));
   }
   const int n = s.points;
   std::cout << fmt::format("\nsummary over {} points (relative error |grad - fd| / (|fd| + {} max|fd| + {}), "
@@ -50,6 +50,12 @@ void print_table(const std::string& env_name, int dim, const GradientSurveyOptio
                            n, c.relative_floor, c.absolute_floor, c.tolerance);
   std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient agrees with central differences", s.agreeing,
                            n, percent(s.agreeing, n));
+  if (s.directed > 0) {
+    std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient within 25 degrees of differences",
+                             s.aligned, s.directed, percent(s.aligned, s.directed));
+    std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient opposed to differences (cos < 0)", s.opposed, s.directed,
+                             percent(s.opposed, s.directed));
+  }
   std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient exactly zero", s.exactly_zero, n,
                            percent(s.exactly_zero, n));
   std::cout << fmt::format("  {:<42} {:>6} of {}\n", "non-finite loss, gradient or difference", s.non_finite, n);
@@ -88,6 +94,7 @@ nlohmann::json to_json(const std::string& env_name, int dim, const GradientSurve
                       {"exactly_zero", r.exactly_zero},
                       {"bit_equal_to_differences", r.bit_equal_to_differences},
                       {"gradient_agrees", r.gradient_agrees},
+                      {"direction_cosine", number(r.direction_cosine)},
                       {"passed", r.passed}});
   }
   const auto& q = s.gradient_norm;
@@ -96,6 +103,9 @@ nlohmann::json to_json(const std::string& env_name, int dim, const GradientSurve
       {"points", n},
       {"agreeing", s.agreeing},
       {"agreeing_fraction", static_cast<double>(s.agreeing) / n},
+      {"aligned", s.aligned},
+      {"opposed", s.opposed},
+      {"directed", s.directed},
       {"exactly_zero", s.exactly_zero},
       {"exactly_zero_fraction", static_cast<double>(s.exactly_zero) / n},
       {"non_finite", s.non_finite},

@@ -114,6 +114,50 @@ TEST(GradientCheck, CorrectGradientPassesWithSmallErrors) {
   EXPECT_EQ(r.worst_relative_error, r.coordinates[r.worst_coordinate].relative_error);
 }
 
+TEST(GradientCheck, AlongChosenCoordinatesAndDirectionCosine) {
+  const std::vector<double> x = {0.3, -0.7, 0.2, 0.55};
+  // only coordinates 2 and 0, in that order; the wrong coordinate 2 is named by its env index
+  const auto env = smooth_env(/*wrong=*/true);
+  const auto ws = env.make_workspace();
+  const std::vector<int> coords = {2, 0};
+  const auto r = check_gradient_along(env, *ws, x, coords, {});
+  ASSERT_EQ(r.coordinates.size(), 2u);
+  std::vector<double> g(4);
+  smooth(x, g, true);
+  EXPECT_EQ(r.coordinates[0].analytic, g[2]);
+  EXPECT_EQ(r.coordinates[1].analytic, g[0]);
+  EXPECT_EQ(r.worst_coordinate, 2);
+  EXPECT_FALSE(r.coordinates[0].agrees);
+  EXPECT_TRUE(r.coordinates[1].agrees);
+  // cos between (1.01 g2, g0) and (g2, g0): closed form, to the differences' accuracy
+  const double a0 = g[2] / 1.01, a1 = g[0];  // the exact gradient's components (g[2] was scaled by 1.01)
+  const double cos = (1.01 * a0 * a0 + a1 * a1) / (std::hypot(1.01 * a0, a1) * std::hypot(a0, a1));
+  EXPECT_NEAR(r.direction_cosine, cos, 1e-9);
+  EXPECT_LT(r.direction_cosine, 1.0 - 1e-7);  // the 1% error tilts it by 5.7e-4 rad: 1 - cos = 1.6e-7
+
+  // a correct gradient points the differences' way (cos 1), its negative the opposite way (-1)
+  EXPECT_NEAR(check_gradient(smooth_env(), x).direction_cosine, 1.0, 1e-12);
+  FunctionEnv negated(
+      4, [](std::span<const double> y) { return smooth(y, {}); },
+      [](std::span<const double> y, std::span<double> gy) {
+        const double f = smooth(y, gy);
+        for (double& v : gy) v = -v;
+        return f;
+      });
+  EXPECT_NEAR(check_gradient(negated, x).direction_cosine, -1.0, 1e-12);
+  GradientSurveyOptions o;
+  o.points = 6;
+  o.seed = 4;
+  const auto good = survey_gradient(smooth_env(), o);
+  EXPECT_EQ(good.directed, 6);
+  EXPECT_EQ(good.aligned, 6);
+  EXPECT_EQ(good.opposed, 0);
+  const auto bad = survey_gradient(negated, o);
+  EXPECT_EQ(bad.directed, 6);
+  EXPECT_EQ(bad.aligned, 0);
+  EXPECT_EQ(bad.opposed, 6);
+}
+
 TEST(GradientCheck, WrongCoordinateFailsAndIsNamed) {
   const auto env = smooth_env(/*wrong=*/true);
   const std::vector<double> x = {0.3, -0.7, 0.2, 0.55};
@@ -380,6 +424,7 @@ TEST(HarnessGradcheck, JsonHasThePointsAndTheSummary) {
     EXPECT_EQ(q.at("worst_coordinate"), s.checks[p].worst_coordinate);
     EXPECT_EQ(q.at("gradient_norm").get<double>(), s.checks[p].gradient_norm);
     EXPECT_EQ(q.at("passed"), true);
+    EXPECT_EQ(q.at("direction_cosine").get<double>(), s.checks[p].direction_cosine);
     for (const char* key : {"value_path_loss", "value_agrees", "max_abs_central", "finite", "exactly_zero",
                             "bit_equal_to_differences", "gradient_agrees"})
       EXPECT_TRUE(q.contains(key)) << key;
@@ -388,6 +433,9 @@ TEST(HarnessGradcheck, JsonHasThePointsAndTheSummary) {
   EXPECT_EQ(summary.at("points"), 4);
   EXPECT_EQ(summary.at("agreeing"), 4);
   EXPECT_EQ(summary.at("agreeing_fraction"), 1.0);
+  EXPECT_EQ(summary.at("aligned"), 4);
+  EXPECT_EQ(summary.at("opposed"), 0);
+  EXPECT_EQ(summary.at("directed"), 4);
   EXPECT_EQ(summary.at("exactly_zero"), 0);
   EXPECT_EQ(summary.at("exactly_zero_fraction"), 0.0);
   EXPECT_EQ(summary.at("non_finite"), 0);
@@ -415,7 +463,8 @@ TEST(HarnessGradcheck, AnyFailingPointExitsOneAndTheTableHasTheSummary) {
 
   const auto table = harness("gradcheck --env sphere-2 --points 3");
   EXPECT_EQ(table.code, 0);
-  for (const char* text : {"gradient agrees with central differences", "gradient exactly zero", "|grad|",
+  for (const char* text : {"gradient agrees with central differences", "gradient within 25 degrees of differences",
+                           "gradient opposed to differences (cos < 0)", "gradient exactly zero", "|grad|",
                            "loss() != loss_and_grad()", "PASS"})
     EXPECT_NE(table.out.find(text), std::string::npos) << text << "\n" << table.out;
 

@@ -187,6 +187,14 @@ GradientCheckResult check_gradient_along(const Env& env, Workspace& ws, std::spa
       r.worst_coordinate = coordinates[k];
     }
   }
+  double dot = 0.0, analytic2 = 0.0, central2 = 0.0;
+  for (const auto& c : r.coordinates) {
+    dot += c.analytic * c.differences.central;
+    analytic2 += c.analytic * c.analytic;
+    central2 += c.differences.central * c.differences.central;
+  }
+  const double norms = std::sqrt(analytic2) * std::sqrt(central2);
+  r.direction_cosine = std::isfinite(dot) && std::isfinite(norms) && norms > 0.0 ? dot / norms : kNaN;
   r.passed = r.finite && r.value_agrees && r.gradient_agrees;
   return r;
 }
@@ -216,6 +224,11 @@ GradientSurvey survey_gradient(const Env& env, const GradientSurveyOptions& opti
     for (auto& xi : x) xi = options.amplitude * rng.uniform(-1.0, 1.0);
     auto r = check_gradient(env, x, options.check);
     s.agreeing += r.gradient_agrees;
+    if (!std::isnan(r.direction_cosine)) {
+      ++s.directed;
+      s.aligned += r.direction_cosine > kAlignedCosine;
+      s.opposed += r.direction_cosine < 0.0;
+    }
     s.exactly_zero += r.exactly_zero;
     s.non_finite += !r.finite;
     s.value_mismatches += !r.value_agrees;

@@ -32,6 +32,9 @@
 
 namespace dsb {
 
+// cos 25 degrees: the gradient "points the way the differences do" above it
+inline constexpr double kAlignedCosine = 0.90630778703665;
+
 struct GradientCheckOptions {
   // h, normalized units: the window is [x - h, x + h], shifted to [1 - 2h, 1] or [-1, -1 + 2h]
   // (a one-sided difference over the same width) where it would leave the box
@@ -83,6 +86,10 @@ struct GradientCheckResult {
   bool exactly_zero = false;   // every analytic component is 0 (and finite)
   bool bit_equal_to_differences = false;  // see the header comment; not a failure
   bool gradient_agrees = false;  // every coordinate agrees
+  // cos of the angle between the analytic gradient and the central differences over the checked
+  // coordinates: where a loss has many small jumps the two can disagree coordinate by coordinate
+  // and still point the same way (or not); NaN when either vector is zero or not finite
+  double direction_cosine = 0.0;
   bool passed = false;           // finite, value_agrees and gradient_agrees
   double seconds_loss_and_grad = 0.0;  // wall time of the loss_and_grad() call
   double seconds_per_loss = 0.0;       // mean wall time of the loss() calls
@@ -121,6 +128,9 @@ struct GradientSurvey {
   std::vector<GradientCheckResult> checks;
   int points = 0;
   int agreeing = 0;        // gradient_agrees
+  int aligned = 0;         // direction_cosine > kAlignedCosine (within 25 degrees)
+  int opposed = 0;         // direction_cosine < 0
+  int directed = 0;        // points with a direction_cosine (not NaN)
   int exactly_zero = 0;    // exactly_zero
   int non_finite = 0;      // !finite
   int value_mismatches = 0;           // !value_agrees
