@@ -7,10 +7,6 @@
 //     goal < 60 s per task), and the peak resident memory of a process that runs one.
 // Benchmarks named *Full run the 1,000-episode loops; the smoke test (filter -Full) runs the rest
 // briefly. The table printed at the end is the README's cloth table.
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -22,6 +18,7 @@
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
 #include "envs/core/registry.hpp"
+#include "tests/perf/child_peak_rss.hpp"
 #include "tests/perf/timing_reporter.hpp"
 
 namespace {
@@ -95,17 +92,7 @@ void thousand_gradients(benchmark::State& state, const std::string& env_name) {
 
 // peak RSS (MB) of a child process that builds the env and runs one gradient episode
 double child_peak_rss_mb(const std::string& env_name) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const auto env = make_env(env_name);
-    const auto x = point(env->dim());
-    std::vector<double> g(x.size());
-    _exit(std::isfinite(env->loss_and_grad(x, g)) ? 0 : 1);
-  }
-  int status = 0;
-  struct rusage ru {};
-  wait4(pid, &status, 0, &ru);
-  return ru.ru_maxrss / 1024.0;
+  return perf::gradient_episode_peak_rss_mb(env_name, [](int dim) { return point(dim); });
 }
 
 const char* kind_name(Kind k) {

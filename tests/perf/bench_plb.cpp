@@ -6,10 +6,6 @@
 //   - peak resident memory of a process that builds the task and runs one gradient episode.
 // Benchmarks named *Full* run whole episodes once; the smoke test (filter -Full) runs plb-pinch-h5.
 // The table printed at the end is the README's per-task table.
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -23,6 +19,7 @@
 #include "envs/core/registry.hpp"
 #include "envs/mpm/plb_env.hpp"
 #include "envs/mpm/plb_tasks.hpp"
+#include "tests/perf/child_peak_rss.hpp"
 #include "tests/perf/timing_reporter.hpp"
 
 namespace {
@@ -49,17 +46,7 @@ void episodes(benchmark::State& state, const std::string& env_name, bool gradien
 
 // peak RSS (MB) of a child process that builds the env and runs one gradient episode
 double child_peak_rss_mb(const std::string& env_name) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const auto env = make_env(env_name);
-    const auto x = point(env->dim());
-    std::vector<double> g(x.size());
-    _exit(std::isfinite(env->loss_and_grad(x, g)) ? 0 : 1);
-  }
-  int status = 0;
-  struct rusage ru {};
-  wait4(pid, &status, 0, &ru);
-  return ru.ru_maxrss / 1024.0;
+  return perf::gradient_episode_peak_rss_mb(env_name, [](int dim) { return point(dim); });
 }
 
 std::string full_name(const char* what, const std::string& task, int threads) {
