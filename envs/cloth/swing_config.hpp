@@ -19,8 +19,8 @@ namespace dsb::cloth {
 
 struct SwingConfig {
   // mesh: 9 x 9 vertices, 8 x 8 cells, so each of the 4 x 4 stiffness patches is 2 x 2 cells;
-  // 81 vertices x 1,600 steps cost 4.2 ms forward and 15.4 ms for a gradient episode
-  // (test_swing, one core of a loaded 2-core machine): 1,000 gradient episodes in ~15 s
+  // 81 vertices x 1,600 steps cost 4.5 ms forward and 12-14 ms for a gradient episode
+  // (bench_cloth, one core): 1,000 gradient episodes in 11-13 s
   int cols = 9, rows = 9;
   double width = 0.2, height = 0.2;  // m (the seed's 20 x 20 cm)
   double total_mass = 0.02;          // kg (500 g/m^2, a heavy towel), equal per vertex
