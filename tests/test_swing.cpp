@@ -283,16 +283,66 @@ TEST(SwingNames, BadNamesAreRefused) {
   for (const auto& name : kTasks) EXPECT_NO_THROW(make_env(name));
   const auto names = grid_env_names();
   for (const auto& name : kTasks) EXPECT_NE(std::find(names.begin(), names.end(), name), names.end()) << name;
-  EXPECT_FALSE(make_env("swing-velocity-mesh")->make_rl());
   // making an env, its info and its config build no model (the reference episode runs lazily)
   const std::int64_t before = lazy_model_builds();
   for (const auto& name : kTasks) {
     const auto env = make_env(name);
     EXPECT_TRUE(env->differentiable());
-    EXPECT_FALSE(env->supports_rl());
+    EXPECT_TRUE(env->supports_rl());
     (void)env->config();
   }
   EXPECT_EQ(lazy_model_builds(), before);
+}
+
+TEST(SwingRl, OneActionRunsTheEpisodeWithTheLossOfLoss) {
+  Rng rng(31);
+  for (const std::string name : {"swing-stiffness-corner", "swing-velocity-single"}) {
+    const auto base = make_env(name);
+    const auto& env = static_cast<const SwingEnv&>(*base);
+    const auto rl = env.make_rl();
+    ASSERT_TRUE(rl);
+    EXPECT_EQ(rl->observation_dim(), 61);
+    EXPECT_EQ(rl->action_dim(), env.dim());
+    EXPECT_EQ(rl->horizon(), 1);
+    const auto& m = env.model();
+    // before the action: the cloth at rest, the held corners at their start, time 0
+    auto o = rl->observe();
+    ASSERT_EQ(o.size(), 61u);
+    for (int k = 0; k < 9; ++k)
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(o[3 * k + c], m.cloth.rest_position[m.observed[k]](c));
+        EXPECT_EQ(o[27 + 3 * k + c], 0.0);
+      }
+    EXPECT_EQ(o[54], m.anchor_path[0].x());
+    EXPECT_EQ(o[60], 0.0);
+    for (int trial = 0; trial < 3; ++trial) {
+      std::vector<double> x(env.dim());
+      for (double& v : x) v = rng.uniform(-1.0, 1.0);
+      rl->reset();
+      EXPECT_FALSE(rl->done());
+      rl->step(x);
+      ASSERT_TRUE(rl->done());
+      // the same number as loss(), bit for bit, and the observation is the final state's
+      EXPECT_EQ(rl->final_loss(), env.loss(x)) << name;
+      const auto final_state = env.final_state(x);
+      o = rl->observe();
+      for (int k = 0; k < 9; ++k)
+        for (int c = 0; c < 3; ++c) {
+          EXPECT_EQ(o[3 * k + c], final_state.x[m.observed[k]](c));
+          EXPECT_EQ(o[27 + 3 * k + c], final_state.v[m.observed[k]](c));
+        }
+      EXPECT_EQ(o[60], 1.0);
+      // a step after done changes nothing
+      const std::vector<double> other(env.dim(), 0.9);
+      rl->step(other);
+      EXPECT_EQ(rl->final_loss(), env.loss(x));
+    }
+    // actions outside [-1, 1] are clamped to the box
+    std::vector<double> wild(env.dim(), 3.0), edge(env.dim(), 1.0);
+    rl->reset();
+    rl->step(wild);
+    EXPECT_EQ(rl->final_loss(), env.loss(edge)) << name;
+  }
 }
 
 TEST(SwingTiming, ForwardAndGradientEpisodes) {

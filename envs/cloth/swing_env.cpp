@@ -7,6 +7,7 @@
 
 #include "common/det_math.hpp"
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 
 namespace dsb::cloth {
 
@@ -89,6 +90,9 @@ SwingModel build_swing_model(const SwingConfig& cfg, SwingParams params) {
   c.validate();
   m.steps = cfg.steps();
   m.corners = {0, W - 1, (H - 1) * W, H * W - 1};
+  const int rs[3] = {0, (H - 1) / 2, H - 1}, cs[3] = {0, (W - 1) / 2, W - 1};
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) m.observed[a * 3 + b] = rs[a] * W + cs[b];
   // scripted swing of the held corners (only rows up to the release are read)
   m.anchor_path = anchor_path_from(c, m.steps, [&](int a, double t) -> Vec3 {
     const double tau = std::min(t / cfg.swing_time, 1.0);
@@ -138,13 +142,65 @@ EnvInfo swing_info(std::string name, SwingParams params, const SwingConfig& cfg)
   info.name = std::move(name);
   info.dim = param_dim(params);
   info.differentiable = true;
-  info.rl = false;
+  info.rl = true;
   // bench_cloth: a gradient episode of 81 vertices x 1,600 steps, 12-14 ms on one core (forward 4.5 ms)
   info.cost_hint_s = 0.013;
   return info;
 }
 
+// The RL view: reset shows the cloth at rest, one step runs the episode with the action as params.
+class SwingRl : public RlEnv {
+ public:
+  explicit SwingRl(const SwingEnv& env) : env_(env) {
+    ws_ = env.make_workspace();
+    reset();
+  }
+  int observation_dim() const override { return 61; }
+  int action_dim() const override { return env_.dim(); }
+  int horizon() const override { return 1; }
+  void reset() override {
+    state_.x = env_.model().cloth.rest_position;
+    state_.v.assign(state_.x.size(), Vec3::Zero());
+    done_ = false;
+    loss_ = std::numeric_limits<double>::quiet_NaN();
+  }
+  // 3 x 3 vertex positions and velocities, the held corners' positions, time (0 or 1)
+  std::vector<double> observe() const override {
+    const SwingModel& m = env_.model();
+    std::vector<double> o;
+    o.reserve(61);
+    for (int v : m.observed)
+      for (int k = 0; k < 3; ++k) o.push_back(state_.x[v](k));
+    for (int v : m.observed)
+      for (int k = 0; k < 3; ++k) o.push_back(state_.v[v](k));
+    for (const Anchor& a : m.cloth.anchors)
+      for (int k = 0; k < 3; ++k) o.push_back(state_.x[a.vertex](k));
+    o.push_back(done_ ? 1.0 : 0.0);
+    return o;
+  }
+  void step(std::span<const double> action) override {
+    if (done_) return;
+    std::vector<double> x(action.begin(), action.end());
+    for (double& v : x) v = std::clamp(v, -1.0, 1.0);
+    // the value path itself (rollout), so the loss is loss(x)'s bits
+    loss_ = env_.loss(x, *ws_, serial_team());
+    state_ = static_cast<const SwingWorkspace&>(*ws_).state;
+    done_ = true;
+  }
+  bool done() const override { return done_; }
+  double final_loss() const override { return loss_; }
+
+ private:
+  const SwingEnv& env_;
+  std::unique_ptr<Workspace> ws_;
+  ClothState state_;
+  bool done_ = false;
+  double loss_ = 0.0;
+};
+
 }  // namespace
+
+std::unique_ptr<RlEnv> SwingEnv::make_rl() const { return std::make_unique<SwingRl>(*this); }
 
 SwingEnv::SwingEnv(std::string name, SwingParams params, SwingLoss loss, SwingConfig cfg)
     : Env(swing_info(std::move(name), params, cfg)), cfg_(std::move(cfg)), params_(params), loss_(loss),

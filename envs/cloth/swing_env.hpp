@@ -19,9 +19,13 @@
 // reverse pass (dLoss/dk per spring, dLoss/dv0 per vertex) and the chain rule to the normalized
 // params; the distance's gradient at a zero distance is taken as 0.
 //
-// No RL view (make_rl returns nullptr): the params are episode constants (stiffness, the initial
-// velocity), not per-step controls, so there is no action to take at each step; the swing itself
-// is scripted.
+// RL view (make_rl): the params are episode constants (stiffness, the initial velocity), not
+// per-step controls, and the swing itself is scripted, so an RL episode is one action, the param
+// vector, after which the whole episode runs (horizon 1: for PPO/SAC a bandit over the box).
+// Observation (61): positions and velocities of a 3 x 3 subsample of the vertices (rows and
+// columns 0, (n - 1) / 2, n - 1), the two held corners' positions, and time as a fraction of the
+// episode; before the action it shows the cloth at rest (the velocity tasks' throw is the
+// action), after it the final state. final_loss() equals loss() of the action, bit for bit.
 #include <array>
 #include <memory>
 #include <span>
@@ -50,6 +54,7 @@ struct SwingModel {
   double log_k_low = 0.0, log_k_high = 0.0;
   std::array<int, 4> corners{};      // vertex indices of the 4 corners
   std::vector<double> fixed_stiffness;  // per spring, the velocity tasks' (every patch at param 0)
+  std::array<int, 9> observed{};     // the RL view's 3 x 3 subsample
   // targets: the final state at the reference params
   std::vector<Vec3> target;          // (n) every vertex
   Vec3 target_com = Vec3::Zero();
@@ -70,8 +75,8 @@ class SwingEnv : public Env {
   SwingEnv(std::string name, SwingParams params, SwingLoss loss, SwingConfig cfg = {});
   nlohmann::json config() const override;
   std::unique_ptr<Workspace> make_workspace() const override;
-  // no per-step interface: the params are episode constants, not controls (see above)
-  std::unique_ptr<RlEnv> make_rl() const override { return nullptr; }
+  // one action per episode: the params (see above)
+  std::unique_ptr<RlEnv> make_rl() const override;
 
   const SwingConfig& swing_config() const { return cfg_; }
   SwingParams params() const { return params_; }
