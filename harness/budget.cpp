@@ -1,5 +1,6 @@
 #include "harness/budget.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -131,6 +132,57 @@ void BudgetedObjective::values(std::span<const double> xs, std::span<double> out
   }
   if (bad_point) std::rethrow_exception(bad_point);
   if (n < out.size()) throw BudgetExhausted{};
+}
+
+RlEnv& BudgetedObjective::rl_env() {
+  if (!env_.supports_rl()) throw std::logic_error("env '" + env_.name() + "' has no RL view");
+  if (!rl_) rl_ = env_.make_rl();
+  return *rl_;
+}
+
+RlSpec BudgetedObjective::rl_spec() const {
+  auto& self = const_cast<BudgetedObjective&>(*this);  // the view is made on first use
+  const RlEnv& rl = self.rl_env();
+  const int repeat = rl.action_repeat();
+  return {rl.observation_dim(), rl.action_dim(), repeat, (rl.horizon() + repeat - 1) / repeat};
+}
+
+void BudgetedObjective::write_observation(std::span<double> observation) const {
+  const std::vector<double> o = rl_->observe();
+  if (observation.size() != o.size())
+    throw std::logic_error("observation buffer has " + std::to_string(observation.size()) + " values, the env " +
+                           std::to_string(o.size()));
+  std::copy(o.begin(), o.end(), observation.begin());
+}
+
+void BudgetedObjective::rl_reset(std::span<double> observation) {
+  RlEnv& rl = rl_env();
+  if (rl_open_) throw std::logic_error("rl_reset while an episode is open: finish it first (it is recorded)");
+  if (used() >= budget_) throw BudgetExhausted{};
+  rl.reset();
+  rl_open_ = true;
+  rl_start_ = std::chrono::steady_clock::now();
+  write_observation(observation);
+}
+
+RlStep BudgetedObjective::rl_step(std::span<const double> action, std::span<double> observation) {
+  RlEnv& rl = rl_env();
+  if (!rl_open_) throw std::logic_error("rl_step without an open episode (call rl_reset first)");
+  if (static_cast<int>(action.size()) != rl.action_dim())
+    throw std::logic_error("optimizer gave an action of size " + std::to_string(action.size()) + " on env '" +
+                           env_.name() + "' with " + std::to_string(rl.action_dim()) + " actions");
+  for (std::size_t i = 0; i < action.size(); ++i)
+    if (!(action[i] >= -1.0 && action[i] <= 1.0))
+      throw std::logic_error("optimizer gave action[" + std::to_string(i) + "] = " + std::to_string(action[i]) +
+                             " outside [-1, 1]");
+  // one decision: the action held for action_repeat env steps, or until the episode ends
+  for (int k = 0; k < rl.action_repeat() && !rl.done(); ++k) rl.step(action);
+  write_observation(observation);
+  if (!rl.done()) return {false, 0.0};
+  rl_open_ = false;
+  const double loss = record({}, rl.final_loss(), false, seconds_since(rl_start_),
+                             std::numeric_limits<double>::quiet_NaN());
+  return {true, loss};
 }
 
 nlohmann::json BudgetedObjective::diagnostics() const {

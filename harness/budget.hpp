@@ -33,6 +33,10 @@ class BudgetedObjective : public Objective {
   double value(std::span<const double> x) override;
   double value_and_grad(std::span<const double> x, std::span<double> grad) override;
   void values(std::span<const double> xs, std::span<double> out) override;
+  bool has_rl() const override { return env_.supports_rl(); }
+  RlSpec rl_spec() const override;
+  void rl_reset(std::span<double> observation) override;
+  RlStep rl_step(std::span<const double> action, std::span<double> observation) override;
 
   const std::vector<EvalRecord>& evals() const { return evals_; }
   double best_loss() const { return best_; }  // NaN while no episode succeeded
@@ -59,6 +63,12 @@ class BudgetedObjective : public Objective {
   std::vector<double> best_x_;
   std::int64_t failed_ = 0;
   std::vector<double> grad_norms_;  // |dLoss/dx| of every gradient episode that did not fail
+  // RL: the env's per-step view (made on first use), the open episode's start and env steps
+  RlEnv& rl_env();
+  void write_observation(std::span<double> observation) const;
+  std::unique_ptr<RlEnv> rl_;
+  bool rl_open_ = false;
+  std::chrono::steady_clock::time_point rl_start_{};
 };
 
 }  // namespace dsb

@@ -41,21 +41,22 @@ std::vector<double> parse_number_list(const std::string& option, const std::stri
 }
 
 int command_list() {
-  std::cout << fmt::format("{:<16} {:>5} {:>14} {:>3}  {}\n", "env", "dim", "differentiable", "rl",
+  std::cout << fmt::format("{:<22} {:>5} {:>14} {:>3}  {}\n", "env", "dim", "differentiable", "rl",
                            "description");
   for (const auto& family : env_families()) {
     for (const auto& name : family.grid_names) {
       const EnvInfo& info = shared_env(name)->info();  // metadata only: no model is built
-      std::cout << fmt::format("{:<16} {:>5} {:>14} {:>3}  {}\n", name, info.dim,
+      std::cout << fmt::format("{:<22} {:>5} {:>14} {:>3}  {}\n", name, info.dim,
                                info.differentiable ? "yes" : "no", info.rl ? "yes" : "no",
                                family.pattern == name ? family.description
                                                       : family.pattern + ": " + family.description);
     }
   }
-  std::cout << "\n" << fmt::format("{:<16} {:>14}  {}\n", "optimizer", "needs gradient", "description");
+  std::cout << "\n"
+            << fmt::format("{:<22} {:>14} {:>8}  {}\n", "optimizer", "needs gradient", "needs rl", "description");
   for (const auto& e : optimizer_entries())
-    std::cout << fmt::format("{:<16} {:>14}  {}\n", e.name, e.needs_gradient ? "yes" : "no",
-                             e.description);
+    std::cout << fmt::format("{:<22} {:>14} {:>8}  {}\n", e.name, e.needs_gradient ? "yes" : "no",
+                             e.needs_rl ? "yes" : "no", e.description);
   return 0;
 }
 

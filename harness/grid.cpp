@@ -37,10 +37,12 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
 
   // validate every name before anything runs; duplicates are a user error too
   std::set<std::string> seen;
-  std::vector<bool> differentiable;
+  std::vector<bool> differentiable, rl;
   for (const auto& name : envs) {
     if (!seen.insert("env:" + name).second) throw UsageError("env '" + name + "' given twice");
-    differentiable.push_back(make_env(name)->differentiable());
+    const auto env = make_env(name);
+    differentiable.push_back(env->differentiable());
+    rl.push_back(env->supports_rl());
   }
   for (const auto& name : optimizers) {
     if (!seen.insert("opt:" + name).second) throw UsageError("optimizer '" + name + "' given twice");
@@ -55,6 +57,12 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
         if (envs_explicit && opts_explicit)
           throw UsageError("optimizer '" + opt + "' needs gradients; env '" + envs[e] +
                            "' is not differentiable");
+        continue;
+      }
+      if (optimizer_entry(opt).needs_rl && !rl[e]) {
+        if (envs_explicit && opts_explicit)
+          throw UsageError("optimizer '" + opt + "' needs an RL view; env '" + envs[e] +
+                           "' has none (see `harness list`)");
         continue;
       }
       for (int s = 0; s < req.seeds; ++s, ++index) {

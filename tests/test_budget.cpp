@@ -189,3 +189,71 @@ TEST(ExecuteRun, RunsAreBitIdenticalForAnyTeamSize) {
 
 }  // namespace
 }  // namespace dsb
+
+namespace dsb {
+namespace {
+
+// an RL episode through the budget: decisions of action_repeat env steps, recorded when done
+TEST(BudgetRl, EpisodesAreRecordedWithTheEnvsFinalLossAndCountAgainstTheBudget) {
+  for (const std::string name : {"cartpole1", "flip"}) {
+    const auto env = make_env(name);
+    BudgetedObjective f(*env, 3);
+    ASSERT_TRUE(f.has_rl());
+    const RlSpec spec = f.rl_spec();
+    const auto direct = env->make_rl();
+    EXPECT_EQ(spec.observation_dim, direct->observation_dim());
+    EXPECT_EQ(spec.action_dim, direct->action_dim());
+    EXPECT_EQ(spec.action_repeat, name == "cartpole1" ? 1 : 5);  // the seed's action repeats
+    EXPECT_EQ(spec.decisions, (direct->horizon() + spec.action_repeat - 1) / spec.action_repeat);
+    std::vector<double> obs(spec.observation_dim), action(spec.action_dim);
+    Rng rng(5);
+    for (int episode = 0; episode < 3; ++episode) {
+      f.rl_reset(obs);
+      direct->reset();
+      EXPECT_EQ(obs, direct->observe());
+      RlStep r;
+      int decisions = 0;
+      while (!r.done) {
+        for (double& a : action) a = rng.uniform(-1.0, 1.0);
+        r = f.rl_step(action, obs);
+        for (int k = 0; k < spec.action_repeat && !direct->done(); ++k) direct->step(action);
+        EXPECT_EQ(obs, direct->observe());
+        ++decisions;
+        ASSERT_LE(decisions, spec.decisions);
+      }
+      EXPECT_EQ(decisions, spec.decisions) << name;
+      EXPECT_EQ(r.loss, direct->final_loss()) << name;  // finite here: recorded as is
+      ASSERT_EQ(f.used(), episode + 1);
+      EXPECT_EQ(f.evals().back().loss, r.loss);
+      EXPECT_FALSE(f.evals().back().used_grad);
+    }
+    // the budget is spent: no fourth episode, and nothing more is recorded
+    EXPECT_THROW(f.rl_reset(obs), BudgetExhausted);
+    EXPECT_EQ(f.used(), 3);
+  }
+}
+
+TEST(BudgetRl, EveryStartedEpisodeIsFinishedAndActionsAreChecked) {
+  const auto env = make_env("cartpole1");
+  BudgetedObjective f(*env, 5);
+  const RlSpec spec = f.rl_spec();
+  std::vector<double> obs(spec.observation_dim), action(spec.action_dim, 0.0);
+  EXPECT_THROW(f.rl_step(action, obs), std::logic_error);  // no open episode
+  f.rl_reset(obs);
+  f.rl_step(action, obs);
+  // no restart mid-episode: the steps taken so far would be information nobody paid for
+  EXPECT_THROW(f.rl_reset(obs), std::logic_error);
+  std::vector<double> outside(spec.action_dim, 0.0), wrong(spec.action_dim + 1, 0.0);
+  outside[1] = 1.5;
+  EXPECT_THROW(f.rl_step(outside, obs), std::logic_error);
+  EXPECT_THROW(f.rl_step(wrong, obs), std::logic_error);
+  EXPECT_EQ(f.used(), 0);
+  // an env without an RL view
+  const auto sphere = make_env("sphere-10");
+  BudgetedObjective g(*sphere, 5);
+  EXPECT_FALSE(g.has_rl());
+  EXPECT_THROW(g.rl_reset(obs), std::logic_error);
+}
+
+}  // namespace
+}  // namespace dsb

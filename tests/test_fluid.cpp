@@ -138,7 +138,7 @@ class FluidHarness : public ::testing::Test {
 TEST_F(FluidHarness, ListEvalAndAGridOfCmaesAndGd) {
   auto r = testing::run_harness(dir_, "list");
   ASSERT_EQ(r.code, 0);
-  EXPECT_NE(r.out.find("fluid               10            yes yes"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("fluid                     10            yes yes"), std::string::npos) << r.out;
 
   r = testing::run_harness(dir_, "eval --env fluid --x 0.5,-1,0.6,-1,0.5,0.2,-0.3,1,-0.3,1 --grad");
   ASSERT_EQ(r.code, 0) << r.err;

@@ -182,7 +182,7 @@ TEST(Plb, BadNamesAreRefused) {
 // the task's row of `harness list`: name, dim, differentiable, rl
 std::string fmt_line(const Expected& e) {
   char buf[80];
-  std::snprintf(buf, sizeof buf, "%-16s %5d %14s %3s", (std::string("plb-") + e.task).c_str(), e.dim, "yes", "yes");
+  std::snprintf(buf, sizeof buf, "%-22s %5d %14s %3s", (std::string("plb-") + e.task).c_str(), e.dim, "yes", "yes");
   return buf;
 }
 

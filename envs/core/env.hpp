@@ -41,6 +41,8 @@ class RlEnv {
   virtual int observation_dim() const = 0;
   virtual int action_dim() const = 0;   // actions live in [-1, 1]^action_dim
   virtual int horizon() const = 0;      // steps per episode
+  // env steps an RL agent's action is held for (the seed's action repeat: 5, the cartpoles 1)
+  virtual int action_repeat() const { return 5; }
   virtual void reset() = 0;
   virtual std::vector<double> observe() const = 0;
   virtual void step(std::span<const double> action) = 0;

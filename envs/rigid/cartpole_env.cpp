@@ -137,6 +137,8 @@ class CartpoleRl : public RlEnv {
   int observation_dim() const override { return 3 + 2 * env_.model().n; }
   int action_dim() const override { return 1 + env_.model().n; }
   int horizon() const override { return env_.cartpole_config().steps; }
+  // the seed: "in cartpole, as other methods take actions once per timestep, action repeat is 1"
+  int action_repeat() const override { return 1; }
   void reset() override {
     state_ = cartpole_initial_state(env_.model(), env_.cartpole_config());
     t_ = 0;

@@ -3,12 +3,31 @@
 // owns the implementation (counting, recording, stopping); optimizers only call it.
 #include <cstdint>
 #include <span>
+#include <stdexcept>
 
 namespace dsb {
 
 // Thrown by an Objective when an optimizer asks for an episode after the budget is spent. The
 // runner catches it and ends the run normally; optimizers let it pass through.
 struct BudgetExhausted {};
+
+// The per-step view of an RL-capable env, as an RL optimizer sees it: one decision applies its
+// action for action_repeat env steps (the seed: 1 on the cartpoles, 5 elsewhere; the last
+// decision may cover fewer), so an episode has at most `decisions` of them.
+struct RlSpec {
+  int observation_dim = 0;
+  int action_dim = 0;       // actions in [-1, 1]^action_dim
+  int action_repeat = 1;    // env steps per decision
+  int decisions = 0;        // ceil(env horizon / action_repeat)
+};
+
+// What one decision returns. When `done`, the episode has been recorded as one budget unit and
+// `loss` is its final loss (+infinity for a failed episode, as value() gives); the observation is
+// the terminal one (what a time-limit bootstrap needs).
+struct RlStep {
+  bool done = false;
+  double loss = 0.0;
+};
 
 class Objective {
  public:
@@ -33,6 +52,19 @@ class Objective {
   virtual void values(std::span<const double> xs, std::span<double> out) {
     const std::size_t d = static_cast<std::size_t>(dim());
     for (std::size_t i = 0; i < out.size(); ++i) out[i] = value(xs.subspan(i * d, d));
+  }
+
+  // RL episodes, only when has_rl(): the same budget, one unit per finished episode, recorded
+  // with its final loss like any other. rl_reset() starts an episode and writes the first
+  // observation; it throws BudgetExhausted when no episode is left, and std::logic_error while an
+  // episode is still open (every started episode runs to its end and is paid for: no optimizer
+  // learns from steps that were never recorded). rl_step() applies one decision (action in the
+  // box, checked) and writes the next observation.
+  virtual bool has_rl() const { return false; }
+  virtual RlSpec rl_spec() const { throw std::logic_error("objective has no RL view"); }
+  virtual void rl_reset(std::span<double> /*observation*/) { throw std::logic_error("objective has no RL view"); }
+  virtual RlStep rl_step(std::span<const double> /*action*/, std::span<double> /*observation*/) {
+    throw std::logic_error("objective has no RL view");
   }
 };
 

@@ -14,6 +14,7 @@ struct OptimizerEntry {
   std::string description;
   bool needs_gradient;
   std::function<std::unique_ptr<Optimizer>()> make;
+  bool needs_rl = false;  // drives the env's per-step view (Objective::rl_*): paired only with RL envs
 };
 
 const std::vector<OptimizerEntry>& optimizer_entries();
