@@ -12,6 +12,7 @@
 #include "harness/budget.hpp"
 #include "harness/runner.hpp"
 #include "optimizers/core/registry.hpp"
+#include "tests/support/reach_env.hpp"
 
 namespace dsb {
 namespace {
@@ -231,6 +232,25 @@ TEST(BudgetRl, EpisodesAreRecordedWithTheEnvsFinalLossAndCountAgainstTheBudget) 
     EXPECT_THROW(f.rl_reset(obs), BudgetExhausted);
     EXPECT_EQ(f.used(), 3);
   }
+}
+
+TEST(BudgetRl, TheTestReachEnvsLossIsItsRlEpisode) {
+  testing::ReachEnv env;
+  BudgetedObjective f(env, 4);
+  const RlSpec spec = f.rl_spec();
+  EXPECT_EQ(spec.decisions, 20);
+  std::vector<double> obs(2), a(1), x(20);
+  Rng rng(2);
+  for (int e = 0; e < 4; ++e) {
+    f.rl_reset(obs);
+    RlStep r;
+    for (int t = 0; !r.done; ++t) {
+      a[0] = x[t] = rng.uniform(-1.0, 1.0);
+      r = f.rl_step(a, obs);
+    }
+    EXPECT_EQ(r.loss, env.loss(x));
+  }
+  EXPECT_LT(env.loss(std::vector<double>(20, 0.5)), 1e-15);  // a = 0.5 throughout reaches the target (round-off: 2.2e-16)
 }
 
 TEST(BudgetRl, EveryStartedEpisodeIsFinishedAndActionsAreChecked) {
