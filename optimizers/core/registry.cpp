@@ -7,6 +7,7 @@
 #include "optimizers/gd.hpp"
 #include "optimizers/nlopt_adapters.hpp"
 #include "optimizers/random_search.hpp"
+#include "optimizers/rl/ppo.hpp"
 
 namespace dsb {
 
@@ -31,6 +32,8 @@ const std::vector<OptimizerEntry>& optimizer_entries() {
        [] { return make_nlopt_direct_l(); }},
       {"nlopt-crs2", "NLopt GN_CRS2_LM, restarts with a new random population", false,
        [] { return make_nlopt_crs2(); }},
+      {"ppo", "PPO (Stable-Baselines3 defaults, 3 x 64 tanh MLPs), sparse reward -loss; RL envs only", false,
+       [] { return make_ppo(); }, true},
   };
   return entries;
 }
