@@ -4,7 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <vector>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -15,6 +18,7 @@
 #include "optimizers/core/registry.hpp"
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/ppo.hpp"
+#include "support/harness_process.hpp"
 #include "tests/support/reach_env.hpp"
 
 namespace dsb {
@@ -192,6 +196,35 @@ TEST(PpoRuns, ExactBudgetAndIdenticalReruns) {
   std::vector<double> l3;
   best_of(*env, 25, "ppo", 4, nullptr, &l3);
   EXPECT_NE(l1, l3);
+}
+
+TEST(PpoHarness, SameResultsForAnyJobsAndPairedOnlyWithRlEnvs) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("dsb_ppo_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::string csv[2];
+  for (int jobs : {1, 2}) {
+    const std::string db = (dir / ("j" + std::to_string(jobs) + ".sqlite")).string();
+    auto r = testing::run_harness(dir, "--env cartpole1,flip --optimizer ppo --seeds 2 --budget 12 --quiet --jobs " +
+                                           std::to_string(jobs) + " --db " + db);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string out = (dir / ("j" + std::to_string(jobs) + ".csv")).string();
+    ASSERT_EQ(testing::run_harness(dir, "export --db " + db + " --out " + out).code, 0);
+    csv[jobs - 1] = testing::read_file(out);
+  }
+  EXPECT_EQ(csv[0], csv[1]);
+  EXPECT_EQ(std::count(csv[0].begin(), csv[0].end(), '\n'), 1 + 2 * 2 * 12);  // header + every episode
+  // --all pairs ppo only with RL envs; an explicit pair with a non-RL env is a usage error
+  auto plan = testing::run_harness(dir, "plan --env sphere-10,cartpole1 --all --seeds 1");
+  ASSERT_EQ(plan.code, 0) << plan.err;
+  // sphere-10 x the 10 non-RL optimizers + cartpole1 x all 11
+  EXPECT_NE((plan.out + plan.err).find("21 runs"), std::string::npos) << plan.out << plan.err;
+  auto bad = testing::run_harness(dir, "--env sphere-10 --optimizer ppo --seeds 1 --budget 2 --db " +
+                                           (dir / "bad.sqlite").string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("needs an RL view"), std::string::npos) << bad.err;
+  fs::remove_all(dir);
 }
 
 TEST(PpoConfigTest, InvalidFieldsAreNamed) {

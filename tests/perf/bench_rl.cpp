@@ -1,0 +1,130 @@
+// The RL learners' cost per decision against the env step they drive (cartpole3: the cheapest
+// simulator step we have, 0.13 us), measured in the same run:
+//   - the env: one RlEnv::step of cartpole3 (the peer);
+//   - ppo, where the time goes: acting (policy and value forward for one observation, sampling,
+//     log-probability) and one minibatch update (loss and gradient on 64 decisions, gradient clip,
+//     Adam), amortised per decision over a rollout (n_epochs x n_steps / batch_size minibatches
+//     per n_steps decisions);
+//   - ppo end to end: a run of 21 cartpole3 episodes (2,100 decisions, one update) through the
+//     budgeted objective, minus 2,100 env steps.
+// The table printed at the end is the README's.
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "common/rng.hpp"
+#include "envs/core/registry.hpp"
+#include "harness/budget.hpp"
+#include "optimizers/rl/gaussian.hpp"
+#include "optimizers/rl/network_adam.hpp"
+#include "optimizers/rl/ppo.hpp"
+#include "tests/perf/timing_reporter.hpp"
+
+namespace {
+
+using namespace dsb;
+
+constexpr int kObs = 9, kAct = 4;  // cartpole3's RL view
+
+void BM_Cartpole3RlStep(benchmark::State& state) {
+  const auto env = make_env("cartpole3");
+  auto rl = env->make_rl();
+  std::vector<double> a(rl->action_dim(), 0.1);
+  rl->reset();
+  for (auto _ : state) {
+    if (rl->done()) rl->reset();
+    rl->step(a);
+  }
+}
+BENCHMARK(BM_Cartpole3RlStep);
+
+void BM_PpoAct(benchmark::State& state) {
+  PpoConfig cfg;
+  PpoNetworks nets(kObs, kAct, cfg);
+  Rng rng(1);
+  nets.init(cfg, rng);
+  std::vector<double> obs(kObs, 0.1), a(kAct);
+  for (auto _ : state) {
+    const Eigen::Map<const Eigen::VectorXd> o(obs.data(), kObs);
+    const Eigen::VectorXd mu = nets.policy.forward_one(o);
+    benchmark::DoNotOptimize(nets.value.forward_one(o)(0));
+    diag_gaussian_sample(std::span<const double>(mu.data(), kAct), nets.log_std, rng, a);
+    benchmark::DoNotOptimize(diag_gaussian_log_prob(a, std::span<const double>(mu.data(), kAct), nets.log_std));
+  }
+}
+BENCHMARK(BM_PpoAct);
+
+void BM_PpoMinibatch(benchmark::State& state) {
+  PpoConfig cfg;
+  PpoNetworks nets(kObs, kAct, cfg);
+  Rng rng(2);
+  nets.init(cfg, rng);
+  const int B = cfg.batch_size;
+  PpoBatch batch;
+  batch.observations = Eigen::MatrixXd::Random(kObs, B);
+  batch.actions = Eigen::MatrixXd::Random(kAct, B);
+  batch.old_log_prob.assign(B, -4.0);
+  batch.advantages.resize(B);
+  batch.returns.resize(B);
+  for (int i = 0; i < B; ++i) batch.advantages[i] = batch.returns[i] = rng.uniform(-1.0, 1.0);
+  AdamConfig adam{cfg.learning_rate, 0.9, 0.999, cfg.adam_eps};
+  const std::size_t np = nets.policy.param_count(), nv = nets.value.param_count();
+  NetworkAdam a_pi(adam, np), a_v(adam, nv), a_ls(adam, kAct);
+  std::vector<double> grad(nets.param_count());
+  for (auto _ : state) {
+    std::fill(grad.begin(), grad.end(), 0.0);
+    benchmark::DoNotOptimize(ppo_loss(nets, batch, cfg, grad).loss);
+    clip_grad_norm(grad, cfg.max_grad_norm);
+    const std::span<double> g(grad);
+    a_pi.step(nets.policy.params(), g.subspan(0, np));
+    a_v.step(nets.value.params(), g.subspan(np, nv));
+    a_ls.step(nets.log_std, g.subspan(np + nv));
+  }
+}
+BENCHMARK(BM_PpoMinibatch);
+
+void BM_PpoRunCartpole3(benchmark::State& state) {
+  const auto env = make_env("cartpole3");
+  for (auto _ : state) {
+    BudgetedObjective f(*env, 21);
+    auto opt = make_ppo();
+    Rng rng(3);
+    try {
+      opt->minimize(f, rng);
+    } catch (const BudgetExhausted&) {
+    }
+    benchmark::DoNotOptimize(f.best_loss());
+  }
+}
+BENCHMARK(BM_PpoRunCartpole3)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  perf::TimingReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  const double env = reporter.seconds("BM_Cartpole3RlStep");
+  const double act = reporter.seconds("BM_PpoAct");
+  const double mb = reporter.seconds("BM_PpoMinibatch");
+  const double run = reporter.seconds("BM_PpoRunCartpole3");
+  if (env <= 0.0 || act <= 0.0 || mb <= 0.0) return 0;
+  const PpoConfig cfg;
+  const double minibatches = cfg.n_epochs * ((cfg.n_steps + cfg.batch_size - 1) / cfg.batch_size);
+  const double update = mb * minibatches / cfg.n_steps;
+  std::printf("\n| per decision on cartpole3 | us | x env step |\n|---|---|---|\n");
+  std::printf("| env step (peer) | %.3f | 1 |\n", 1e6 * env);
+  std::printf("| ppo acting (2 forward passes, sample, log-prob) | %.2f | %.0f |\n", 1e6 * act, act / env);
+  std::printf("| ppo update, amortised (%.0f minibatches of %d per %d decisions; one minibatch %.0f us) | %.2f | %.0f |\n",
+              minibatches, cfg.batch_size, cfg.n_steps, 1e6 * mb, 1e6 * update, update / env);
+  std::printf("| ppo learner in all | %.2f | %.0f |\n", 1e6 * (act + update), (act + update) / env);
+  if (run > 0.0) {
+    const double learner = (run - 2100 * env) / 2100;
+    std::printf("| ppo end to end: a 21-episode run (2,100 decisions, one update) minus its env steps | %.2f | %.0f |\n",
+                1e6 * learner, learner / env);
+  }
+  return 0;
+}
