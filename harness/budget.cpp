@@ -178,10 +178,15 @@ RlStep BudgetedObjective::rl_step(std::span<const double> action, std::span<doub
   // one decision: the action held for action_repeat env steps, or until the episode ends
   for (int k = 0; k < rl.action_repeat() && !rl.done(); ++k) rl.step(action);
   write_observation(observation);
-  if (!rl.done()) return {false, 0.0};
+  // a simulation that blew up (a non-finite observation) ends its episode as a failed one: the
+  // optimizer never sees NaN, and nothing after the blow-up is simulated
+  bool blown_up = false;
+  for (const double o : observation) blown_up = blown_up || !std::isfinite(o);
+  if (blown_up) std::fill(observation.begin(), observation.end(), 0.0);
+  if (!rl.done() && !blown_up) return {false, 0.0};
   rl_open_ = false;
-  const double loss = record({}, rl.final_loss(), false, seconds_since(rl_start_),
-                             std::numeric_limits<double>::quiet_NaN());
+  const double loss = record({}, blown_up ? std::numeric_limits<double>::quiet_NaN() : rl.final_loss(), false,
+                             seconds_since(rl_start_), std::numeric_limits<double>::quiet_NaN());
   return {true, loss};
 }
 

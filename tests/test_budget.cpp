@@ -253,6 +253,61 @@ TEST(BudgetRl, TheTestReachEnvsLossIsItsRlEpisode) {
   EXPECT_LT(env.loss(std::vector<double>(20, 0.5)), 1e-15);  // a = 0.5 throughout reaches the target (round-off: 2.2e-16)
 }
 
+// an RL env whose simulation blows up at its third step (NaN state) and never says done early
+class BlowsUpEnv : public Env {
+ public:
+  BlowsUpEnv() : Env(EnvInfo{"blows-up", 10, false, true, false, 1e-6, ""}) {}
+  nlohmann::json config() const override { return nlohmann::json::object(); }
+  class Rl : public RlEnv {
+   public:
+    int observation_dim() const override { return 2; }
+    int action_dim() const override { return 1; }
+    int horizon() const override { return 10; }
+    int action_repeat() const override { return 1; }
+    void reset() override { t_ = 0, s_ = 0.0; }
+    std::vector<double> observe() const override { return {s_, static_cast<double>(t_)}; }
+    void step(std::span<const double>) override {
+      ++t_;
+      s_ = t_ >= 3 ? std::numeric_limits<double>::quiet_NaN() : s_ + 1.0;
+    }
+    bool done() const override { return t_ >= 10; }
+    double final_loss() const override { return s_; }
+
+   private:
+    int t_ = 0;
+    double s_ = 0.0;
+  };
+  std::unique_ptr<RlEnv> make_rl() const override { return std::make_unique<Rl>(); }
+
+ protected:
+  double rollout(std::span<const double>, Workspace&, ThreadTeam&) const override { return 0.0; }
+  double rollout_with_grad(std::span<const double>, std::span<double>, Workspace&, ThreadTeam&) const override {
+    return 0.0;
+  }
+};
+
+TEST(BudgetRl, ABlownUpSimulationEndsItsEpisodeAsAFailure) {
+  BlowsUpEnv env;
+  BudgetedObjective f(env, 2);
+  std::vector<double> obs(2), a{0.0};
+  for (int e = 0; e < 2; ++e) {
+    f.rl_reset(obs);
+    RlStep r;
+    int decisions = 0;
+    while (!r.done) {
+      r = f.rl_step(a, obs);
+      ++decisions;
+    }
+    EXPECT_EQ(decisions, 3);  // ends where the state went NaN, not at the horizon
+    EXPECT_EQ(r.loss, std::numeric_limits<double>::infinity());
+    EXPECT_EQ(obs, (std::vector<double>{0.0, 0.0}));  // the optimizer never sees NaN
+    EXPECT_TRUE(std::isnan(f.evals().back().loss));
+  }
+  EXPECT_EQ(f.used(), 2);
+  EXPECT_EQ(f.failed_episodes(), 2);
+  EXPECT_THROW(f.rl_reset(obs), BudgetExhausted);
+}
+
 TEST(BudgetRl, EveryStartedEpisodeIsFinishedAndActionsAreChecked) {
   const auto env = make_env("cartpole1");
   BudgetedObjective f(*env, 5);

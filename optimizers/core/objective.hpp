@@ -23,7 +23,9 @@ struct RlSpec {
 
 // What one decision returns. When `done`, the episode has been recorded as one budget unit and
 // `loss` is its final loss (+infinity for a failed episode, as value() gives); the observation is
-// the terminal one (what a time-limit bootstrap needs).
+// the terminal one (what a time-limit bootstrap needs). A simulation that blows up mid-episode
+// (a non-finite observation) ends the episode there as a failed one, with an all-zero terminal
+// observation: an optimizer never sees NaN.
 struct RlStep {
   bool done = false;
   double loss = 0.0;
