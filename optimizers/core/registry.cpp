@@ -7,6 +7,7 @@
 #include "optimizers/gd.hpp"
 #include "optimizers/nlopt_adapters.hpp"
 #include "optimizers/random_search.hpp"
+#include "optimizers/rl/sac.hpp"
 
 namespace dsb {
 
@@ -31,6 +32,8 @@ const std::vector<OptimizerEntry>& optimizer_entries() {
        [] { return make_nlopt_direct_l(); }},
       {"nlopt-crs2", "NLopt GN_CRS2_LM, restarts with a new random population", false,
        [] { return make_nlopt_crs2(); }},
+      {"sac", "SB3 SAC defaults, 3x64 ReLU MLPs, sparse reward -loss at the last decision", false,
+       [] { return make_sac(); }, true},
   };
   return entries;
 }
