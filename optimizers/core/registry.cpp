@@ -8,6 +8,7 @@
 #include "optimizers/nlopt_adapters.hpp"
 #include "optimizers/random_search.hpp"
 #include "optimizers/rl/ppo.hpp"
+#include "optimizers/rl/sac.hpp"
 
 namespace dsb {
 
@@ -34,6 +35,8 @@ const std::vector<OptimizerEntry>& optimizer_entries() {
        [] { return make_nlopt_crs2(); }},
       {"ppo", "PPO (Stable-Baselines3 defaults, 3 x 64 tanh MLPs), sparse reward -loss; RL envs only", false,
        [] { return make_ppo(); }, true},
+      {"sac", "SB3 SAC defaults, 3x64 ReLU MLPs, sparse reward -loss at the last decision", false,
+       [] { return make_sac(); }, true},
   };
   return entries;
 }

@@ -1,0 +1,305 @@
+#include "optimizers/rl/sac.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+#include <string_view>
+
+#include "common/det_math.hpp"
+#include "common/error.hpp"
+#include "common/rng.hpp"
+#include "optimizers/core/diagnostics.hpp"
+#include "optimizers/rl/network_adam.hpp"
+#include "optimizers/rl/replay_buffer.hpp"
+
+namespace dsb {
+namespace {
+
+std::string num(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+[[noreturn]] void bad(const std::string& field, const std::string& why) { throw ConfigError("sac", field, why); }
+
+std::string hex64(std::uint64_t h) {
+  char buf[19];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::uint64_t hash_params(std::span<const double> p) {
+  return fnv1a64(std::string_view(reinterpret_cast<const char*>(p.data()), p.size() * sizeof(double)));
+}
+
+// Observations of a blown-up simulation may be NaN, infinite or huge; the networks would turn them
+// into NaN parameters. Each component is replaced: NaN -> 0, otherwise clamped to
+// [-kObsLimit, kObsLimit]. Returns how many components were changed.
+constexpr double kObsLimit = 1e6;
+int sanitize_observation(std::span<double> obs) {
+  int changed = 0;
+  for (double& o : obs) {
+    const double c = std::isnan(o) ? 0.0 : std::clamp(o, -kObsLimit, kObsLimit);
+    if (c != o || std::isnan(o)) o = c, ++changed;
+  }
+  return changed;
+}
+
+std::vector<int> layer_sizes(int in, const std::vector<int>& hidden, int out) {
+  std::vector<int> s{in};
+  s.insert(s.end(), hidden.begin(), hidden.end());
+  s.push_back(out);
+  return s;
+}
+
+class Sac : public Optimizer {
+ public:
+  explicit Sac(const SacConfig& cfg) : cfg_(cfg) { cfg_.validate(); }
+  const std::string& name() const override { return name_; }
+  bool needs_gradient() const override { return false; }
+  nlohmann::json config() const override { return cfg_.to_json(); }
+  nlohmann::json diagnostics() const override;
+  void minimize(Objective& f, Rng& rng) override;
+
+ private:
+  void train(Rng& rng, int gradient_steps);
+
+  SacConfig cfg_;
+  std::string name_ = "sac";
+
+  // run state (rebuilt by minimize)
+  int obs_dim_ = 0, act_dim_ = 0;
+  std::unique_ptr<Mlp> actor_;
+  std::vector<Mlp> critics_, targets_;
+  std::unique_ptr<NetworkAdam> actor_adam_, alpha_adam_;
+  std::vector<NetworkAdam> critic_adams_;
+  std::unique_ptr<ReplayBuffer> buffer_;
+  ReplayBatch batch_;
+  double log_alpha_ = 0.0, target_entropy_ = 0.0;
+  std::vector<double> actor_grad_;
+  std::vector<std::vector<double>> critic_grads_;
+
+  // diagnostics
+  std::int64_t episodes_ = 0, failed_ = 0, timesteps_ = 0, gradient_steps_ = 0, obs_sanitized_ = 0;
+  std::int64_t block_size_ = 1;
+  double worst_finite_ = -INFINITY;
+  std::vector<double> block_sum_;        // sum of finite losses per block of episodes
+  std::vector<std::int64_t> block_n_;    // finite episodes per block
+  double last_critic_loss_ = NAN, last_actor_loss_ = NAN, last_alpha_loss_ = NAN;
+  std::size_t buffer_capacity_ = 0;
+};
+
+void Sac::minimize(Objective& f, Rng& rng) {
+  // reset everything a previous run left
+  episodes_ = failed_ = timesteps_ = gradient_steps_ = obs_sanitized_ = 0;
+  worst_finite_ = -INFINITY;
+  block_sum_.clear();
+  block_n_.clear();
+  last_critic_loss_ = last_actor_loss_ = last_alpha_loss_ = NAN;
+  actor_.reset();
+  critics_.clear();
+  targets_.clear();
+  buffer_.reset();
+  buffer_capacity_ = 0;
+
+  if (!f.has_rl()) throw UsageError("sac: the objective has no RL view (pair sac with an RL env)");
+  const RlSpec spec = f.rl_spec();
+  obs_dim_ = spec.observation_dim;
+  act_dim_ = spec.action_dim;
+  if (obs_dim_ < 1 || act_dim_ < 1 || spec.decisions < 1)
+    throw std::logic_error("sac: RL spec with an empty observation, action or episode");
+
+  // networks: actor (mean, log_std), n critics; torch default init in that order; targets = copies
+  actor_ = std::make_unique<Mlp>(layer_sizes(obs_dim_, cfg_.net_arch, 2 * act_dim_), Activation::relu);
+  init_torch_default(*actor_, rng);
+  for (int k = 0; k < cfg_.n_critics; ++k) {
+    critics_.emplace_back(layer_sizes(obs_dim_ + act_dim_, cfg_.net_arch, 1), Activation::relu);
+    init_torch_default(critics_.back(), rng);
+  }
+  targets_ = critics_;
+  AdamConfig adam;
+  adam.lr = cfg_.learning_rate;
+  adam.eps = cfg_.adam_eps;
+  actor_adam_ = std::make_unique<NetworkAdam>(adam, actor_->param_count());
+  critic_adams_.clear();
+  for (const auto& c : critics_) critic_adams_.emplace_back(adam, c.param_count());
+  alpha_adam_ = std::make_unique<NetworkAdam>(adam, 1);
+  actor_grad_.assign(actor_->param_count(), 0.0);
+  critic_grads_.assign(critics_.size(), std::vector<double>(critics_[0].param_count(), 0.0));
+  log_alpha_ = dm::log(cfg_.ent_coef_init);
+  target_entropy_ = -static_cast<double>(act_dim_);
+
+  // buffer: bounded by what the remaining budget can fill
+  const std::int64_t remaining = std::max<std::int64_t>(f.remaining(), 1);
+  const std::int64_t can_fill =
+      remaining > cfg_.buffer_size / spec.decisions ? cfg_.buffer_size : remaining * spec.decisions;
+  buffer_capacity_ = static_cast<std::size_t>(std::min(cfg_.buffer_size, std::max<std::int64_t>(can_fill, 1)));
+  buffer_ = std::make_unique<ReplayBuffer>(buffer_capacity_, obs_dim_, act_dim_);
+  block_size_ = std::max<std::int64_t>(1, (remaining + std::int64_t(kDiagnosticsListCap) - 1) /
+                                              std::int64_t(kDiagnosticsListCap));
+
+  std::vector<double> obs(obs_dim_), next_obs(obs_dim_), action(act_dim_);
+  Eigen::VectorXd x(obs_dim_);
+  // until rl_reset throws BudgetExhausted
+  for (;;) {
+    f.rl_reset(obs);
+    obs_sanitized_ += sanitize_observation(obs);
+    for (;;) {
+      // SB3 _sample_action: uniform while num_timesteps < learning_starts, else a policy sample
+      if (timesteps_ < cfg_.learning_starts) {
+        for (double& a : action) a = rng.uniform(-1.0, 1.0);
+      } else {
+        for (int i = 0; i < obs_dim_; ++i) x[i] = obs[i];
+        const Eigen::VectorXd out = actor_->forward_one(x);
+        const SquashedGaussian g = squashed_gaussian_sample(std::span<const double>(out.data(), act_dim_),
+                                                           std::span<const double>(out.data() + act_dim_, act_dim_), rng);
+        for (int i = 0; i < act_dim_; ++i) action[i] = g.a[i];
+        for (double a : action)
+          if (!(a >= -1.0 && a <= 1.0)) throw std::runtime_error("sac: the policy diverged (non-finite action)");
+      }
+      const RlStep st = f.rl_step(action, next_obs);
+      ++timesteps_;
+      obs_sanitized_ += sanitize_observation(next_obs);
+      double reward = 0.0;
+      if (st.done) {
+        // sparse reward: -loss at the final decision; failed episodes get a finite penalty
+        double loss = st.loss;
+        const std::size_t b = static_cast<std::size_t>(episodes_ / block_size_);
+        if (block_sum_.size() <= b) block_sum_.resize(b + 1, 0.0), block_n_.resize(b + 1, 0);
+        if (std::isfinite(loss)) {
+          worst_finite_ = std::max(worst_finite_, loss);
+          block_sum_[b] += loss;
+          ++block_n_[b];
+        } else {
+          ++failed_;
+          loss = std::max(cfg_.failed_loss_factor * worst_finite_, cfg_.failed_loss_floor);
+        }
+        reward = -loss;
+        ++episodes_;
+      }
+      // every end is a time limit: done = 0, bootstrap from the terminal observation
+      buffer_->add(obs, action, reward, next_obs, false);
+      if (timesteps_ > cfg_.learning_starts && timesteps_ % cfg_.train_freq == 0) train(rng, cfg_.gradient_steps);
+      obs.swap(next_obs);
+      if (st.done) break;
+    }
+  }
+}
+
+void Sac::train(Rng& rng, int gradient_steps) {
+  const int n = cfg_.batch_size;
+  Eigen::MatrixXd eps(act_dim_, n), eps_next(act_dim_, n);
+  std::vector<double> y(n);
+  for (int step = 0; step < gradient_steps; ++step) {
+    buffer_->sample(n, rng, batch_);
+    // fresh actor sample at s; alpha before its update
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < act_dim_; ++i) eps(i, j) = rng.normal();
+    const SacActorPass pi = sac_actor_pass(*actor_, batch_.obs, eps);
+    const double alpha = dm::exp(log_alpha_);
+    // entropy coefficient
+    const double g_alpha = sac_alpha_loss_grad(pi.log_prob, target_entropy_);
+    last_alpha_loss_ = log_alpha_ * g_alpha;
+    alpha_adam_->step(std::span<double>(&log_alpha_, 1), std::span<const double>(&g_alpha, 1));
+    // critic target from the current actor at s' and the target critics
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < act_dim_; ++i) eps_next(i, j) = rng.normal();
+    const SacActorPass next = sac_actor_pass(*actor_, batch_.next_obs, eps_next);
+    const std::vector<double> min_q = sac_min_q(targets_, batch_.next_obs, next.actions);
+    for (int j = 0; j < n; ++j)
+      y[j] = sac_critic_target(batch_.reward[j], batch_.done[j], cfg_.gamma, min_q[j], alpha, next.log_prob[j]);
+    // critics
+    for (auto& g : critic_grads_) std::fill(g.begin(), g.end(), 0.0);
+    last_critic_loss_ = sac_critic_loss(critics_, batch_.obs, batch_.action, y, &critic_grads_);
+    for (std::size_t k = 0; k < critics_.size(); ++k) critic_adams_[k].step(critics_[k].params(), critic_grads_[k]);
+    // actor, on the updated critics
+    std::fill(actor_grad_.begin(), actor_grad_.end(), 0.0);
+    last_actor_loss_ = sac_actor_loss(*actor_, pi, critics_, batch_.obs, alpha, actor_grad_);
+    actor_adam_->step(actor_->params(), actor_grad_);
+    // target critics
+    if (step % cfg_.target_update_interval == 0)
+      for (std::size_t k = 0; k < critics_.size(); ++k) polyak_update(targets_[k].params(), critics_[k].params(), cfg_.tau);
+    ++gradient_steps_;
+  }
+}
+
+nlohmann::json Sac::diagnostics() const {
+  nlohmann::json d = {{"episodes", episodes_},
+                      {"failed_episodes", failed_},
+                      {"timesteps", timesteps_},
+                      {"gradient_steps", gradient_steps_},
+                      {"buffer_capacity", buffer_capacity_},
+                      {"observations_sanitized", obs_sanitized_},
+                      {"alpha", actor_ ? nlohmann::json(dm::exp(log_alpha_)) : nlohmann::json(nullptr)},
+                      {"target_entropy", target_entropy_},
+                      {"last_critic_loss", std::isfinite(last_critic_loss_) ? nlohmann::json(last_critic_loss_) : nlohmann::json(nullptr)},
+                      {"last_actor_loss", std::isfinite(last_actor_loss_) ? nlohmann::json(last_actor_loss_) : nlohmann::json(nullptr)},
+                      {"last_alpha_loss", std::isfinite(last_alpha_loss_) ? nlohmann::json(last_alpha_loss_) : nlohmann::json(nullptr)},
+                      {"actor_hash", actor_ ? nlohmann::json(hex64(hash_params(actor_->params()))) : nlohmann::json(nullptr)},
+                      {"loss_block", block_size_}};
+  std::vector<std::size_t> blocks(block_sum_.size());
+  for (std::size_t b = 0; b < blocks.size(); ++b) blocks[b] = b;
+  // mean finite episode loss per block of loss_block episodes (null when all of a block failed)
+  put_capped(d, "block_mean_loss", blocks, [&](std::size_t b, std::size_t) {
+    return block_n_[b] > 0 ? nlohmann::json(block_sum_[b] / static_cast<double>(block_n_[b])) : nlohmann::json(nullptr);
+  });
+  return d;
+}
+
+}  // namespace
+
+void SacConfig::validate() const {
+  auto pos_finite = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (!pos_finite(learning_rate)) bad("learning_rate", "must be a finite number > 0 (got " + num(learning_rate) + ")");
+  if (!pos_finite(adam_eps)) bad("adam_eps", "must be a finite number > 0 (got " + num(adam_eps) + ")");
+  if (buffer_size < 1) bad("buffer_size", "must be >= 1 (got " + std::to_string(buffer_size) + ")");
+  if (learning_starts < 0) bad("learning_starts", "must be >= 0 (got " + std::to_string(learning_starts) + ")");
+  if (batch_size < 1) bad("batch_size", "must be >= 1 (got " + std::to_string(batch_size) + ")");
+  if (!(tau > 0.0 && tau <= 1.0)) bad("tau", "must lie in (0, 1] (got " + num(tau) + ")");
+  if (!(gamma >= 0.0 && gamma <= 1.0)) bad("gamma", "must lie in [0, 1] (got " + num(gamma) + ")");
+  if (train_freq < 1) bad("train_freq", "must be >= 1 (got " + std::to_string(train_freq) + ")");
+  if (gradient_steps < 1) bad("gradient_steps", "must be >= 1 (got " + std::to_string(gradient_steps) + ")");
+  if (target_update_interval < 1)
+    bad("target_update_interval", "must be >= 1 (got " + std::to_string(target_update_interval) + ")");
+  if (n_critics < 1) bad("n_critics", "must be >= 1 (got " + std::to_string(n_critics) + ")");
+  if (net_arch.empty()) bad("net_arch", "must list at least one hidden layer");
+  for (int h : net_arch)
+    if (h < 1) bad("net_arch", "layer sizes must be >= 1 (got " + std::to_string(h) + ")");
+  if (!pos_finite(ent_coef_init)) bad("ent_coef_init", "must be a finite number > 0 (got " + num(ent_coef_init) + ")");
+  if (!(failed_loss_factor >= 1.0) || !std::isfinite(failed_loss_factor))
+    bad("failed_loss_factor", "must be a finite number >= 1 (got " + num(failed_loss_factor) + ")");
+  if (!pos_finite(failed_loss_floor))
+    bad("failed_loss_floor", "must be a finite number > 0 (got " + num(failed_loss_floor) + ")");
+}
+
+nlohmann::json SacConfig::to_json() const {
+  return nlohmann::json{{"learning_rate", learning_rate},
+                        {"adam_eps", adam_eps},
+                        {"buffer_size", buffer_size},
+                        {"learning_starts", learning_starts},
+                        {"batch_size", batch_size},
+                        {"tau", tau},
+                        {"gamma", gamma},
+                        {"train_freq", train_freq},
+                        {"gradient_steps", gradient_steps},
+                        {"target_update_interval", target_update_interval},
+                        {"n_critics", n_critics},
+                        {"net_arch", net_arch},
+                        {"activation", "relu"},
+                        {"ent_coef", "auto"},
+                        {"ent_coef_init", ent_coef_init},
+                        {"target_entropy", "-action_dim"},
+                        {"log_std_clamp", {kSacLogStdMin, kSacLogStdMax}},
+                        {"reward", "sparse: -loss at the final decision"},
+                        {"timeout_bootstrap", true},
+                        {"failed_loss_factor", failed_loss_factor},
+                        {"failed_loss_floor", failed_loss_floor}};
+}
+
+std::unique_ptr<Optimizer> make_sac(const SacConfig& cfg) { return std::make_unique<Sac>(cfg); }
+
+}  // namespace dsb
