@@ -4,7 +4,8 @@
 # seeds x 5 episodes; and two PlasticineLab tasks at 5 env steps (plb-pinch-h5, plb-writer-h5) x
 # random, gd x 2 seeds x 3 episodes; and two cloth tasks (swing-stiffness-corner, flip) x random,
 # gd, cmaes, nlopt-lbfgs x 2 seeds x 10 episodes; and the RL optimizers on cartpole1 (ppo x 2
-# seeds x 25 episodes: 2,500 decisions, one PPO update).
+# seeds x 25 episodes: 2,500 decisions, one PPO update; sac x 2 seeds x 3 episodes: 300
+# decisions, 200 gradient steps after its 100 random ones).
 #   scripts/regression-grid.sh check [BUILD_DIR]       run the grid, compare with the baseline (exit 1 on any difference)
 #   scripts/regression-grid.sh regenerate [BUILD_DIR]  run the grid, rewrite data/baselines/small-grid.csv
 # A change that alters results on purpose regenerates the baseline in the same commit and says why.
@@ -27,6 +28,7 @@ trap 'rm -rf "$work"' EXIT
 "$build/bin/harness" --env swing-stiffness-corner,flip --optimizer random,gd,cmaes,nlopt-lbfgs \
   --seeds 2 --budget 10 --jobs 2 --quiet --db "$work/grid.sqlite"
 "$build/bin/harness" --env cartpole1 --optimizer ppo --seeds 2 --budget 25 --jobs 2 --quiet --db "$work/grid.sqlite"
+"$build/bin/harness" --env cartpole1 --optimizer sac --seeds 2 --budget 3 --jobs 2 --quiet --db "$work/grid.sqlite"
 
 case $mode in
   check) exec "$build/bin/harness" check --db "$work/grid.sqlite" --baseline "$baseline" ;;

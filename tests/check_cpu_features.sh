@@ -27,11 +27,18 @@ fi
 
 # every env of `harness list` but the particle tasks, which get their short-horizon variants
 light_envs=$("$harness" list | awk 'NR > 1 && NF == 0 { exit } NR > 1 { print $1 }' | grep -v -E '^(fluid|plb-)' | paste -sd, -)
+# every optimizer but the RL learners (below, on the cartpoles, at budgets that reach an update)
+plain_optimizers=$("$harness" list | awk 'f && NF { print $1 } /^optimizer/ { f = 1 }' | grep -v -E '^(ppo|sac)$' | paste -sd, -)
 
 run() {  # run NAME [env assignments...]: grid into NAME.sqlite, export to NAME.csv
   local name=$1
   shift
-  env "$@" "$harness" --all --env "$light_envs" --seeds 2 --budget 30 --jobs 2 --quiet --db "$work/$name.sqlite"
+  env "$@" "$harness" --env "$light_envs" --optimizer "$plain_optimizers" --seeds 2 --budget 30 --jobs 2 --quiet \
+    --db "$work/$name.sqlite"
+  # the RL learners on the cartpoles at budgets that reach their updates: ppo 21 episodes (2,100
+  # decisions, one update), sac 3 (200 gradient steps)
+  env "$@" "$harness" --env cartpole1,cartpole3 --optimizer ppo --seeds 2 --budget 21 --jobs 2 --quiet --db "$work/$name.sqlite"
+  env "$@" "$harness" --env cartpole1,cartpole3 --optimizer sac --seeds 2 --budget 3 --jobs 2 --quiet --db "$work/$name.sqlite"
   env "$@" "$harness" --all --env fluid-h5 --seeds 2 --budget 4 --jobs 2 --quiet --db "$work/$name.sqlite"
   env "$@" "$harness" --all --env plb-pinch-h5 --seeds 2 --budget 2 --jobs 2 --quiet --db "$work/$name.sqlite"
   "$harness" export --db "$work/$name.sqlite" --out "$work/$name.csv" >/dev/null

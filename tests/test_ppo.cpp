@@ -218,8 +218,8 @@ TEST(PpoHarness, SameResultsForAnyJobsAndPairedOnlyWithRlEnvs) {
   // --all pairs ppo only with RL envs; an explicit pair with a non-RL env is a usage error
   auto plan = testing::run_harness(dir, "plan --env sphere-10,cartpole1 --all --seeds 1");
   ASSERT_EQ(plan.code, 0) << plan.err;
-  // sphere-10 x the 10 non-RL optimizers + cartpole1 x all 11
-  EXPECT_NE((plan.out + plan.err).find("21 runs"), std::string::npos) << plan.out << plan.err;
+  // sphere-10 x the 10 non-RL optimizers + cartpole1 x all 12 (ppo and sac)
+  EXPECT_NE((plan.out + plan.err).find("22 runs"), std::string::npos) << plan.out << plan.err;
   auto bad = testing::run_harness(dir, "--env sphere-10 --optimizer ppo --seeds 1 --budget 2 --db " +
                                            (dir / "bad.sqlite").string());
   EXPECT_EQ(bad.code, 2);

@@ -181,8 +181,8 @@ void Sac::minimize(Objective& f, Rng& rng) {
         reward = -loss;
         ++episodes_;
       }
-      // every end is a time limit: done = 0, bootstrap from the terminal observation
-      buffer_->add(obs, action, reward, next_obs, false);
+      // the episode's end is terminal: done = 1, no bootstrap past the final loss
+      buffer_->add(obs, action, reward, next_obs, st.done);
       if (timesteps_ > cfg_.learning_starts && timesteps_ % cfg_.train_freq == 0) train(rng, cfg_.gradient_steps);
       obs.swap(next_obs);
       if (st.done) break;
@@ -295,7 +295,7 @@ nlohmann::json SacConfig::to_json() const {
                         {"target_entropy", "-action_dim"},
                         {"log_std_clamp", {kSacLogStdMin, kSacLogStdMax}},
                         {"reward", "sparse: -loss at the final decision"},
-                        {"timeout_bootstrap", true},
+                        {"episode_end", "terminal (done = 1, no bootstrap)"},
                         {"failed_loss_factor", failed_loss_factor},
                         {"failed_loss_floor", failed_loss_floor}};
 }

@@ -30,9 +30,10 @@
 //   - fixed horizon, sparse reward: r = 0 on every decision but the last, r = -loss on the last
 //     one (the episode's final loss, as recorded by the budget); 1,000 episodes like every method.
 // Choices made here (not fixed by SB3 or the seed):
-//   - every episode end is a time limit (fixed horizon, no early termination), so following SB3's
-//     default handle_timeout_termination = True every transition is stored with done = 0 and the
-//     last one bootstraps from the terminal observation (the one rl_step writes when done);
+//   - an episode's end is terminal: its last transition is stored with done = 1, so the critic
+//     target there is the reward alone. The fixed horizon is not a time limit that cuts a longer
+//     task short (SB3's handle_timeout_termination would bootstrap then): the loss at the end is the
+//     whole payoff and nothing follows it; `ppo` treats the end the same way;
 //   - the terminal reward enters as the reward of the last decision's transition (above);
 //   - a failed episode (loss +inf or NaN) is rewarded -max(failed_loss_factor * worst finite loss
 //     seen so far in the run, failed_loss_floor), a large finite penalty so the critics stay finite;
