@@ -6,7 +6,9 @@
 //     Adam), amortised per decision over a rollout (n_epochs x n_steps / batch_size minibatches
 //     per n_steps decisions);
 //   - ppo end to end: a run of 21 cartpole3 episodes (2,100 decisions, one update) through the
-//     budgeted objective, minus 2,100 env steps.
+//     budgeted objective, minus 2,100 env steps;
+//   - sac end to end: a run of 3 cartpole3 episodes (300 decisions: 100 random ones, then one
+//     gradient step of batch 256 per decision), minus its env steps, per gradient step.
 // The table printed at the end is the README's.
 #include <cstdio>
 #include <memory>
@@ -21,6 +23,7 @@
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/network_adam.hpp"
 #include "optimizers/rl/ppo.hpp"
+#include "optimizers/rl/sac.hpp"
 #include "tests/perf/timing_reporter.hpp"
 
 namespace {
@@ -101,6 +104,21 @@ void BM_PpoRunCartpole3(benchmark::State& state) {
 }
 BENCHMARK(BM_PpoRunCartpole3)->Unit(benchmark::kMillisecond);
 
+void BM_SacRunCartpole3(benchmark::State& state) {
+  const auto env = make_env("cartpole3");
+  for (auto _ : state) {
+    BudgetedObjective f(*env, 3);
+    auto opt = make_sac();
+    Rng rng(3);
+    try {
+      opt->minimize(f, rng);
+    } catch (const BudgetExhausted&) {
+    }
+    benchmark::DoNotOptimize(f.best_loss());
+  }
+}
+BENCHMARK(BM_SacRunCartpole3)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -121,6 +139,13 @@ int main(int argc, char** argv) {
   std::printf("| ppo update, amortised (%.0f minibatches of %d per %d decisions; one minibatch %.0f us) | %.2f | %.0f |\n",
               minibatches, cfg.batch_size, cfg.n_steps, 1e6 * mb, 1e6 * update, update / env);
   std::printf("| ppo learner in all | %.2f | %.0f |\n", 1e6 * (act + update), (act + update) / env);
+  const double sac = reporter.seconds("BM_SacRunCartpole3");
+  if (sac > 0.0) {
+    const double per_step = (sac - 300 * env) / 200;
+    std::printf("| sac end to end: a 3-episode run (300 decisions, 200 gradient steps of batch 256) minus its env "
+                "steps, per gradient step | %.0f | %.0f |\n",
+                1e6 * per_step, per_step / env);
+  }
   if (run > 0.0) {
     const double learner = (run - 2100 * env) / 2100;
     std::printf("| ppo end to end: a 21-episode run (2,100 decisions, one update) minus its env steps | %.2f | %.0f |\n",
