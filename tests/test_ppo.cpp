@@ -1,6 +1,7 @@
 // `ppo` (optimizers/rl/ppo.hpp): GAE on a hand-computed trajectory, the PPO loss gradient against
 // central differences on a fixed minibatch, learning on the test reach env against random search,
-// the budget, identical reruns, and config validation.
+// the budget, identical reruns, config validation; and both RL optimizers (ppo, sac) through the
+// harness program: the same results for --jobs 1 and 2, paired only with RL envs.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -198,7 +199,7 @@ TEST(PpoRuns, ExactBudgetAndIdenticalReruns) {
   EXPECT_NE(l1, l3);
 }
 
-TEST(PpoHarness, SameResultsForAnyJobsAndPairedOnlyWithRlEnvs) {
+TEST(RlHarness, PpoAndSacGiveTheSameResultsForAnyJobsAndPairOnlyWithRlEnvs) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / ("dsb_ppo_" + std::to_string(::getpid()));
   fs::remove_all(dir);
@@ -209,12 +210,16 @@ TEST(PpoHarness, SameResultsForAnyJobsAndPairedOnlyWithRlEnvs) {
     auto r = testing::run_harness(dir, "--env cartpole1,flip --optimizer ppo --seeds 2 --budget 12 --quiet --jobs " +
                                            std::to_string(jobs) + " --db " + db);
     ASSERT_EQ(r.code, 0) << r.err;
+    // sac: 2 cartpole1 episodes = 200 decisions, 100 gradient steps after the random ones
+    r = testing::run_harness(dir, "--env cartpole1 --optimizer sac --seeds 2 --budget 2 --quiet --jobs " +
+                                      std::to_string(jobs) + " --db " + db);
+    ASSERT_EQ(r.code, 0) << r.err;
     const std::string out = (dir / ("j" + std::to_string(jobs) + ".csv")).string();
     ASSERT_EQ(testing::run_harness(dir, "export --db " + db + " --out " + out).code, 0);
     csv[jobs - 1] = testing::read_file(out);
   }
   EXPECT_EQ(csv[0], csv[1]);
-  EXPECT_EQ(std::count(csv[0].begin(), csv[0].end(), '\n'), 1 + 2 * 2 * 12);  // header + every episode
+  EXPECT_EQ(std::count(csv[0].begin(), csv[0].end(), '\n'), 1 + 2 * 2 * 12 + 2 * 2);  // header + every episode
   // --all pairs ppo only with RL envs; an explicit pair with a non-RL env is a usage error
   auto plan = testing::run_harness(dir, "plan --env sphere-10,cartpole1 --all --seeds 1");
   ASSERT_EQ(plan.code, 0) << plan.err;
