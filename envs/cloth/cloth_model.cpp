@@ -134,4 +134,19 @@ double frequency_bound(const ClothModel& m, std::span<const double> stiffness) {
   return std::sqrt(w2);
 }
 
+std::array<int, 9> grid_subsample_3x3(int cols, int rows) {
+  const int cs[3] = {0, (cols - 1) / 2, cols - 1}, rs[3] = {0, (rows - 1) / 2, rows - 1};
+  std::array<int, 9> v{};
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) v[a * 3 + b] = rs[a] * cols + cs[b];
+  return v;
+}
+
+void append_vertex_states(std::vector<double>& observation, const ClothState& s, std::span<const int> vertices) {
+  for (int v : vertices)
+    for (int k = 0; k < 3; ++k) observation.push_back(s.x[v](k));
+  for (int v : vertices)
+    for (int k = 0; k < 3; ++k) observation.push_back(s.v[v](k));
+}
+
 }  // namespace dsb::cloth

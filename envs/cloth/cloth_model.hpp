@@ -7,6 +7,7 @@
 // Units: SI (m, kg, s, N). Vertex i of a W x H grid is i = row * W + col.
 #include <climits>
 #include <memory>
+#include <array>
 #include <span>
 #include <vector>
 
@@ -129,5 +130,11 @@ ClothModel build_grid(const GridSpec& spec);
 // stable for omega dt < 2; tension adds a geometric stiffness k (1 - L0/l) < k per spring, which
 // the bound's factor 2 does not cover for springs stretched far beyond rest.
 double frequency_bound(const ClothModel& m, std::span<const double> stiffness);
+
+// The RL views' 3 x 3 subsample of a cols x rows grid (build_grid's vertex order): rows and
+// columns 0, (n - 1) / 2 and n - 1, row by row.
+std::array<int, 9> grid_subsample_3x3(int cols, int rows);
+// Appends the positions, then the velocities, of `vertices` to an observation (6 per vertex).
+void append_vertex_states(std::vector<double>& observation, const ClothState& s, std::span<const int> vertices);
 
 }  // namespace dsb::cloth

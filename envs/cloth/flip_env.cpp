@@ -64,10 +64,7 @@ FlipModel build_flip_model(const FlipConfig& cfg) {
     const Vec3& p = c.rest_position[m.corners[k]];
     m.corner_target_local[k] = Vec3(-p.x(), 0.0, p.z());
   }
-  // 3 x 3 subsample: columns 0, W/2, W-1 by rows 0, H/2, H-1
-  const int cs[3] = {0, W / 2, W - 1}, rs[3] = {0, H / 2, H - 1};
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) m.observed[a * 3 + b] = rs[a] * W + cs[b];
+  m.observed = grid_subsample_3x3(W, H);
   return m;
 }
 
@@ -115,10 +112,7 @@ class FlipRl : public RlEnv {
     const FlipModel& m = env_.model();
     std::vector<double> o;
     o.reserve(61);
-    for (int v : m.observed)
-      for (int k = 0; k < 3; ++k) o.push_back(state_.x[v](k));
-    for (int v : m.observed)
-      for (int k = 0; k < 3; ++k) o.push_back(state_.v[v](k));
+    append_vertex_states(o, state_, m.observed);
     const double interval = env_.flip_config().control_steps * cloth_.dt;
     o.insert(o.end(),
              {pose_.x, pose_.y, pose_.tilt, (pose_.x - last_pose_.x) / interval, (pose_.y - last_pose_.y) / interval,

@@ -90,9 +90,7 @@ SwingModel build_swing_model(const SwingConfig& cfg, SwingParams params) {
   c.validate();
   m.steps = cfg.steps();
   m.corners = {0, W - 1, (H - 1) * W, H * W - 1};
-  const int rs[3] = {0, (H - 1) / 2, H - 1}, cs[3] = {0, (W - 1) / 2, W - 1};
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) m.observed[a * 3 + b] = rs[a] * W + cs[b];
+  m.observed = grid_subsample_3x3(W, H);
   // scripted swing of the held corners (only rows up to the release are read)
   m.anchor_path = anchor_path_from(c, m.steps, [&](int a, double t) -> Vec3 {
     const double tau = std::min(t / cfg.swing_time, 1.0);
@@ -169,10 +167,7 @@ class SwingRl : public RlEnv {
     const SwingModel& m = env_.model();
     std::vector<double> o;
     o.reserve(61);
-    for (int v : m.observed)
-      for (int k = 0; k < 3; ++k) o.push_back(state_.x[v](k));
-    for (int v : m.observed)
-      for (int k = 0; k < 3; ++k) o.push_back(state_.v[v](k));
+    append_vertex_states(o, state_, m.observed);
     for (const Anchor& a : m.cloth.anchors)
       for (int k = 0; k < 3; ++k) o.push_back(state_.x[a.vertex](k));
     o.push_back(done_ ? 1.0 : 0.0);

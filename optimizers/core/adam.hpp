@@ -29,7 +29,16 @@ class Adam {
     t_ = 0;
   }
   // x <- clip(x - lr * mhat / (sqrt(vhat) + eps), -1, 1)   (Adam update, eq. in Alg. 1 of the paper)
-  void step(std::span<double> x, std::span<const double> grad) {
+  void step(std::span<double> x, std::span<const double> grad) { update(x, grad, true); }
+  // the same without the box (network parameters: optimizers/rl/network_adam.hpp)
+  void step_unbounded(std::span<double> x, std::span<const double> grad) { update(x, grad, false); }
+  int steps() const { return t_; }
+  const AdamConfig& config() const { return cfg_; }
+  void set_lr(double lr) { cfg_.lr = lr; }
+
+ private:
+  // m <- b1 m + (1 - b1) g; v <- b2 v + (1 - b2) g^2; x <- x - lr mhat / (sqrt(vhat) + eps)
+  void update(std::span<double> x, std::span<const double> grad, bool clip_to_box) {
     ++t_;
     const double c1 = 1.0 - dm::pow(cfg_.beta1, t_);
     const double c2 = 1.0 - dm::pow(cfg_.beta2, t_);
@@ -39,11 +48,10 @@ class Adam {
       const double mhat = m_[i] / c1;
       const double vhat = v_[i] / c2;
       const double xi = x[i] - cfg_.lr * mhat / (std::sqrt(vhat) + cfg_.eps);
-      x[i] = xi < -1.0 ? -1.0 : (xi > 1.0 ? 1.0 : xi);
+      x[i] = !clip_to_box ? xi : (xi < -1.0 ? -1.0 : (xi > 1.0 ? 1.0 : xi));
     }
   }
 
- private:
   AdamConfig cfg_;
   std::vector<double> m_, v_;
   int t_ = 0;

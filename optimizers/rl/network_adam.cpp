@@ -8,32 +8,15 @@
 
 namespace dsb {
 
-NetworkAdam::NetworkAdam(const AdamConfig& cfg, std::size_t dim) : cfg_(cfg), m_(dim, 0.0), v_(dim, 0.0) {
-  cfg_.validate("network_adam");
-}
-
-void NetworkAdam::reset() {
-  std::fill(m_.begin(), m_.end(), 0.0);
-  std::fill(v_.begin(), v_.end(), 0.0);
-  t_ = 0;
+NetworkAdam::NetworkAdam(const AdamConfig& cfg, std::size_t dim) : dim_(dim), adam_(cfg, static_cast<int>(dim)) {
+  cfg.validate("network_adam");
 }
 
 void NetworkAdam::step(std::span<double> p, std::span<const double> g) {
-  if (p.size() != m_.size() || g.size() != m_.size())
+  if (p.size() != dim_ || g.size() != dim_)
     throw std::invalid_argument("NetworkAdam::step: parameters and gradient must have the dimension "
                                 "given at construction");
-  ++t_;
-  // bias corrections 1 - b1^t, 1 - b2^t
-  const double c1 = 1.0 - dm::pow(cfg_.beta1, t_);
-  const double c2 = 1.0 - dm::pow(cfg_.beta2, t_);
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    // moments (Alg. 1 lines 7-8), bias-corrected (lines 9-10), update (line 11)
-    m_[i] = cfg_.beta1 * m_[i] + (1.0 - cfg_.beta1) * g[i];
-    v_[i] = cfg_.beta2 * v_[i] + (1.0 - cfg_.beta2) * g[i] * g[i];
-    const double mhat = m_[i] / c1;
-    const double vhat = v_[i] / c2;
-    p[i] -= cfg_.lr * mhat / (std::sqrt(vhat) + cfg_.eps);
-  }
+  adam_.step_unbounded(p, g);
 }
 
 double clip_grad_norm(std::span<double> g, double max_norm) {

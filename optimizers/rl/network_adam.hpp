@@ -20,17 +20,17 @@ class NetworkAdam {
  public:
   // throws ConfigError (owner "network_adam") naming the bad field of cfg
   NetworkAdam(const AdamConfig& cfg, std::size_t dim);
-  void reset();
-  // one update of p (dim) with gradient g (dim); throws std::invalid_argument on a size mismatch
+  void reset() { adam_.reset(); }
+  // one update of p (dim) with gradient g (dim): core Adam's arithmetic without the box clip;
+  // throws std::invalid_argument on a size mismatch
   void step(std::span<double> p, std::span<const double> g);
-  int steps() const { return t_; }
-  const AdamConfig& config() const { return cfg_; }
-  void set_lr(double lr) { cfg_.lr = lr; }  // for learning-rate schedules
+  int steps() const { return adam_.steps(); }
+  const AdamConfig& config() const { return adam_.config(); }
+  void set_lr(double lr) { adam_.set_lr(lr); }  // for learning-rate schedules
 
  private:
-  AdamConfig cfg_;
-  std::vector<double> m_, v_;  // first and second moments (dim)
-  int t_ = 0;
+  std::size_t dim_;
+  Adam adam_;
 };
 
 // torch.nn.utils.clip_grad_norm_ (one parameter group, 2-norm): n = |g|_2; if
