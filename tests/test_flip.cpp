@@ -363,32 +363,16 @@ TEST(FlipGradient, AcrossAContactSwitchTheLossJumpsAndTheGradientIsOneSided) {
   // accounts for 7e-14; a grazing contact, inward speed about 0 at the switch, would leave the loss
   // continuous). The analytic gradient is the derivative of the piece it is evaluated in (finite,
   // blind to the switch) and agrees with the one-sided difference inside that piece.
-  const auto& env = flip();
-  std::vector<double> a = env.flip_config().flip_example, b = a;
-  b[4] += 1e-4;
-  const auto pa = env.contact_pattern(a);
-  ASSERT_NE(env.contact_pattern(b), pa) << "no switch within 1e-4";
-  while (b[4] - a[4] > 1e-13) {
-    auto mid = a;
-    mid[4] = 0.5 * (a[4] + b[4]);
-    (env.contact_pattern(mid) == pa ? a : b) = mid;
-  }
-  std::vector<double> grad(15);
-  const double loss = env.loss_and_grad(a, grad);
-  for (double g : grad) EXPECT_TRUE(std::isfinite(g));
-  const double h = 1e-9;
-  auto left = a;
-  left[4] -= h;
-  ASSERT_EQ(env.contact_pattern(left), pa);
-  const double d_left = (loss - env.loss(left)) / h;
-  const double jump = env.loss(b) - loss;
+  const auto r = testing::across_contact_switch(flip(), flip().flip_config().flip_example, 4, 1e-4, 1e-9);
+  ASSERT_TRUE(r.found) << "no switch within 1e-4, or the left window leaves the piece";
+  EXPECT_TRUE(r.gradient_finite);
   std::printf(
       "contact switch at toss-height param %.15f: loss change over %.1e: %.3e m (slope x width %.3e), left difference "
       "%.6e, analytic %.6e\n",
-      a[4], b[4] - a[4], jump, d_left * (b[4] - a[4]), d_left, grad[4]);
-  EXPECT_NEAR(grad[4], d_left, 1e-3 * std::abs(d_left) + 1e-4);
+      r.at, r.bracket, r.jump, r.left_difference * r.bracket, r.left_difference, r.analytic);
+  EXPECT_NEAR(r.analytic, r.left_difference, 1e-3 * std::abs(r.left_difference) + 1e-4);
   // the jump is far larger than the slope times the bracket width
-  EXPECT_GT(std::abs(jump), 1e3 * (std::abs(d_left) + 1.0) * (b[4] - a[4]));
+  EXPECT_GT(std::abs(r.jump), 1e3 * (std::abs(r.left_difference) + 1.0) * r.bracket);
 }
 
 TEST(FlipDeterminism, RerunsAreBitIdentical) {

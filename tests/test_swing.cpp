@@ -232,30 +232,14 @@ TEST(SwingGradient, AcrossAContactSwitchTheLossJumpsAndTheGradientIsOneSided) {
   // floor one step later keeps its inward velocity one step longer: the trajectory, and the loss,
   // jump. The analytic gradient is the derivative of the piece it is evaluated in (finite, blind to
   // the switch) and agrees with the one-sided difference that stays inside that piece.
-  const auto& env = swing("swing-velocity-mesh");
-  std::vector<double> a = {0.1, -0.2, 0.0}, b = a;
-  b[2] += 1e-3;
-  const auto pa = env.contact_pattern(a);
-  ASSERT_NE(env.contact_pattern(b), pa) << "no switch within 1e-3";
-  while (b[2] - a[2] > 1e-13) {
-    auto mid = a;
-    mid[2] = 0.5 * (a[2] + b[2]);
-    (env.contact_pattern(mid) == pa ? a : b) = mid;
-  }
-  std::vector<double> grad(3);
-  const double loss = env.loss_and_grad(a, grad);
-  for (double g : grad) EXPECT_TRUE(std::isfinite(g));
-  const double h = 1e-8;
-  auto left = a;
-  left[2] -= h;
-  ASSERT_EQ(env.contact_pattern(left), pa);
-  const double d_left = (loss - env.loss(left)) / h;
-  const double jump = env.loss(b) - loss;
+  const auto r = testing::across_contact_switch(swing("swing-velocity-mesh"), {0.1, -0.2, 0.0}, 2, 1e-3, 1e-8);
+  ASSERT_TRUE(r.found) << "no switch within 1e-3, or the left window leaves the piece";
+  EXPECT_TRUE(r.gradient_finite);
   std::printf("contact switch at vz param %.15f: loss change over %.1e %.3e m, left difference %.6e, analytic %.6e\n",
-              a[2], b[2] - a[2], jump, d_left, grad[2]);
-  EXPECT_NEAR(grad[2], d_left, 1e-3 * std::abs(d_left) + 1e-5);
+              r.at, r.bracket, r.jump, r.left_difference, r.analytic);
+  EXPECT_NEAR(r.analytic, r.left_difference, 1e-3 * std::abs(r.left_difference) + 1e-5);
   // the jump is far larger than the slope times the bracket width
-  EXPECT_GT(std::abs(jump), 1e3 * (std::abs(d_left) + 1.0) * (b[2] - a[2]));
+  EXPECT_GT(std::abs(r.jump), 1e3 * (std::abs(r.left_difference) + 1.0) * r.bracket);
 }
 
 TEST(SwingDeterminism, RerunsAreBitIdentical) {
