@@ -54,24 +54,115 @@ double BudgetedObjective::record(std::span<const double> x, double loss, bool us
   evals_.push_back({static_cast<std::int64_t>(evals_.size()), loss, best_, used_grad, wall_s,
                     failed ? std::numeric_limits<double>::quiet_NaN() : metric});
   if (counter_) counter_->fetch_add(1, std::memory_order_relaxed);
+  if (serving_) ++replayed_episodes_;
+  // the episode is over: the listener may commit it; a requested stop commits and ends the run
+  const bool stop = stop_ && stop_->load(std::memory_order_relaxed);
+  if (listener_) listener_->episode_finished(*this, stop);
+  if (stop) {
+    interrupted_ = true;
+    throw RunInterrupted{};
+  }
   return failed ? std::numeric_limits<double>::infinity() : loss;
 }
 
+void BudgetedObjective::set_listener(EpisodeListener* listener, const std::atomic<bool>* stop) {
+  listener_ = listener;
+  stop_ = stop;
+}
+
+void BudgetedObjective::set_replay(std::vector<ReplayEntry> entries, std::int64_t episodes) {
+  if (calls_ != 0) throw std::logic_error("set_replay after the run started");
+  replay_ = std::move(entries);
+  replay_cursor_ = 0;
+  replay_episodes_ = episodes;
+}
+
+std::vector<ReplayEntry> BudgetedObjective::take_journal(std::int64_t& first_seq) {
+  first_seq = journal_first_;
+  journal_first_ += static_cast<std::int64_t>(journal_.size());
+  std::vector<ReplayEntry> out;
+  out.swap(journal_);
+  return out;
+}
+
+void BudgetedObjective::check_stop() {
+  if (interrupted_) throw RunInterrupted{};
+  if (stop_ && stop_->load(std::memory_order_relaxed)) {
+    interrupted_ = true;
+    if (listener_) listener_->episode_finished(*this, true);
+    throw RunInterrupted{};
+  }
+}
+
+void BudgetedObjective::end_replay() {
+  if (replay_.empty()) return;
+  // the journal is used up: it must have regenerated exactly the committed episodes, and ended
+  // between episodes (it is committed only there)
+  if (replayed_episodes_ != replay_episodes_ || rl_open_)
+    throw ReplayDiverged("resume: the journal regenerated " + std::to_string(replayed_episodes_) +
+                         " episodes, the database has " + std::to_string(replay_episodes_));
+  replay_.clear();
+  replay_.shrink_to_fit();
+  journal_first_ = calls_;  // the first live call
+}
+
+const ReplayEntry* BudgetedObjective::replay_next(ReplayKind kind, std::span<const double> input) {
+  serving_ = false;
+  if (replay_cursor_ >= replay_.size()) {
+    end_replay();
+    ++calls_;
+    return nullptr;
+  }
+  const ReplayEntry& e = replay_[replay_cursor_];
+  if (e.kind != kind || e.input_hash != replay_input_hash(input))
+    throw ReplayDiverged("resume: call " + std::to_string(calls_) + " differs from the journal's");
+  ++calls_;
+  ++replay_cursor_;
+  serving_ = true;
+  return &e;
+}
+
+void BudgetedObjective::journal(ReplayKind kind, std::span<const double> input, std::vector<double> payload) {
+  if (listener_) journal_.push_back({kind, replay_input_hash(input), std::move(payload)});
+}
+
 double BudgetedObjective::value(std::span<const double> x) {
+  check_stop();
   if (used() >= budget_) throw BudgetExhausted{};
   check_point(x);
+  if (const ReplayEntry* r = replay_next(ReplayKind::value, x))
+    return record(x, r->payload.at(0), false, r->payload.at(2), r->payload.at(1));
   const auto start = std::chrono::steady_clock::now();
   const double loss = env_.loss(x, workspace(0), team_);
-  return record(x, loss, false, seconds_since(start), env_.episode_metric(workspace(0)));
+  const double wall_s = seconds_since(start), metric = env_.episode_metric(workspace(0));
+  journal(ReplayKind::value, x, {loss, metric, wall_s});
+  return record(x, loss, false, wall_s, metric);
 }
 
 double BudgetedObjective::value_and_grad(std::span<const double> x, std::span<double> grad) {
+  check_stop();
   if (used() >= budget_) throw BudgetExhausted{};
   check_point(x);
   if (static_cast<int>(grad.size()) != env_.dim())
     throw std::logic_error("gradient buffer has the wrong size");
-  const auto start = std::chrono::steady_clock::now();
-  const double loss = env_.loss_and_grad(x, grad, workspace(0), team_);
+  double loss = 0.0, wall_s = 0.0, metric = 0.0;
+  if (const ReplayEntry* r = replay_next(ReplayKind::value_and_grad, x)) {
+    if (r->payload.size() != 3 + grad.size()) throw ReplayDiverged("resume: a journal gradient of the wrong size");
+    loss = r->payload[0];
+    metric = r->payload[1];
+    wall_s = r->payload[2];
+    std::copy(r->payload.begin() + 3, r->payload.end(), grad.begin());
+  } else {
+    const auto start = std::chrono::steady_clock::now();
+    loss = env_.loss_and_grad(x, grad, workspace(0), team_);
+    wall_s = seconds_since(start);
+    metric = env_.episode_metric(workspace(0));
+    if (listener_) {
+      std::vector<double> payload = {loss, metric, wall_s};
+      payload.insert(payload.end(), grad.begin(), grad.end());
+      journal(ReplayKind::value_and_grad, x, std::move(payload));
+    }
+  }
   bool finite = std::isfinite(loss);
   for (double g : grad) finite = finite && std::isfinite(g);
   if (!finite) std::fill(grad.begin(), grad.end(), 0.0);
@@ -81,8 +172,7 @@ double BudgetedObjective::value_and_grad(std::span<const double> x, std::span<do
     for (double g : grad) sq += g * g;
     grad_norms_.push_back(std::sqrt(sq));
   }
-  return record(x, finite ? loss : std::numeric_limits<double>::quiet_NaN(), true, seconds_since(start),
-                env_.episode_metric(workspace(0)));
+  return record(x, finite ? loss : std::numeric_limits<double>::quiet_NaN(), true, wall_s, metric);
 }
 
 void BudgetedObjective::values(std::span<const double> xs, std::span<double> out) {
@@ -91,6 +181,7 @@ void BudgetedObjective::values(std::span<const double> xs, std::span<double> out
     throw std::logic_error("batch of " + std::to_string(out.size()) + " points has " +
                            std::to_string(xs.size()) + " values, expected " + std::to_string(out.size() * d));
   if (out.empty()) return;
+  check_stop();
   if (used() >= budget_) throw BudgetExhausted{};
   auto point = [&](std::size_t i) { return xs.subspan(i * d, d); };
   // what one-at-a-time evaluation would reach: the points before the first bad one, within budget
@@ -110,12 +201,23 @@ void BudgetedObjective::values(std::span<const double> xs, std::span<double> out
   struct Outcome {
     double loss = 0.0, wall_s = 0.0, metric = 0.0;
     std::exception_ptr error;
+    bool served = false;
   };
   std::vector<Outcome> outcomes(n);
-  const std::size_t slots = std::min<std::size_t>(n, static_cast<std::size_t>(team_.size()));
+  // a resumed run serves the batch's first points from its journal (in order), simulates the rest
+  std::size_t n_served = 0;
+  while (n_served < n && replay_cursor_ < replay_.size()) {
+    const ReplayEntry* r = replay_next(ReplayKind::value, point(n_served));
+    outcomes[n_served] = {r->payload.at(0), r->payload.at(2), r->payload.at(1), nullptr, true};
+    ++n_served;
+  }
+  std::vector<std::size_t> live;
+  for (std::size_t i = n_served; i < n; ++i) live.push_back(i);
+  const std::size_t slots = std::min<std::size_t>(live.size(), static_cast<std::size_t>(team_.size()));
   for (std::size_t s = 0; s < slots; ++s) workspace(s);
   team_.run(static_cast<int>(slots), [&](int slot) {
-    for (std::size_t i = static_cast<std::size_t>(slot); i < n; i += slots) {
+    for (std::size_t k = static_cast<std::size_t>(slot); k < live.size(); k += slots) {
+      const std::size_t i = live[k];
       const auto start = std::chrono::steady_clock::now();
       try {
         outcomes[i].loss = env_.loss(point(i), *workspaces_[slot], team_);
@@ -128,8 +230,15 @@ void BudgetedObjective::values(std::span<const double> xs, std::span<double> out
   });
   for (std::size_t i = 0; i < n; ++i) {
     if (outcomes[i].error) std::rethrow_exception(outcomes[i].error);
+    serving_ = outcomes[i].served;
+    if (!serving_) {
+      end_replay();  // the first live point checks and closes a journal that ended in this batch
+      ++calls_;
+      journal(ReplayKind::value, point(i), {outcomes[i].loss, outcomes[i].metric, outcomes[i].wall_s});
+    }
     out[i] = record(point(i), outcomes[i].loss, false, outcomes[i].wall_s, outcomes[i].metric);
   }
+  serving_ = false;
   if (bad_point) std::rethrow_exception(bad_point);
   if (n < out.size()) throw BudgetExhausted{};
 }
@@ -158,11 +267,21 @@ void BudgetedObjective::write_observation(std::span<double> observation) const {
 void BudgetedObjective::rl_reset(std::span<double> observation) {
   RlEnv& rl = rl_env();
   if (rl_open_) throw std::logic_error("rl_reset while an episode is open: finish it first (it is recorded)");
+  check_stop();  // between episodes only: an open episode always runs to its end
   if (used() >= budget_) throw BudgetExhausted{};
+  if (const ReplayEntry* r = replay_next(ReplayKind::rl_reset, {})) {
+    if (r->payload.size() != observation.size()) throw ReplayDiverged("resume: a journal observation of the wrong size");
+    std::copy(r->payload.begin(), r->payload.end(), observation.begin());
+    rl_open_ = true;
+    rl_served_ = true;
+    return;
+  }
   rl.reset();
   rl_open_ = true;
+  rl_served_ = false;
   rl_start_ = std::chrono::steady_clock::now();
   write_observation(observation);
+  journal(ReplayKind::rl_reset, {}, std::vector<double>(observation.begin(), observation.end()));
 }
 
 RlStep BudgetedObjective::rl_step(std::span<const double> action, std::span<double> observation) {
@@ -175,6 +294,19 @@ RlStep BudgetedObjective::rl_step(std::span<const double> action, std::span<doub
     if (!(action[i] >= -1.0 && action[i] <= 1.0))
       throw std::logic_error("optimizer gave action[" + std::to_string(i) + "] = " + std::to_string(action[i]) +
                              " outside [-1, 1]");
+  if (rl_served_) {
+    // an episode of the journal: its decisions are answered from it, to its end
+    const ReplayEntry* r = replay_cursor_ < replay_.size() ? replay_next(ReplayKind::rl_step, action) : nullptr;
+    if (!r || r->payload.size() != 3 + observation.size())
+      throw ReplayDiverged("resume: the journal ends inside an RL episode");
+    std::copy(r->payload.begin() + 3, r->payload.end(), observation.begin());
+    if (r->payload[0] == 0.0) return {false, 0.0};
+    rl_open_ = false;
+    rl_served_ = false;
+    const double loss = record({}, r->payload[1], false, r->payload[2], std::numeric_limits<double>::quiet_NaN());
+    return {true, loss};
+  }
+  ++calls_;
   // one decision: the action held for action_repeat env steps, or until the episode ends
   for (int k = 0; k < rl.action_repeat() && !rl.done(); ++k) rl.step(action);
   write_observation(observation);
@@ -183,10 +315,17 @@ RlStep BudgetedObjective::rl_step(std::span<const double> action, std::span<doub
   bool blown_up = false;
   for (const double o : observation) blown_up = blown_up || !std::isfinite(o);
   if (blown_up) std::fill(observation.begin(), observation.end(), 0.0);
-  if (!rl.done() && !blown_up) return {false, 0.0};
+  const bool done = rl.done() || blown_up;
+  const double raw_loss = !done ? 0.0 : blown_up ? std::numeric_limits<double>::quiet_NaN() : rl.final_loss();
+  const double wall_s = done ? seconds_since(rl_start_) : 0.0;
+  if (listener_) {
+    std::vector<double> payload = {done ? 1.0 : 0.0, raw_loss, wall_s};
+    payload.insert(payload.end(), observation.begin(), observation.end());
+    journal(ReplayKind::rl_step, action, std::move(payload));
+  }
+  if (!done) return {false, 0.0};
   rl_open_ = false;
-  const double loss = record({}, blown_up ? std::numeric_limits<double>::quiet_NaN() : rl.final_loss(), false,
-                             seconds_since(rl_start_), std::numeric_limits<double>::quiet_NaN());
+  const double loss = record({}, raw_loss, false, wall_s, std::numeric_limits<double>::quiet_NaN());
   return {true, loss};
 }
 

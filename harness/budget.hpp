@@ -8,16 +8,40 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "common/thread_team.hpp"
 #include "envs/core/env.hpp"
+#include "harness/replay.hpp"
 #include "harness/run_spec.hpp"
 #include "optimizers/core/objective.hpp"
 
 namespace dsb {
+
+// Thrown by the budget wrapper when the harness was asked to stop (SIGTERM, SIGINT) after the
+// episode in progress: what was done is committed and the run resumes later. It is a
+// BudgetExhausted, so optimizers end as they do at the budget; the runner tells them apart by
+// BudgetedObjective::interrupted().
+struct RunInterrupted : BudgetExhausted {};
+
+// Thrown when a resumed run asks for something other than its journal's next entry (another
+// binary, or a bug): the runner then restarts the run from nothing.
+struct ReplayDiverged : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class BudgetedObjective;
+
+// What the runner hears after every finished episode: it commits the new evals and journal
+// entries when it chooses (every few seconds), and always before an interruption.
+class EpisodeListener {
+ public:
+  virtual ~EpisodeListener() = default;
+  virtual void episode_finished(BudgetedObjective& objective, bool commit_now) = 0;
+};
 
 class BudgetedObjective : public Objective {
  public:
@@ -48,7 +72,27 @@ class BudgetedObjective : public Objective {
   // none) with "zero" (how many were exactly 0)}.
   nlohmann::json diagnostics() const;
 
+  // Journaling and resume (harness/replay.hpp). With a listener, every call is journaled and the
+  // listener is told after every episode; `stop` (may be null) is polled after every episode and
+  // before every call: once set, the episode is committed and RunInterrupted thrown.
+  void set_listener(EpisodeListener* listener, const std::atomic<bool>* stop);
+  // entries of a journal to serve before going live, for a run whose first `episodes` evals it
+  // regenerates (ReplayDiverged when it does not)
+  void set_replay(std::vector<ReplayEntry> entries, std::int64_t episodes);
+  // journal entries since the last take, with the call index of the first
+  std::vector<ReplayEntry> take_journal(std::int64_t& first_seq);
+  std::int64_t replayed_episodes() const { return replayed_episodes_; }
+  bool interrupted() const { return interrupted_; }
+
  private:
+  // the journal's next entry when it answers this call (kind and input digest match), else null;
+  // ReplayDiverged when the journal has entries left but they are for another call
+  const ReplayEntry* replay_next(ReplayKind kind, std::span<const double> input);
+  void end_replay();
+  void journal(ReplayKind kind, std::span<const double> input, std::vector<double> payload);
+  void check_stop();
+  double finish_episode(double loss_to_return);
+
   void check_point(std::span<const double> x) const;
   Workspace& workspace(std::size_t slot);
   double record(std::span<const double> x, double loss, bool used_grad, double wall_s, double metric);
@@ -68,7 +112,19 @@ class BudgetedObjective : public Objective {
   void write_observation(std::span<double> observation) const;
   std::unique_ptr<RlEnv> rl_;
   bool rl_open_ = false;
+  bool rl_served_ = false;  // the open episode is answered from the journal
   std::chrono::steady_clock::time_point rl_start_{};
+  // journal and replay
+  EpisodeListener* listener_ = nullptr;
+  const std::atomic<bool>* stop_ = nullptr;
+  bool interrupted_ = false;
+  std::int64_t calls_ = 0;           // objective calls so far (journal sequence)
+  std::int64_t journal_first_ = 0;   // call index of journal_[0]
+  std::vector<ReplayEntry> journal_;
+  std::vector<ReplayEntry> replay_;  // served from the front
+  std::size_t replay_cursor_ = 0;
+  std::int64_t replay_episodes_ = 0, replayed_episodes_ = 0;
+  bool serving_ = false;  // the call being recorded was answered from the journal
 };
 
 }  // namespace dsb

@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <charconv>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <set>
 #include <iostream>
@@ -15,6 +17,8 @@
 #include "common/usable_cpus.hpp"
 #include "harness/commands.hpp"
 #include "harness/grid.hpp"
+#include "harness/interrupt.hpp"
+#include "harness/merge_command.hpp"
 #include "envs/core/lazy_model.hpp"
 #include "harness/plan.hpp"
 #include "harness/runner.hpp"
@@ -30,7 +34,7 @@ struct RunArgs {
   bool all = false;
   std::vector<std::string> envs, optimizers;
   int seeds = 1;
-  std::int64_t budget = 1000;
+  std::string budget = "1000";
   std::string db = "results.sqlite";
   int jobs = 0;     // 0 = usable CPUs / threads
   int threads = 1;  // inside one rollout
@@ -61,6 +65,7 @@ std::string host_name() {
 // any database is opened
 struct CheckedRun {
   std::vector<RunSpec> grid;
+  Shard shard;
   int jobs = 1;
 };
 
@@ -70,19 +75,29 @@ CheckedRun check_run_args(const RunArgs& a) {
   req.envs = a.envs;
   req.optimizers = a.optimizers;
   req.seeds = a.seeds;
-  req.budget = a.budget;
+  {
+    // parsed here, not by CLI11, which saturates 99999999999999999999 to INT64_MAX
+    std::int64_t b = 0;
+    const char* end = a.budget.data() + a.budget.size();
+    const auto [ptr, ec] = std::from_chars(a.budget.data(), end, b);
+    if (a.budget.empty() || ec != std::errc() || ptr != end || b < 1 || b > kMaxBudget)
+      throw UsageError("--budget must be a whole number from 1 to " + std::to_string(kMaxBudget) + ", got '" +
+                       a.budget + "'");
+    req.budget = b;
+  }
+  Shard shard;
   if (!a.shard.empty()) {
     int i = -1, n = -1;
     char tail = 0;
-    if (std::sscanf(a.shard.c_str(), "%d/%d%c", &i, &n, &tail) != 2)
-      throw UsageError("--shard must look like I/N, got '" + a.shard + "'");
-    req.shard_index = i;
-    req.shard_count = n;
+    if (std::sscanf(a.shard.c_str(), "%d/%d%c", &i, &n, &tail) != 2 || n < 1 || n > 100000 || i < 0 || i >= n)
+      throw UsageError("--shard must be I/N with 0 <= I < N <= 100000, got '" + a.shard + "'");
+    shard = {i, n};
   }
-  if (a.jobs < 0) throw UsageError("--jobs must be >= 1, got " + std::to_string(a.jobs));
+  if (a.db.empty()) throw UsageError("--db must name a file, got ''");
+  if (a.jobs < 0 || a.jobs > 1024) throw UsageError("--jobs must be from 1 to 1024, got " + std::to_string(a.jobs));
   if (a.threads < 1 || a.threads > 1024)
     throw UsageError("--threads must be from 1 to 1024, got " + std::to_string(a.threads));
-  return {expand_grid(req), a.jobs > 0 ? a.jobs : std::max(1, usable_cpus() / a.threads)};
+  return {expand_grid(req), shard, a.jobs > 0 ? a.jobs : std::max(1, usable_cpus() / a.threads)};
 }
 
 int command_plan(const RunArgs& a) {
@@ -94,12 +109,12 @@ int command_plan(const RunArgs& a) {
   } catch (const StoreError& e) {
     throw UsageError(std::string("--db: ") + e.what());
   }
-  const GridPlan plan = plan_grid(run.grid, done);
+  const GridPlan plan = plan_grid(run.grid, done, kVersion, run.shard);
   const double planning_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double core_h = plan.pending_core_seconds / 3600.0;
   const int parallel = std::max(1, std::min<int>(run.jobs, static_cast<int>(plan.pending.size())));
   std::cout << fmt::format("plan: {} runs in the grid; {} already done in {}; {} to run ({} episodes)\n",
-                           run.grid.size(), plan.skipped, a.db, plan.pending.size(), plan.pending_episodes);
+                           plan.runs, plan.skipped, a.db, plan.pending.size(), plan.pending_episodes);
   std::cout << fmt::format("  simulation: about {:.3g} core-hours from the envs' cost hints (optimizer overhead, "
                            "e.g. bo's GP, not included)\n", core_h);
   std::cout << fmt::format("  with --jobs {} --threads {}: about {:.3g} h wall for the simulation\n", run.jobs,
@@ -111,8 +126,6 @@ int command_plan(const RunArgs& a) {
 
 int command_run(const RunArgs& a) {
   const CheckedRun run = check_run_args(a);
-  const auto& grid = run.grid;
-  const int jobs = run.jobs;
 
   std::unique_ptr<Store> store;
   try {
@@ -120,11 +133,23 @@ int command_run(const RunArgs& a) {
   } catch (const StoreError& e) {
     throw UsageError(std::string("--db: ") + e.what());
   }
+  const GridPlan plan = plan_grid(run.grid, store->done_keys(), kVersion, run.shard);
   std::FILE* progress = a.quiet ? nullptr : stderr;
-  const auto s = run_grid(grid, *store, jobs, a.threads, progress);
-  std::fprintf(stderr, "harness: %zu runs in the grid: %lld already done, %lld done now, %lld failed; database %s\n",
-               grid.size(), static_cast<long long>(s.skipped), static_cast<long long>(s.done),
+  install_stop_handlers();
+  const auto s = run_grid(plan.pending, plan.skipped, *store, run.jobs, a.threads, progress);
+  if (s.resumed > 0)
+    std::fprintf(stderr, "harness: resumed %lld interrupted runs, %lld of their episodes replayed from the database\n",
+                 static_cast<long long>(s.resumed), static_cast<long long>(s.replayed_episodes));
+  std::fprintf(stderr, "harness: %lld runs in the grid: %lld already done, %lld done now, %lld failed; database %s\n",
+               static_cast<long long>(plan.runs), static_cast<long long>(s.skipped), static_cast<long long>(s.done),
                static_cast<long long>(s.failed), a.db.c_str());
+  if (const int sig = stop_signal(); sig != 0) {
+    std::fprintf(stderr,
+                 "harness: stopped by %s: %lld runs in progress committed their finished episodes; run the same "
+                 "command again to resume them\n",
+                 sig == SIGINT ? "SIGINT" : "SIGTERM", static_cast<long long>(s.interrupted));
+    return 128 + sig;
+  }
   return 0;
 }
 
@@ -196,6 +221,12 @@ int harness_main(int argc, char** argv) {
   check->add_option("--db", check_db, "results database")->required();
   check->add_option("--baseline", check_baseline, "baseline CSV (data/baselines/NAME.csv)")->required();
 
+  std::string merge_into;
+  std::vector<std::string> merge_inputs;
+  auto* merge = app.add_subcommand("merge", "combine shard databases by run key (conflicting runs refused)");
+  merge->add_option("--into", merge_into, "the merged database (created or added to)")->required();
+  merge->add_option("inputs", merge_inputs, "shard databases to merge")->required();
+
   std::string export_db, export_out;
   auto* exporter = app.add_subcommand("export", "write the database's result table as a baseline CSV");
   exporter->add_option("--db", export_db, "results database")->required();
@@ -228,6 +259,7 @@ int harness_main(int argc, char** argv) {
       return run_crosscheck(cc_envs, std::cout);
     }
     if (check->parsed()) return command_check(check_db, check_baseline);
+    if (merge->parsed()) return command_merge(merge_into, merge_inputs);
     if (exporter->parsed()) return command_export(export_db, export_out);
     if (report->parsed()) return command_report(report_db, report_out, report_landscapes);
     if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);

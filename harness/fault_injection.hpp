@@ -4,7 +4,11 @@
 // same database. It exists only in builds configured with DSB_FAULT_INJECTION=ON (the default
 // only with DSB_BUILD_TESTS=ON) and fires only when both variables are set:
 //   DSB_FAULT_INJECTION=kill-after-episodes  DSB_FAULT_KILL_AFTER_EPISODES=K
-// A build without the option ignores both, so a stray variable cannot kill a production run; a
+// and, for mid-run interruptions (a run stopped after a given episode of its own):
+//   DSB_FAULT_INJECTION=signal-in-run  DSB_FAULT_AT_EPISODE=K  DSB_FAULT_SIGNAL=15 (TERM) or 9 (KILL)
+// (the first run to record its K-th episode commits it, then raises the signal), and
+//   DSB_FAULT_COMMIT_EVERY_EPISODE=1 (commit after every episode instead of every few seconds).
+// A build without the option ignores all of them, so a stray variable cannot kill a production run; a
 // build with it says so on stderr whenever the injection is armed.
 #include <cstdint>
 
@@ -15,5 +19,13 @@ std::int64_t fault_kill_after_episodes();
 
 // kills the process (SIGKILL) when armed and `episodes` has reached the count
 void fault_maybe_kill(std::int64_t episodes);
+
+// signal-in-run: the signal to raise once a run has recorded `run_episodes` episodes (after
+// committing them), or 0
+int fault_signal_in_run(std::int64_t run_episodes);
+void fault_raise(int sig);
+
+// DSB_FAULT_COMMIT_EVERY_EPISODE
+bool fault_commit_every_episode();
 
 }  // namespace dsb

@@ -20,11 +20,11 @@ std::uint64_t per_run_seed(const std::string& env, const std::string& optimizer,
 }
 
 std::vector<RunSpec> expand_grid(const GridRequest& req) {
-  if (req.seeds < 1) throw UsageError("--seeds must be >= 1, got " + std::to_string(req.seeds));
-  if (req.budget < 1) throw UsageError("--budget must be >= 1, got " + std::to_string(req.budget));
-  if (req.shard_count < 1 || req.shard_index < 0 || req.shard_index >= req.shard_count)
-    throw UsageError("--shard must be I/N with 0 <= I < N, got " + std::to_string(req.shard_index) +
-                     "/" + std::to_string(req.shard_count));
+  if (req.seeds < 1 || req.seeds > kMaxSeeds)
+    throw UsageError("--seeds must be from 1 to " + std::to_string(kMaxSeeds) + ", got " + std::to_string(req.seeds));
+  if (req.budget < 1 || req.budget > kMaxBudget)
+    throw UsageError("--budget must be from 1 to " + std::to_string(kMaxBudget) + ", got " +
+                     std::to_string(req.budget));
 
   std::vector<std::string> envs = req.envs;
   std::vector<std::string> optimizers = req.optimizers;
@@ -50,7 +50,6 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
   }
 
   std::vector<RunSpec> grid;
-  std::size_t index = 0;
   for (std::size_t e = 0; e < envs.size(); ++e) {
     for (const auto& opt : optimizers) {
       if (optimizer_entry(opt).needs_gradient && !differentiable[e]) {
@@ -65,8 +64,7 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
                            "' has none (see `harness list`)");
         continue;
       }
-      for (int s = 0; s < req.seeds; ++s, ++index) {
-        if (static_cast<int>(index % req.shard_count) != req.shard_index) continue;
+      for (int s = 0; s < req.seeds; ++s) {
         grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s)});
       }
     }

@@ -1,7 +1,7 @@
 #pragma once
 // The grid of runs: env x optimizer x seed at one budget, in a canonical order (envs, then
-// optimizers, in the order given; seeds ascending). A shard I/N keeps the runs whose index in that
-// order is I mod N, so every run lies in exactly one shard.
+// optimizers, in the order given; seeds ascending). Shards (harness/plan.hpp) are cut from the
+// run keys, not from this order.
 #include <string>
 #include <vector>
 
@@ -15,9 +15,11 @@ struct GridRequest {
   std::vector<std::string> optimizers;  // explicit names (empty with all = every optimizer)
   int seeds = 1;
   std::int64_t budget = 1000;
-  int shard_index = 0;
-  int shard_count = 1;
 };
+
+// the largest --budget and --seeds a grid accepts (a run keeps its evals in memory: 48 bytes each)
+inline constexpr std::int64_t kMaxBudget = 1'000'000;
+inline constexpr int kMaxSeeds = 10'000;
 
 // Validates names and applicability (UsageError naming the bad value) and expands the grid.
 // Pairs that are inapplicable (gradient optimizer on a non-differentiable env) are skipped when

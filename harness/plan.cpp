@@ -3,7 +3,9 @@
 #include <filesystem>
 
 #include "common/config_hash.hpp"
+#include "common/rng.hpp"
 #include "envs/core/registry.hpp"
+#include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
 #include "optimizers/core/registry.hpp"
 
@@ -24,14 +26,28 @@ const ResolvedConfig& resolve(std::map<std::string, ResolvedConfig>& cache, cons
 
 }  // namespace
 
-GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done) {
+int shard_of(const RunKey& key, int count) {
+  std::string text;
+  for (const std::string& part : {key.env, key.optimizer, std::to_string(key.seed), std::to_string(key.budget),
+                                  key.env_config_hash, key.opt_config_hash}) {
+    text += part;
+    text.push_back('\0');
+  }
+  std::uint64_t h = fnv1a64(text);
+  return static_cast<int>(splitmix64(h) % static_cast<std::uint64_t>(count));
+}
+
+GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done,
+                   const std::string& harness_version, Shard shard) {
   GridPlan plan;
   for (const auto& spec : grid) {
     const ResolvedConfig& env =
         resolve(plan.env_configs, spec.env, [](const std::string& n) { return shared_env(n)->config(); });
     const ResolvedConfig& opt =
         resolve(plan.opt_configs, spec.optimizer, [](const std::string& n) { return make_optimizer(n)->config(); });
-    RunKey key{spec.env, spec.optimizer, spec.seed, spec.budget, env.hash, opt.hash};
+    RunKey key{spec.env, spec.optimizer, spec.seed, spec.budget, env.hash, opt.hash, harness_version};
+    if (shard.count > 1 && shard_of(key, shard.count) != shard.index) continue;
+    ++plan.runs;
     if (done.count(key)) {
       ++plan.skipped;
       continue;
@@ -47,14 +63,13 @@ std::set<RunKey> done_keys_of_file(const std::string& path) {
   std::set<RunKey> keys;
   if (!std::filesystem::exists(path)) return keys;
   Database db(path, Database::Mode::read_only);
-  Statement has_runs(db.handle(), "SELECT count(*) FROM sqlite_master WHERE type='table' AND name='runs'");
-  if (!has_runs.step() || has_runs.column_int(0) == 0) return keys;
+  if (check_schema(db) == 0) return keys;  // refuses a file that is not a harness database
   Statement q(db.handle(),
-              "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash FROM runs "
+              "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version FROM runs "
               "WHERE status='done'");
   while (q.step())
     keys.insert({q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
-                 q.column_text(4), q.column_text(5)});
+                 q.column_text(4), q.column_text(5), q.column_text(6)});
   return keys;
 }
 

@@ -29,6 +29,7 @@ struct PlannedRun {
 };
 
 struct GridPlan {
+  std::int64_t runs = 0;            // runs of the grid in this shard
   std::vector<PlannedRun> pending;  // grid order, runs not done yet
   std::int64_t skipped = 0;         // runs already done
   std::int64_t pending_episodes = 0;
@@ -36,7 +37,18 @@ struct GridPlan {
   std::map<std::string, ResolvedConfig> env_configs, opt_configs;  // by name
 };
 
-GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done);
+// A shard I/N of the grid: the runs whose key hashes to I mod N (shard_of), so adding an env or an
+// optimizer, or reordering the names, moves no run to another shard.
+struct Shard {
+  int index = 0, count = 1;
+};
+
+// the shard of a run: FNV-1a over "env\0optimizer\0seed\0budget\0env_config_hash\0opt_config_hash",
+// mixed by splitmix64, mod count (the harness version is not hashed: a new version keeps the cut)
+int shard_of(const RunKey& key, int count);
+
+GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done,
+                   const std::string& harness_version, Shard shard = {});
 
 // keys of the 'done' runs of an existing database, opened read-only (a file that is not a
 // harness database throws StoreError); an empty set when the file does not exist

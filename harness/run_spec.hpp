@@ -30,7 +30,7 @@ struct EvalRecord {
 };
 
 struct RunResult {
-  std::string status;  // "done" or "failed"
+  std::string status;  // "done" or "failed" (execute_run also: "interrupted", "diverged")
   std::int64_t episodes = 0;
   std::int64_t failed_episodes = 0;
   double best_loss = 0.0;  // NaN when no episode succeeded
@@ -41,6 +41,7 @@ struct RunResult {
   // {"optimizer": Optimizer::diagnostics(), "objective": BudgetedObjective::diagnostics()};
   // stored as runs.diagnostics (JSON); deterministic, no timings
   nlohmann::json diagnostics;
+  std::int64_t replayed_episodes = 0;  // episodes answered from a resumed run's journal (not stored)
 };
 
 }  // namespace dsb

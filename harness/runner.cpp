@@ -8,6 +8,7 @@
 #include "envs/core/registry.hpp"
 #include "harness/budget.hpp"
 #include "harness/fault_injection.hpp"
+#include "harness/interrupt.hpp"
 #include "harness/plan.hpp"
 #include "harness/progress.hpp"
 #include "optimizers/core/registry.hpp"
@@ -15,20 +16,29 @@
 namespace dsb {
 
 RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
-                      std::atomic<std::int64_t>* episode_counter, ThreadTeam* team) {
+                      std::atomic<std::int64_t>* episode_counter, ThreadTeam* team, RunControl* control) {
   RunResult result;
   const auto start = std::chrono::steady_clock::now();
   BudgetedObjective objective(env, spec.budget, episode_counter, team);
+  if (control) {
+    objective.set_listener(control->listener, control->stop);
+    objective.set_replay(std::move(control->journal), control->journal_episodes);
+  }
   Rng rng(spec.rng_seed);
   result.status = "done";
   try {
     optimizer.minimize(objective, rng);
   } catch (const BudgetExhausted&) {
-    // the normal end: the budget is spent
+    // the normal end: the budget is spent (or a stop request, below)
+  } catch (const ReplayDiverged& e) {
+    result.status = "diverged";
+    result.error = e.what();
   } catch (const std::exception& e) {
     result.status = "failed";
     result.error = e.what();
   }
+  // an optimizer may catch a stop like the budget's end and return: the objective knows
+  if (objective.interrupted()) result.status = "interrupted";
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.episodes = objective.used();
   result.failed_episodes = objective.failed_episodes();
@@ -36,40 +46,94 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
   result.best_x = objective.best_x();
   result.evals = objective.evals();
   result.diagnostics = {{"optimizer", optimizer.diagnostics()}, {"objective", objective.diagnostics()}};
+  result.replayed_episodes = objective.replayed_episodes();
   return result;
 }
 
-GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs, int threads,
-                     std::FILE* progress_out) {
-  GridSummary summary;
-  const GridPlan plan = plan_grid(grid, store.done_keys());
-  const std::vector<PlannedRun>& pending = plan.pending;
-  summary.skipped = plan.skipped;
+namespace {
 
-  Progress progress(static_cast<std::int64_t>(pending.size()), plan.pending_episodes, progress_out);
+// commits a running run's new episodes and journal every kCommitIntervalS, and at once when asked
+class CommitListener : public EpisodeListener {
+ public:
+  CommitListener(Store& store, std::int64_t run_id, std::int64_t committed)
+      : store_(store), run_id_(run_id), committed_(committed), last_(std::chrono::steady_clock::now()) {}
+
+  void episode_finished(BudgetedObjective& objective, bool commit_now) override {
+    const auto now = std::chrono::steady_clock::now();
+    const int fault = fault_signal_in_run(objective.used());
+    commit_now = commit_now || fault != 0 || fault_commit_every_episode();
+    if (!commit_now && std::chrono::duration<double>(now - last_).count() < kCommitIntervalS) return;
+    const auto& evals = objective.evals();
+    const auto first = static_cast<std::size_t>(std::min<std::int64_t>(committed_, evals.size()));
+    std::int64_t first_seq = 0;
+    const std::vector<ReplayEntry> journal = objective.take_journal(first_seq);
+    store_.append_progress(run_id_, std::span<const EvalRecord>(evals).subspan(first), first_seq, journal);
+    committed_ = static_cast<std::int64_t>(evals.size());
+    last_ = now;
+    if (fault != 0) fault_raise(fault);
+  }
+
+ private:
+  Store& store_;
+  std::int64_t run_id_, committed_;
+  std::chrono::steady_clock::time_point last_;
+};
+
+}  // namespace
+
+GridSummary run_grid(const std::vector<PlannedRun>& pending, std::int64_t skipped, Store& store, int jobs,
+                     int threads, std::FILE* progress_out) {
+  GridSummary summary;
+  summary.skipped = skipped;
+  std::int64_t pending_episodes = 0;
+  for (const auto& p : pending) pending_episodes += p.spec.budget;
+
+  Progress progress(static_cast<std::int64_t>(pending.size()), pending_episodes, progress_out);
   if (progress_out && summary.skipped > 0)
     std::fprintf(progress_out, "resuming: %lld runs already done, %zu to run\n",
                  static_cast<long long>(summary.skipped), pending.size());
   progress.start();
 
+  const std::atomic<bool>& stop = stop_requested();
   std::atomic<std::size_t> next{0};
-  std::atomic<std::int64_t> n_done{0}, n_failed{0};
+  std::atomic<std::int64_t> n_done{0}, n_failed{0}, n_interrupted{0}, n_resumed{0}, n_replayed{0};
   std::mutex error_mutex;
   std::exception_ptr store_error;
   auto worker = [&] {
     ThreadTeam team(threads);  // this job's threads, reused by all its runs
     for (;;) {
+      if (stop.load()) return;  // no new run after a stop request
       const std::size_t i = next.fetch_add(1);
       if (i >= pending.size()) return;
       const PlannedRun& p = pending[i];
       try {
-        const std::int64_t run_id =
-            store.begin_run(p.key, p.spec.rng_seed, p.env_config->config, p.opt_config->config);
+        RunStart start = store.begin_run(p.key, p.spec.rng_seed, p.env_config->config, p.opt_config->config);
         const auto env = shared_env(p.spec.env);
-        const auto opt = make_optimizer(p.spec.optimizer);
-        const RunResult r = execute_run(p.spec, *env, *opt, &progress.episodes(), &team);
+        RunResult r;
+        for (int attempt = 0;; ++attempt) {
+          // a resumed run replays its journal; one that diverged from it starts over without
+          const auto opt = make_optimizer(p.spec.optimizer);
+          CommitListener listener(store, start.run_id, start.committed_episodes);
+          RunControl control{&listener, &stop, std::move(start.journal), start.committed_episodes};
+          r = execute_run(p.spec, *env, *opt, &progress.episodes(), &team, &control);
+          if (r.status != "diverged" || attempt > 0) break;
+          if (progress_out)
+            std::fprintf(progress_out, "\nharness: %s: %s; running it again from the start\n", p.key.text().c_str(),
+                         r.error.c_str());
+          store.reset_progress(start.run_id);
+          start = RunStart{start.run_id, 0, {}};
+        }
         fault_maybe_kill(progress.episodes().load());
-        store.finish_run(run_id, r);
+        if (start.committed_episodes > 0) {
+          n_resumed.fetch_add(1);
+          n_replayed.fetch_add(r.replayed_episodes);
+        }
+        if (r.status == "interrupted") {
+          n_interrupted.fetch_add(1);
+          continue;  // committed; the next harness resumes it
+        }
+        if (r.status == "diverged") r.status = "failed";
+        store.finish_run(start.run_id, r);
         (r.status == "done" ? n_done : n_failed).fetch_add(1);
         progress.run_finished(r.status != "done");
       } catch (...) {
@@ -88,6 +152,9 @@ GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs, i
   if (store_error) std::rethrow_exception(store_error);
   summary.done = n_done.load();
   summary.failed = n_failed.load();
+  summary.interrupted = n_interrupted.load();
+  summary.resumed = n_resumed.load();
+  summary.replayed_episodes = n_replayed.load();
   return summary;
 }
 

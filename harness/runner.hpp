@@ -1,12 +1,16 @@
 #pragma once
 // Runs a grid: skips runs already done in the store, executes the rest on `jobs` worker threads
-// (each run with its own env, optimizer and RNG, so results do not depend on jobs or order), and
-// commits each run with its evals when it ends.
+// (each run with its own env, optimizer and RNG, so results do not depend on jobs or order),
+// commits each run's episodes as it goes (every kCommitIntervalS) and the run when it ends. A run
+// an earlier harness left unfinished resumes by replaying its journal (harness/replay.hpp). A stop
+// request (harness/interrupt.hpp) ends every run after its current episode, committed.
 #include <cstdio>
 #include <vector>
 
 #include "common/thread_team.hpp"
 #include "envs/core/env.hpp"
+#include "harness/budget.hpp"
+#include "harness/plan.hpp"
 #include "harness/run_spec.hpp"
 #include "harness/store.hpp"
 #include "optimizers/core/optimizer.hpp"
@@ -16,17 +20,33 @@ namespace dsb {
 // One run of an optimizer on an env under the budget wrapper, with `team` (may be null: one
 // thread) for the threads inside its rollouts and batches. Never throws for optimizer or
 // simulation failures: they become status "failed" with the error text.
+// With `control`, the run journals every call to control->listener, serves control->journal
+// first (a resume), and stops when *control->stop is set: status "interrupted" (nothing final to
+// store), or "diverged" when the journal does not fit the run (start it again without it).
+struct RunControl {
+  EpisodeListener* listener = nullptr;
+  const std::atomic<bool>* stop = nullptr;
+  std::vector<ReplayEntry> journal;
+  std::int64_t journal_episodes = 0;
+};
 RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
-                      std::atomic<std::int64_t>* episode_counter = nullptr, ThreadTeam* team = nullptr);
+                      std::atomic<std::int64_t>* episode_counter = nullptr, ThreadTeam* team = nullptr,
+                      RunControl* control = nullptr);
+
+// seconds between commits of a running run's episodes
+inline constexpr double kCommitIntervalS = 2.0;
 
 struct GridSummary {
   std::int64_t skipped = 0, done = 0, failed = 0;
+  std::int64_t interrupted = 0;        // runs stopped by a signal, committed, to resume
+  std::int64_t resumed = 0;            // runs that resumed an earlier attempt
+  std::int64_t replayed_episodes = 0;  // episodes those served from their journals
 };
 
 // `jobs` runs at once, each with a team of `threads` threads. Runs already done are recognised by
 // their keys alone: configs are resolved once per distinct env and optimizer name, and no env
 // model is built for a run that is skipped.
-GridSummary run_grid(const std::vector<RunSpec>& grid, Store& store, int jobs, int threads,
-                     std::FILE* progress_out);
+GridSummary run_grid(const std::vector<PlannedRun>& pending, std::int64_t skipped, Store& store, int jobs,
+                     int threads, std::FILE* progress_out);
 
 }  // namespace dsb

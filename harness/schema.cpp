@@ -1,6 +1,7 @@
 #include "harness/schema.hpp"
 
 #include <algorithm>
+#include <filesystem>
 #include <map>
 #include <set>
 #include <vector>
@@ -9,17 +10,10 @@ namespace dsb {
 
 namespace {
 
-// The newest schema, for a new file. Columns added by migrations come last in their table, so a
-// migrated file and a new one have the same column order.
-const char* kCreateSchema = R"sql(
-CREATE TABLE meta(
-  key TEXT PRIMARY KEY,
-  value TEXT NOT NULL);
-CREATE TABLE configs(
-  hash TEXT PRIMARY KEY,
-  kind TEXT NOT NULL,           -- 'env' or 'optimizer'
-  json TEXT NOT NULL);          -- resolved config, canonical JSON
-CREATE TABLE runs(
+// The runs table under a name (the migration to version 3 builds it beside the old one). Columns
+// added by migrations come last, so a migrated file and a new one have the same column order.
+std::string runs_table_sql(const std::string& name) {
+  return "CREATE TABLE " + name + R"sql((
   run_id INTEGER PRIMARY KEY,
   env TEXT NOT NULL,
   optimizer TEXT NOT NULL,
@@ -37,11 +31,39 @@ CREATE TABLE runs(
   error TEXT,
   started_at TEXT,
   finished_at TEXT,
-  harness_version TEXT,
+  harness_version TEXT NOT NULL DEFAULT '',  -- part of the run key (version 3)
   git_sha TEXT,
   host TEXT,
   diagnostics TEXT,             -- JSON {"optimizer": {...}, "objective": {...}} (version 2)
-  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash));
+  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version));
+)sql";
+}
+
+// What a run that is not done yet needs to be resumed by replay (version 3): one row per
+// objective call (kind: harness/replay.hpp), the digest of the call's input and what the call
+// returned (payload: doubles, native byte order). A run's rows are deleted when it ends.
+const char* kReplayTable = R"sql(
+CREATE TABLE replay(
+  run_id INTEGER NOT NULL REFERENCES runs(run_id),
+  seq INTEGER NOT NULL,         -- 0-based call index within the run
+  kind INTEGER NOT NULL,
+  input_hash INTEGER NOT NULL,
+  payload BLOB NOT NULL,
+  PRIMARY KEY(run_id, seq)) WITHOUT ROWID;
+)sql";
+
+// the newest schema, for a new file
+std::string create_schema_sql() {
+  return R"sql(
+CREATE TABLE meta(
+  key TEXT PRIMARY KEY,
+  value TEXT NOT NULL);
+CREATE TABLE configs(
+  hash TEXT PRIMARY KEY,
+  kind TEXT NOT NULL,           -- 'env' or 'optimizer'
+  json TEXT NOT NULL);          -- resolved config, canonical JSON
+)sql" + runs_table_sql("runs") +
+         R"sql(
 CREATE TABLE evals(
   run_id INTEGER NOT NULL REFERENCES runs(run_id),
   episode INTEGER NOT NULL,     -- 0-based
@@ -52,18 +74,36 @@ CREATE TABLE evals(
   failed INTEGER NOT NULL DEFAULT 0,
   metric REAL,                  -- optional second per-episode metric, NULL when none (version 2)
   PRIMARY KEY(run_id, episode)) WITHOUT ROWID;
-)sql";
+)sql" + kReplayTable;
+}
 
 // One step of the chain: SQL that takes a database of version `from` to version from + 1.
 struct Migration {
   int from;
-  const char* sql;
+  std::string sql;
 };
 
-const Migration kMigrations[] = {
-    {1, "ALTER TABLE runs ADD COLUMN diagnostics TEXT;"
-        "ALTER TABLE evals ADD COLUMN metric REAL;"},
-};
+std::vector<Migration> migrations() {
+  // 2 -> 3: the run key gains harness_version. SQLite cannot change a UNIQUE constraint, so the
+  // runs table is rebuilt beside the old one (run_ids kept, so evals still point at their runs;
+  // prepare_schema migrates with foreign keys off), then the replay table is added.
+  const std::string columns =
+      "run_id, env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, "
+      "failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, {version}, git_sha, host, "
+      "diagnostics";
+  auto with = [&](const std::string& version) {
+    std::string c = columns;
+    return c.replace(c.find("{version}"), 9, version);
+  };
+  return {
+      {1, "ALTER TABLE runs ADD COLUMN diagnostics TEXT;"
+          "ALTER TABLE evals ADD COLUMN metric REAL;"},
+      {2, runs_table_sql("runs_v3") + "INSERT INTO runs_v3(" + with("harness_version") + ") SELECT " +
+              with("COALESCE(harness_version, '')") + " FROM runs;"
+              "DROP TABLE runs;"
+              "ALTER TABLE runs_v3 RENAME TO runs;" + kReplayTable},
+  };
+}
 
 // The columns every table must have at a version (a file may have more).
 std::map<std::string, std::vector<std::string>> required_columns(int version) {
@@ -79,6 +119,7 @@ std::map<std::string, std::vector<std::string>> required_columns(int version) {
     cols["runs"].push_back("diagnostics");
     cols["evals"].push_back("metric");
   }
+  if (version >= 3) cols["replay"] = {"run_id", "seq", "kind", "input_hash", "payload"};
   return cols;
 }
 
@@ -140,23 +181,27 @@ int check_schema(Database& db) {
 }
 
 void prepare_schema(Database& db) {
-  check_schema(db);  // refuse a foreign or newer file before the first write
-  db.exec("PRAGMA journal_mode=WAL");
-  db.exec("PRAGMA synchronous=NORMAL");
-  db.exec("PRAGMA foreign_keys=ON");
+  // refuse a foreign or newer file before the first write; an existing SQLite file without any
+  // table is somebody's database too (only a missing or 0-byte file becomes a new one)
+  if (check_schema(db) == 0) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(db.path(), ec);
+    if (!ec && size > 0) not_ours(db, "it is a SQLite database without harness tables");
+  }
+  db.exec("PRAGMA foreign_keys=OFF");  // a migration may rebuild a referenced table (2 -> 3)
   Transaction tx(db);
   // again under the write lock: another process may have created or migrated the file meanwhile
   int version = check_schema(db);
   if (version == 0) {
-    db.exec(kCreateSchema);
+    db.exec(create_schema_sql());
     Statement meta(db.handle(), "INSERT INTO meta(key, value) VALUES ('schema_version', ?)");
     meta.bind(1, std::to_string(kSchemaVersion)).run();
   } else if (version < kSchemaVersion) {
     // the chain of steps, in order, all in this transaction
     while (version < kSchemaVersion) {
-      const auto* step = std::find_if(std::begin(kMigrations), std::end(kMigrations),
-                                      [&](const Migration& m) { return m.from == version; });
-      if (step == std::end(kMigrations))
+      const auto chain = migrations();
+      const auto step = std::find_if(chain.begin(), chain.end(), [&](const Migration& m) { return m.from == version; });
+      if (step == chain.end())
         throw StoreError("no migration from schema_version " + std::to_string(version));
       db.exec(step->sql);
       ++version;
@@ -165,6 +210,10 @@ void prepare_schema(Database& db) {
     meta.bind(1, std::to_string(kSchemaVersion)).run();
   }
   tx.commit();
+  // after the schema exists: a file is never left with WAL's header but no harness tables
+  db.exec("PRAGMA journal_mode=WAL");
+  db.exec("PRAGMA synchronous=NORMAL");
+  db.exec("PRAGMA foreign_keys=ON");
 }
 
 }  // namespace dsb

@@ -6,6 +6,8 @@
 //   1  runs, evals, configs, meta (the first release)
 //   2  + runs.diagnostics (JSON: what the optimizer and the objective saw during the run)
 //      + evals.metric (REAL, NULL: an optional second per-episode metric)
+//   3  runs.harness_version is part of the run key (UNIQUE; NOT NULL, '' for older rows) and the
+//      table `replay` holds what a run that is not done yet needs to be resumed by replay
 // A later version adds one migration step (from = kSchemaVersion - 1) and bumps kSchemaVersion.
 #include <string>
 
@@ -13,7 +15,7 @@
 
 namespace dsb {
 
-inline constexpr int kSchemaVersion = 2;
+inline constexpr int kSchemaVersion = 3;
 
 // The schema_version of an opened file: 0 for an empty database (no tables at all). Throws
 // StoreError naming the file when it is not a harness database (tables but no meta table, no

@@ -7,9 +7,18 @@
 
 namespace dsb {
 
+namespace {
+
+// "database 'FILE': MESSAGE": what SQLite said, naming the file it said it about
+std::string error_of(sqlite3* db) {
+  const char* file = sqlite3_db_filename(db, "main");
+  return std::string("database '") + (file && *file ? file : "(temporary)") + "': " + sqlite3_errmsg(db);
+}
+
+}  // namespace
+
 Statement::Statement(sqlite3* db, const std::string& sql) : db_(db) {
-  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt_, nullptr) != SQLITE_OK)
-    throw StoreError(std::string("sqlite: ") + sqlite3_errmsg(db) + " in: " + sql);
+  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt_, nullptr) != SQLITE_OK) throw StoreError(error_of(db));
 }
 
 Statement::~Statement() { sqlite3_finalize(stmt_); }
@@ -32,6 +41,11 @@ Statement& Statement::bind(int index, const std::string& v) {
   return *this;
 }
 
+Statement& Statement::bind_blob(int index, const std::string& bytes) {
+  sqlite3_bind_blob(stmt_, index, bytes.data(), static_cast<int>(bytes.size()), SQLITE_TRANSIENT);
+  return *this;
+}
+
 Statement& Statement::bind_null(int index) {
   sqlite3_bind_null(stmt_, index);
   return *this;
@@ -41,7 +55,7 @@ bool Statement::step() {
   const int rc = sqlite3_step(stmt_);
   if (rc == SQLITE_ROW) return true;
   if (rc == SQLITE_DONE) return false;
-  throw StoreError(std::string("sqlite: ") + sqlite3_errmsg(db_));
+  throw StoreError(error_of(db_));
 }
 
 void Statement::run() {
@@ -66,6 +80,13 @@ std::string Statement::column_text(int col) const {
   const auto* p = sqlite3_column_text(stmt_, col);
   return p ? std::string(reinterpret_cast<const char*>(p)) : std::string();
 }
+
+std::string Statement::column_blob(int col) const {
+  const auto* p = static_cast<const char*>(sqlite3_column_blob(stmt_, col));
+  return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col))) : std::string();
+}
+
+int Statement::column_type(int col) const { return sqlite3_column_type(stmt_, col); }
 
 bool Statement::column_is_null(int col) const {
   return sqlite3_column_type(stmt_, col) == SQLITE_NULL;

@@ -26,13 +26,16 @@ class Statement {
   Statement& bind(int index, double v);  // NaN binds as NULL (SQLite has no NaN)
   Statement& bind(int index, const std::string& v);
   Statement& bind_null(int index);
+  Statement& bind_blob(int index, const std::string& bytes);
   bool step();  // true while a row is available
   void run();   // step to completion
   void reset();
   std::int64_t column_int(int col) const;
   double column_double(int col) const;  // NULL reads as NaN
   std::string column_text(int col) const;
+  std::string column_blob(int col) const;
   bool column_is_null(int col) const;
+  int column_type(int col) const;  // SQLite's type code: 1 integer, 2 real, 3 text, 4 blob, 5 NULL
 
  private:
   sqlite3* db_;

@@ -1,31 +1,52 @@
 #pragma once
-// The results database (schema of design.md and harness/schema.hpp): runs, evals, configs, meta.
-// WAL mode, one writer. Opening refuses a foreign or newer file and migrates an older one.
-// A run row is inserted as 'running' when it starts; its evals and final status are committed
-// together in one transaction when it ends, so a killed harness leaves no run that counts as done.
+// The results database (schema of design.md and harness/schema.hpp): runs, evals, configs, meta,
+// replay. WAL mode, one writer: a Store holds an exclusive lock on the file (flock on the sidecar
+// FILE-lock, released by the kernel when the process ends, however it ends), so a second harness
+// on the same file is refused with a message naming the first. Opening refuses a foreign or newer
+// file and migrates an older one. A run row is inserted as 'running' when it starts; its episodes
+// and their journal (harness/replay.hpp) are committed as it goes (append_progress), and its
+// final status when it ends, so a killed harness leaves no run that counts as done and loses at
+// most the episodes since the last commit.
 #include <cstdint>
 #include <mutex>
 #include <optional>
 #include <set>
+#include <span>
+#include <vector>
 #include <string>
 #include <tuple>
 
 #include <nlohmann/json.hpp>
 
+#include "harness/file_lock.hpp"
+#include "harness/replay.hpp"
 #include "harness/run_spec.hpp"
 #include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
 
 namespace dsb {
 
-// the UNIQUE key of a run
+// the UNIQUE key of a run: runs of another harness version or config are other runs
 struct RunKey {
   std::string env, optimizer;
   int seed;
   std::int64_t budget;
   std::string env_config_hash, opt_config_hash;
-  auto tie() const { return std::tie(env, optimizer, seed, budget, env_config_hash, opt_config_hash); }
+  std::string harness_version;
+  auto tie() const {
+    return std::tie(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version);
+  }
   bool operator<(const RunKey& o) const { return tie() < o.tie(); }
+  bool operator==(const RunKey& o) const { return tie() == o.tie(); }
+  // "env/optimizer/seed S/budget B/config E,O/version V", for messages
+  std::string text() const;
+};
+
+// where a run starts: its row, and what an interrupted earlier attempt committed
+struct RunStart {
+  std::int64_t run_id = 0;
+  std::int64_t committed_episodes = 0;  // evals already in the database
+  std::vector<ReplayEntry> journal;     // to replay them
 };
 
 struct Provenance {
@@ -41,16 +62,28 @@ class Store {
   // keys of runs whose status is 'done'
   std::set<RunKey> done_keys();
 
-  // Records the configs and marks the run 'running' (inserting or reusing its row); returns run_id.
-  std::int64_t begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohmann::json& env_config,
-                         const nlohmann::json& opt_config);
+  // Records the configs and marks the run 'running' (inserting or reusing its row). A run left
+  // 'running' by an interrupted harness keeps its committed episodes and returns them with their
+  // journal; a 'failed' one starts again from nothing.
+  RunStart begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohmann::json& env_config,
+                     const nlohmann::json& opt_config);
 
-  // Replaces the run's evals and sets its final status and diagnostics, in one transaction.
+  // Commits a running run's new episodes (episode numbers from evals[0].episode on) and journal
+  // entries (call indices from first_seq on) in one transaction.
+  void append_progress(std::int64_t run_id, std::span<const EvalRecord> evals, std::int64_t first_seq,
+                       const std::vector<ReplayEntry>& journal);
+
+  // Forgets a running run's committed episodes and journal (a replay that diverged starts over).
+  void reset_progress(std::int64_t run_id);
+
+  // Replaces the run's evals, sets its final status and diagnostics and drops its journal, in
+  // one transaction.
   void finish_run(std::int64_t run_id, const RunResult& result);
 
   Database& db() { return db_; }
 
  private:
+  FileLock lock_;
   Database db_;
   Provenance provenance_;
   std::mutex mutex_;

@@ -360,7 +360,7 @@ TEST_F(DiagnosticsCli, ANewerOrForeignDatabaseIsRefusedWithExitTwoAndLeftAlone) 
   {
     sqlite3* h = nullptr;
     ASSERT_EQ(sqlite3_open(newer.c_str(), &h), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(h, "UPDATE meta SET value='3' WHERE key='schema_version'", nullptr, nullptr, nullptr), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(h, "UPDATE meta SET value='99' WHERE key='schema_version'", nullptr, nullptr, nullptr), SQLITE_OK);
     sqlite3_close(h);
   }
   const std::string newer_bytes = read_file(newer);

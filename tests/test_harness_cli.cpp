@@ -176,12 +176,90 @@ TEST_F(HarnessCli, ExternalSigkillDuringALongRunLeavesNothingHalfDone) {
   ::waitpid(pid, &status, 0);
   ASSERT_TRUE(started) << "no run row 'running' appeared (the harness exited or took over 120 s)";
   ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "the harness ended before the kill";
-  const auto done_before = scalar(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='done'");
   EXPECT_EQ(scalar(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='running'"), "1");
-  // evals exist only for runs that are done
-  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT count(*) FROM evals JOIN runs USING(run_id) WHERE status!='done'"), "0");
-  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT count(*) FROM evals"),
-            std::to_string(std::stoi(done_before) * 20000));
+  // what the running run committed is a whole prefix: episodes 0..n-1, counted in runs.episodes,
+  // with the journal that replays it
+  const std::string running = "(SELECT run_id FROM runs WHERE status='running')";
+  const std::string n = scalar(db("k.sqlite"), "SELECT count(*) FROM evals WHERE run_id=" + running);
+  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT episodes FROM runs WHERE status='running'"), n);
+  if (n != "0") {
+    EXPECT_EQ(scalar(db("k.sqlite"), "SELECT max(episode) + 1 FROM evals WHERE run_id=" + running), n);
+    EXPECT_NE(scalar(db("k.sqlite"), "SELECT count(*) FROM replay WHERE run_id=" + running), "0");
+  }
+  // runs that are done have all their evals and no journal
+  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT count(*) FROM evals JOIN runs USING(run_id) WHERE status='done'"),
+            std::to_string(std::stoi(scalar(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='done'")) * 20000));
+  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT count(*) FROM replay JOIN runs USING(run_id) WHERE status='done'"), "0");
+}
+
+TEST_F(HarnessCli, SigtermMidRunCommitsAndTheResumedRunEqualsTheUninterruptedOne) {
+  // one run per kind of objective call: batches (random), gradients (gd), one at a time (cmaes),
+  // RL decisions (ppo); the run is stopped after its 25th episode and resumed by replay
+  for (const std::string opt : {"random", "gd", "cmaes", "ppo"}) {
+    const std::string grid = "--env cartpole1 --optimizer " + opt + " --seeds 1 --budget 60 --jobs 1 --quiet --db ";
+    ASSERT_EQ(harness(grid + db(opt + "-full.sqlite")).code, 0) << opt;
+    const auto stopped = harness(grid + db(opt + ".sqlite"),
+                                 "DSB_FAULT_INJECTION=signal-in-run DSB_FAULT_AT_EPISODE=25 DSB_FAULT_SIGNAL=15");
+    EXPECT_EQ(stopped.code, 143) << opt << ": " << stopped.err;
+    EXPECT_NE(stopped.err.find("stopped by SIGTERM: 1 runs in progress committed"), std::string::npos) << stopped.err;
+    EXPECT_NE(stopped.err.find("run the same command again to resume"), std::string::npos) << stopped.err;
+    const std::string committed = scalar(db(opt + ".sqlite"), "SELECT episodes FROM runs WHERE status='running'");
+    ASSERT_FALSE(committed.empty()) << opt;
+    EXPECT_GE(std::stoi(committed), 25) << opt;
+    EXPECT_LT(std::stoi(committed), 60) << opt;
+    EXPECT_EQ(scalar(db(opt + ".sqlite"), "SELECT count(*) FROM evals"), committed) << opt;
+    EXPECT_NE(scalar(db(opt + ".sqlite"), "SELECT count(*) FROM replay"), "0") << opt;
+
+    const auto resumed = harness(grid + db(opt + ".sqlite"));
+    ASSERT_EQ(resumed.code, 0) << opt << ": " << resumed.err;
+    EXPECT_NE(resumed.err.find("resumed 1 interrupted runs, " + committed + " of their episodes replayed"),
+              std::string::npos)
+        << opt << ": " << resumed.err;
+    expect_same_evals(read_evals(db(opt + "-full.sqlite")), read_evals(db(opt + ".sqlite")));
+    EXPECT_EQ(scalar(db(opt + ".sqlite"), "SELECT count(*) FROM replay"), "0") << opt;  // dropped when done
+  }
+}
+
+TEST_F(HarnessCli, SigkillMidRunLosesOnlyWhatWasNotCommitted) {
+  // committing after every episode, a SIGKILL after episode 30 leaves exactly 30 to replay
+  const std::string grid = "--env flip --optimizer gd --seeds 1 --budget 50 --jobs 1 --quiet --db ";
+  ASSERT_EQ(harness(grid + db("full.sqlite")).code, 0);
+  const auto killed = harness(grid + db("k.sqlite"), "DSB_FAULT_INJECTION=signal-in-run DSB_FAULT_AT_EPISODE=30 "
+                                                     "DSB_FAULT_SIGNAL=9 DSB_FAULT_COMMIT_EVERY_EPISODE=1");
+  EXPECT_EQ(killed.code, 128 + SIGKILL);
+  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT episodes FROM runs WHERE status='running'"), "30");
+  const auto resumed = harness(grid + db("k.sqlite"));
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("resumed 1 interrupted runs, 30 of their episodes replayed"), std::string::npos)
+      << resumed.err;
+  expect_same_evals(read_evals(db("full.sqlite")), read_evals(db("k.sqlite")));
+}
+
+TEST_F(HarnessCli, ASecondHarnessOnTheSameDatabaseIsRefusedAndSigtermStopsTheFirst) {
+  const std::string grid = "--env cartpole3 --optimizer cmaes --seeds 2 --budget 20000 --jobs 1 --quiet";
+  const std::string cmd = std::string("exec ") + DSB_HARNESS_EXE + " " + grid + " --db " + db("l.sqlite") +
+                          " > /dev/null 2>&1 < /dev/null";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const bool started = wait_until(db("l.sqlite"), "SELECT count(*) FROM runs WHERE status='running'", "1", pid,
+                                  std::chrono::seconds(120));
+  const auto second = started ? harness(grid + " --db " + db("l.sqlite")) : Result{};
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(started) << "no run row 'running' appeared";
+  EXPECT_EQ(second.code, 2) << second.err;
+  EXPECT_EQ(std::count(second.err.begin(), second.err.end(), '\n'), 1) << second.err;
+  EXPECT_NE(second.err.find("is in use by another harness (pid " + std::to_string(pid)), std::string::npos)
+      << second.err;
+  // SIGTERM from outside: the first harness commits and exits 143
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  EXPECT_EQ(WEXITSTATUS(status), 143);
+  EXPECT_EQ(scalar(db("l.sqlite"), "SELECT count(*) FROM runs WHERE status='running'"), "1");
 }
 
 TEST_F(HarnessCli, EvalsAreBitIdenticalWhateverTheNumberOfThreads) {
@@ -234,6 +312,8 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
       {"--env sphere-2 --optimizer random --jobs -3", "-3"},
       {"--env sphere-2 --optimizer random --threads 0", "0"},
       {"--env sphere-2 --optimizer random --shard 3/2", "3/2"},
+      {"--env sphere-2 --optimizer random --budget 99999999999999999999", "99999999999999999999"},
+      {"--env sphere-2 --optimizer random --budget 1000001", "1000001"},
       {"--all --bogus-flag", "--bogus-flag"},
   };
   for (const auto& [args, bad] : cases) {
@@ -256,6 +336,26 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
     EXPECT_NE(r.err.find(bad), std::string::npos) << args << ": " << r.err;
     EXPECT_TRUE(r.out.empty());
+  }
+  // --db '' (SQLite would open a temporary database and keep nothing)
+  {
+    const auto r = harness("--env sphere-2 --optimizer random --db ''");
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("--db must name a file, got ''"), std::string::npos) << r.err;
+  }
+  // a SQLite file of somebody else's without any table: refused, not stamped
+  {
+    const std::string other = db("other.sqlite");
+    sqlite3* h = nullptr;
+    ASSERT_EQ(sqlite3_open(other.c_str(), &h), SQLITE_OK);
+    sqlite3_exec(h, "PRAGMA user_version=7; CREATE TABLE t(x); DROP TABLE t;", nullptr, nullptr, nullptr);
+    sqlite3_close(h);
+    const std::string bytes = read(other);
+    ASSERT_FALSE(bytes.empty());
+    const auto r = harness("--env sphere-2 --optimizer random --db " + other);
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("without harness tables"), std::string::npos) << r.err;
+    EXPECT_EQ(read(other), bytes);
   }
   // unwritable database paths
   for (const std::string& path : {db("no/such/dir/r.sqlite"), dir_.string()}) {
@@ -392,6 +492,66 @@ TEST_F(HarnessCli, ShardsPartitionTheGrid) {
     ASSERT_EQ(harness(grid + " --shard " + std::to_string(i) + "/3 --db " + db("s.sqlite")).code, 0);
   EXPECT_EQ(scalar(db("s.sqlite"), "SELECT count(*) FROM runs"), "12");
   expect_same_evals(read_evals(db("all.sqlite")), read_evals(db("s.sqlite")));
+}
+
+TEST_F(HarnessCli, ShardsAreCutFromRunKeysSoAddingAnEnvMovesNoRun) {
+  // shard 0 of 3 of a grid, and of the same grid with one more env and the names reordered
+  const std::string runs_sql = "SELECT group_concat(env || '/' || optimizer || '/' || seed, ' ') FROM "
+                               "(SELECT env, optimizer, seed FROM runs WHERE env != 'hartmann6' ORDER BY 1, 2, 3)";
+  ASSERT_EQ(harness("--env sphere-2,branin --optimizer random,cmaes --seeds 3 --budget 5 --quiet --shard 0/3 --db " +
+                    db("a.sqlite")).code, 0);
+  ASSERT_EQ(harness("--env hartmann6,branin,sphere-2 --optimizer cmaes,random --seeds 3 --budget 5 --quiet "
+                    "--shard 0/3 --db " + db("b.sqlite")).code, 0);
+  const std::string a = scalar(db("a.sqlite"), runs_sql);
+  EXPECT_FALSE(a.empty());
+  EXPECT_EQ(a, scalar(db("b.sqlite"), runs_sql));
+}
+
+TEST_F(HarnessCli, MergeCombinesShardsAndRefusesConflicts) {
+  const std::string grid = "--env sphere-2,branin,cartpole1 --optimizer random,cmaes,gd --seeds 2 --budget 8 --quiet";
+  ASSERT_EQ(harness(grid + " --db " + db("all.sqlite")).code, 0);
+  std::string shards;
+  for (int i = 0; i < 4; ++i) {
+    const std::string f = db("shard-" + std::to_string(i) + ".sqlite");
+    ASSERT_EQ(harness(grid + " --shard " + std::to_string(i) + "/4 --db " + f).code, 0);
+    shards += " " + f;
+  }
+  // a shard given twice is an identical duplicate
+  const auto m = harness("merge --into " + db("merged.sqlite") + shards + " " + db("shard-0.sqlite"));
+  ASSERT_EQ(m.code, 0) << m.err;
+  EXPECT_NE(m.err.find("18 runs added"), std::string::npos) << m.err;
+  expect_same_evals(read_evals(db("all.sqlite")), read_evals(db("merged.sqlite")));
+  ASSERT_EQ(harness("export --db " + db("all.sqlite") + " --out " + db("all.csv")).code, 0);
+  ASSERT_EQ(harness("export --db " + db("merged.sqlite") + " --out " + db("merged.csv")).code, 0);
+  EXPECT_EQ(read(db("all.csv")), read(db("merged.csv")));
+
+  // the same run with one different loss: refused, naming the run, nothing written
+  const std::string bad = db("shard-1.sqlite");
+  sqlite3* h = nullptr;
+  ASSERT_EQ(sqlite3_open(bad.c_str(), &h), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(h, "UPDATE evals SET loss = loss * 2 WHERE episode = 3 AND run_id = (SELECT min(run_id) FROM runs)",
+                         nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(h);
+  const std::string before = read(db("merged.sqlite"));
+  const auto c = harness("merge --into " + db("merged.sqlite") + " " + bad);
+  EXPECT_EQ(c.code, 2);
+  EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << c.err;
+  EXPECT_NE(c.err.find("conflicts with the same run"), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find("/seed "), std::string::npos) << c.err;
+  EXPECT_EQ(read(db("merged.sqlite")), before);
+
+  // a run still 'running' in a shard never replaces a done one, and a foreign input is refused
+  // before the output is touched
+  const auto r = harness("merge --into " + db("merged.sqlite") + " " + db("nosuch.sqlite"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("nosuch.sqlite"), std::string::npos) << r.err;
+  ASSERT_EQ(sqlite3_open(bad.c_str(), &h), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(h, "UPDATE runs SET status='running'", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(h);
+  const auto k = harness("merge --into " + db("merged.sqlite") + " " + bad);
+  ASSERT_EQ(k.code, 0) << k.err;
+  expect_same_evals(read_evals(db("all.sqlite")), read_evals(db("merged.sqlite")));
+  EXPECT_NE(k.err.find("0 runs added"), std::string::npos) << k.err;
 }
 
 }  // namespace

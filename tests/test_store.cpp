@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -32,7 +33,7 @@ class StoreTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  static RunKey key(int seed) { return {"sphere-2", "random", seed, 3, "aaaa", "bbbb"}; }
+  static RunKey key(int seed) { return {"sphere-2", "random", seed, 3, "aaaa", "bbbb", "0.1.0"}; }
   static RunResult result() {
     RunResult r;
     r.status = "done";
@@ -74,14 +75,14 @@ TEST(ConfigHash, CanonicalJsonSortsKeysAndPrintsRoundTripDoubles) {
 TEST_F(StoreTest, CreatesTheSchemaInWalModeWithItsVersion) {
   Store store(path_, {"0.1.0", "abc", "host"});
   EXPECT_EQ(query("PRAGMA journal_mode"), "wal;");
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "2;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "3;");
   EXPECT_EQ(query("SELECT name FROM sqlite_master WHERE type='table' ORDER BY name"),
-            "configs;evals;meta;runs;");
+            "configs;evals;meta;replay;runs;");
 }
 
 TEST_F(StoreTest, RunLifecycleCommitsEvalsWithTheStatus) {
   Store store(path_, {"0.1.0", "abc", "host"});
-  const auto id = store.begin_run(key(0), 0x1234, {{"env", 1}}, {{"opt", 2}});
+  const auto id = store.begin_run(key(0), 0x1234, {{"env", 1}}, {{"opt", 2}}).run_id;
   EXPECT_EQ(query("SELECT status FROM runs"), "running;");
   EXPECT_EQ(query("SELECT count(*) FROM evals"), "0;");
   EXPECT_TRUE(store.done_keys().empty());
@@ -98,9 +99,9 @@ TEST_F(StoreTest, RunLifecycleCommitsEvalsWithTheStatus) {
 
 TEST_F(StoreTest, RedoingARunReusesItsRowAndReplacesItsEvals) {
   Store store(path_, {"0.1.0", "abc", "host"});
-  const auto id = store.begin_run(key(1), 1, {}, {});
+  const auto id = store.begin_run(key(1), 1, {}, {}).run_id;
   store.finish_run(id, result());
-  const auto id2 = store.begin_run(key(1), 1, {}, {});
+  const auto id2 = store.begin_run(key(1), 1, {}, {}).run_id;
   EXPECT_EQ(id, id2);
   EXPECT_EQ(query("SELECT status FROM runs"), "running;");
   store.finish_run(id2, result());
@@ -111,8 +112,8 @@ TEST_F(StoreTest, RedoingARunReusesItsRowAndReplacesItsEvals) {
 TEST_F(StoreTest, AnUnfinishedRunIsNotDoneAfterReopening) {
   {
     Store store(path_, {"0.1.0", "abc", "host"});
-    store.finish_run(store.begin_run(key(0), 1, {}, {}), result());
-    store.begin_run(key(1), 1, {}, {});  // "killed" before finish_run
+    store.finish_run(store.begin_run(key(0), 1, {}, {}).run_id, result());
+    store.begin_run(key(1), 1, {}, {}).run_id;  // "killed" before finish_run
   }
   Store again(path_, {"0.1.0", "abc", "host"});
   const auto done = again.done_keys();
@@ -128,14 +129,14 @@ std::string file_bytes(const std::string& path) {
 TEST_F(StoreTest, RefusesANewerSchemaVersionWithoutTouchingTheFile) {
   {
     Store store(path_, {"0.1.0", "abc", "host"});
-    store.db().exec("UPDATE meta SET value='3' WHERE key='schema_version'");
+    store.db().exec("UPDATE meta SET value='4' WHERE key='schema_version'");
   }
   const std::string before = file_bytes(path_);
   try {
     Store again(path_, {"0.1.0", "abc", "host"});
-    FAIL() << "a schema_version 3 file was opened";
+    FAIL() << "a schema_version 4 file was opened";
   } catch (const StoreError& e) {
-    EXPECT_NE(std::string(e.what()).find("schema_version 3, newer than this harness (2)"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("schema_version 4, newer than this harness (3)"), std::string::npos)
         << e.what();
   }
   EXPECT_EQ(file_bytes(path_), before);
@@ -143,7 +144,7 @@ TEST_F(StoreTest, RefusesANewerSchemaVersionWithoutTouchingTheFile) {
 
 TEST_F(StoreTest, StoresTheRunDiagnosticsAsJsonAndTheMetricAsNull) {
   Store store(path_, {"0.1.0", "abc", "host"});
-  const auto id = store.begin_run(key(0), 1, {}, {});
+  const auto id = store.begin_run(key(0), 1, {}, {}).run_id;
   RunResult r = result();
   r.evals[2].metric = 0.75;
   r.diagnostics = {{"optimizer", {{"restarts", 2}}}, {"objective", {{"episodes", 3}}}};
@@ -151,7 +152,7 @@ TEST_F(StoreTest, StoresTheRunDiagnosticsAsJsonAndTheMetricAsNull) {
   EXPECT_EQ(query("SELECT diagnostics FROM runs"), R"({"objective":{"episodes":3},"optimizer":{"restarts":2}};)");
   EXPECT_EQ(query("SELECT metric FROM evals ORDER BY episode"), "NULL;NULL;0.75;");
   // redoing the run clears the diagnostics until it finishes again
-  store.begin_run(key(0), 1, {}, {});
+  store.begin_run(key(0), 1, {}, {}).run_id;
   EXPECT_EQ(query("SELECT diagnostics FROM runs"), "NULL;");
 }
 
@@ -279,7 +280,7 @@ TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
     // what was done stays done: the migrated file resumes like any other
     EXPECT_EQ(store.done_keys().size(), 1u);
   }
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "2;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "3;");
   EXPECT_EQ(exact_rows(path_, runs_sql), runs_before);
   EXPECT_EQ(exact_rows(path_, evals_sql), evals_before);
   EXPECT_EQ(exact_rows(path_, configs_sql), configs_before);
@@ -291,7 +292,7 @@ TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
   // a migrated file has the columns of a new one, in the same order
   const std::string fresh = (dir_ / "fresh.sqlite").string();
   { Store store(fresh, {}); }
-  for (const char* table : {"meta", "configs", "runs", "evals"}) {
+  for (const char* table : {"meta", "configs", "runs", "evals", "replay"}) {
     const std::string cols = std::string("SELECT name, type, \"notnull\", pk FROM pragma_table_info('") + table + "')";
     EXPECT_EQ(exact_rows(path_, cols), exact_rows(fresh, cols)) << table;
   }
@@ -299,7 +300,7 @@ TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
   // and it takes new runs with diagnostics; opening it again changes nothing
   {
     Store store(path_, {"0.2.0", "def", "host"});
-    const auto id = store.begin_run(key(5), 5, {}, {});
+    const auto id = store.begin_run(key(5), 5, {}, {}).run_id;
     RunResult r = result();
     r.diagnostics = {{"optimizer", nlohmann::json::object()}, {"objective", {{"episodes", 3}}}};
     store.finish_run(id, r);
@@ -362,10 +363,87 @@ TEST_F(StoreTest, ForeignDatabasesAreRefusedAndLeftAlone) {
   }
 }
 
+TEST_F(StoreTest, ARunningRunKeepsItsCommittedEpisodesAndJournalUntilItIsDone) {
+  const double nan_payload = std::bit_cast<double>(0x7ff8000000000123ULL);  // a NaN with payload bits
+  std::vector<ReplayEntry> journal = {{ReplayKind::value_and_grad, 0x8000000000000001ULL, {0.5, nan_payload, 1e-3, -0.0}},
+                                      {ReplayKind::rl_reset, 42, {}},
+                                      {ReplayKind::rl_step, 7, {1.0, std::numeric_limits<double>::infinity()}}};
+  const std::vector<EvalRecord> evals = {{0, 2.0, 2.0, true, 0.1}, {1, std::nan(""), 2.0, false, 0.1}};
+  {
+    Store store(path_, {"0.1.0", "abc", "host"});
+    const auto id = store.begin_run(key(0), 1, {}, {}).run_id;
+    store.append_progress(id, evals, 0, journal);
+    EXPECT_EQ(query("SELECT episodes FROM runs"), "2;");
+  }
+  Store again(path_, {"0.1.0", "abc", "host"});
+  EXPECT_TRUE(again.done_keys().empty());
+  const RunStart start = again.begin_run(key(0), 1, {}, {});
+  EXPECT_EQ(start.committed_episodes, 2);
+  ASSERT_EQ(start.journal.size(), 3u);
+  for (std::size_t k = 0; k < journal.size(); ++k) {
+    EXPECT_EQ(start.journal[k].kind, journal[k].kind);
+    EXPECT_EQ(start.journal[k].input_hash, journal[k].input_hash);
+    ASSERT_EQ(start.journal[k].payload.size(), journal[k].payload.size());
+    for (std::size_t i = 0; i < journal[k].payload.size(); ++i)  // bit for bit: NaN payload, -0.0, inf
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(start.journal[k].payload[i]),
+                std::bit_cast<std::uint64_t>(journal[k].payload[i]));
+  }
+  again.finish_run(start.run_id, result());
+  EXPECT_EQ(query("SELECT count(*) FROM replay"), "0;");
+  EXPECT_EQ(query("SELECT count(*) FROM evals"), "3;");
+  // a failed run starts over from nothing
+  const auto id = again.begin_run(key(1), 1, {}, {}).run_id;
+  again.append_progress(id, evals, 0, journal);
+  RunResult failed = result();
+  failed.status = "failed";
+  again.finish_run(id, failed);
+  const RunStart redo = again.begin_run(key(1), 1, {}, {});
+  EXPECT_EQ(redo.committed_episodes, 0);
+  EXPECT_TRUE(redo.journal.empty());
+}
+
+TEST_F(StoreTest, RunsOfAnotherHarnessVersionAreOtherRuns) {
+  Store store(path_, {"0.2.0", "abc", "host"});
+  RunKey old_version = key(0), new_version = key(0);
+  old_version.harness_version = "0.1.0";
+  new_version.harness_version = "0.2.0";
+  store.finish_run(store.begin_run(old_version, 1, {}, {}).run_id, result());
+  EXPECT_EQ(store.done_keys().count(new_version), 0u);
+  store.finish_run(store.begin_run(new_version, 1, {}, {}).run_id, result());
+  EXPECT_EQ(query("SELECT count(*) FROM runs"), "2;");
+}
+
+TEST_F(StoreTest, ASecondStoreOnTheSameFileIsRefusedUntilTheFirstCloses) {
+  auto first = std::make_unique<Store>(path_, Provenance{"0.1.0", "abc", "host"});
+  try {
+    Store second(path_, {"0.1.0", "abc", "host"});
+    FAIL() << "opened twice";
+  } catch (const StoreError& e) {
+    EXPECT_NE(std::string(e.what()).find("is in use by another harness (pid " + std::to_string(::getpid())),
+              std::string::npos)
+        << e.what();
+  }
+  first.reset();
+  EXPECT_NO_THROW(Store(path_, {"0.1.0", "abc", "host"}));
+}
+
+TEST_F(StoreTest, ASqliteFileWithoutTablesIsNotStamped) {
+  { Database db(path_); db.exec("PRAGMA user_version=5; CREATE TABLE t(x); DROP TABLE t;"); }
+  const std::string before = file_bytes(path_);
+  ASSERT_FALSE(before.empty());
+  try {
+    Store store(path_, {});
+    FAIL() << "opened";
+  } catch (const StoreError& e) {
+    EXPECT_NE(std::string(e.what()).find("without harness tables"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(file_bytes(path_), before);
+}
+
 TEST_F(StoreTest, AnEmptyFileBecomesANewDatabase) {
   { std::ofstream touch(path_); }
   Store store(path_, {});
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "2;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "3;");
 }
 
 TEST_F(StoreTest, UnwritablePathThrowsNamingIt) {

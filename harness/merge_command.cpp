@@ -1,0 +1,240 @@
+#include "harness/merge_command.hpp"
+
+#include <bit>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <iostream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "common/error.hpp"
+#include "harness/schema.hpp"
+#include "harness/store.hpp"
+
+namespace dsb {
+namespace {
+
+// every column of a run row but run_id, in schema order; `harness_version` is read as '' when
+// NULL (files before schema version 3)
+const char* kRunColumns =
+    "env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, failed_episodes, "
+    "best_loss, best_x, wall_s, error, started_at, finished_at, COALESCE(harness_version, ''), git_sha, host, "
+    "diagnostics";
+constexpr int kRunColumnCount = 20;
+const char* kEvalColumns = "episode, loss, best_loss, used_grad, wall_s, failed, metric";
+constexpr int kEvalColumnCount = 7;
+
+// a SQLite value as read: NULL, integer, real, text or blob, compared and written back exactly
+struct Cell {
+  int type = 0;  // SQLITE_NULL 5, SQLITE_INTEGER 1, SQLITE_FLOAT 2, SQLITE_TEXT 3, SQLITE_BLOB 4
+  std::int64_t i = 0;
+  double d = 0.0;
+  std::string s;
+  bool operator==(const Cell& o) const {
+    if (type != o.type) return false;
+    if (type == 1) return i == o.i;
+    if (type == 2) return std::bit_cast<std::uint64_t>(d) == std::bit_cast<std::uint64_t>(o.d);
+    return s == o.s;
+  }
+};
+
+using Row = std::vector<Cell>;
+
+Row read_row(Statement& q, int n) {
+  Row row(static_cast<std::size_t>(n));
+  for (int c = 0; c < n; ++c) {
+    Cell& cell = row[static_cast<std::size_t>(c)];
+    cell.type = q.column_type(c);
+    if (cell.type == 1) cell.i = q.column_int(c);
+    if (cell.type == 2) cell.d = q.column_double(c);
+    if (cell.type == 3) cell.s = q.column_text(c);
+    if (cell.type == 4) cell.s = q.column_blob(c);
+  }
+  return row;
+}
+
+void bind_row(Statement& st, const Row& row, int first_index) {
+  for (std::size_t c = 0; c < row.size(); ++c) {
+    const int index = first_index + static_cast<int>(c);
+    const Cell& cell = row[c];
+    if (cell.type == 1) st.bind(index, cell.i);
+    else if (cell.type == 2) st.bind(index, cell.d);
+    else if (cell.type == 3) st.bind(index, cell.s);
+    else if (cell.type == 4) st.bind_blob(index, cell.s);
+    else st.bind_null(index);
+  }
+}
+
+struct RunRecord {
+  Row run;                       // kRunColumns
+  std::vector<Row> evals;        // kEvalColumns, by episode
+  std::vector<Row> journal;      // seq, kind, input_hash, payload (running runs)
+  std::string status() const { return run[7].s; }
+  std::int64_t committed() const { return static_cast<std::int64_t>(evals.size()); }
+  RunKey key() const {
+    return {run[0].s, run[1].s, static_cast<int>(run[2].i), run[3].i, run[4].s, run[5].s, run[16].s};
+  }
+};
+
+RunRecord read_run(Database& db, std::int64_t run_id, bool with_journal) {
+  RunRecord r;
+  Statement q(db.handle(), std::string("SELECT ") + kRunColumns + " FROM runs WHERE run_id=?");
+  q.bind(1, run_id);
+  if (q.step()) r.run = read_row(q, kRunColumnCount);
+  Statement e(db.handle(), std::string("SELECT ") + kEvalColumns + " FROM evals WHERE run_id=? ORDER BY episode");
+  e.bind(1, run_id);
+  while (e.step()) r.evals.push_back(read_row(e, kEvalColumnCount));
+  if (with_journal) {
+    Statement j(db.handle(), "SELECT seq, kind, input_hash, payload FROM replay WHERE run_id=? ORDER BY seq");
+    j.bind(1, run_id);
+    while (j.step()) r.journal.push_back(read_row(j, 4));
+  }
+  return r;
+}
+
+// what two records of one run key must share to be the same result: every episode's loss,
+// best-so-far, gradient use, failure flag and metric (not its wall time), and the run's status,
+// episode counts, best loss and best point
+bool same_result(const RunRecord& a, const RunRecord& b) {
+  for (int c : {7, 8, 9, 10, 11})
+    if (!(a.run[static_cast<std::size_t>(c)] == b.run[static_cast<std::size_t>(c)])) return false;
+  if (a.evals.size() != b.evals.size()) return false;
+  for (std::size_t k = 0; k < a.evals.size(); ++k)
+    for (int c : {0, 1, 2, 3, 5, 6})
+      if (!(a.evals[k][static_cast<std::size_t>(c)] == b.evals[k][static_cast<std::size_t>(c)])) return false;
+  return true;
+}
+
+// the id of the run with this key in `db`, if any
+std::optional<std::int64_t> find_run(Database& db, const RunKey& k) {
+  Statement q(db.handle(),
+              "SELECT run_id FROM runs WHERE env=? AND optimizer=? AND seed=? AND budget=? AND env_config_hash=? AND "
+              "opt_config_hash=? AND harness_version=?");
+  q.bind(1, k.env).bind(2, k.optimizer).bind(3, static_cast<std::int64_t>(k.seed)).bind(4, k.budget)
+      .bind(5, k.env_config_hash).bind(6, k.opt_config_hash).bind(7, k.harness_version);
+  if (!q.step()) return std::nullopt;
+  return q.column_int(0);
+}
+
+void delete_run(Database& db, std::int64_t run_id) {
+  for (const char* sql : {"DELETE FROM evals WHERE run_id=?", "DELETE FROM replay WHERE run_id=?",
+                          "DELETE FROM runs WHERE run_id=?"}) {
+    Statement st(db.handle(), sql);
+    st.bind(1, run_id).run();
+  }
+}
+
+void insert_run(Database& db, const RunRecord& r) {
+  Statement run(db.handle(), std::string("INSERT INTO runs(") +
+                                 "env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, "
+                                 "episodes, failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
+                                 "harness_version, git_sha, host, diagnostics) VALUES (" +
+                                 "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING run_id");
+  bind_row(run, r.run, 1);
+  if (!run.step()) throw StoreError("merge: no run_id returned");
+  const std::int64_t id = run.column_int(0);
+  run.reset();
+  Statement ev(db.handle(), std::string("INSERT INTO evals(run_id, ") + kEvalColumns +
+                                ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+  for (const auto& e : r.evals) {
+    ev.bind(1, id);
+    bind_row(ev, e, 2);
+    ev.run();
+  }
+  Statement j(db.handle(), "INSERT INTO replay(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
+  for (const auto& e : r.journal) {
+    j.bind(1, id);
+    bind_row(j, e, 2);
+    j.run();
+  }
+}
+
+// rank of a status when two files disagree about a run that is not finished in both:
+// done > failed > running (a 'running' row never replaces a finished one)
+int rank(const std::string& status) { return status == "done" ? 2 : status == "failed" ? 1 : 0; }
+
+}  // namespace
+
+int command_merge(const std::string& into, const std::vector<std::string>& inputs) {
+  if (into.empty()) throw UsageError("--into must name a file, got ''");
+  if (inputs.empty()) throw UsageError("merge: give the shard databases to merge after --into FILE");
+  namespace fs = std::filesystem;
+  for (const auto& in : inputs) {
+    if (!fs::exists(in)) throw UsageError("merge: input '" + in + "' does not exist");
+    std::error_code ec;
+    if (fs::exists(into) && fs::equivalent(in, into, ec))
+      throw UsageError("merge: input '" + in + "' is the output itself");
+  }
+  // every input is checked before the output is opened: a foreign file changes nothing
+  for (const auto& in : inputs) {
+    try {
+      Database db(in, Database::Mode::read_only);
+      if (check_schema(db) == 0) throw StoreError("database '" + in + "' has no harness tables");
+    } catch (const StoreError& e) {
+      throw UsageError(std::string("merge: ") + e.what());
+    }
+  }
+  std::unique_ptr<Store> store;
+  try {
+    store = std::make_unique<Store>(into, Provenance{});
+  } catch (const StoreError& e) {
+    throw UsageError(std::string("--into: ") + e.what());
+  }
+  Database& out = store->db();
+
+  std::int64_t added = 0, identical = 0, replaced = 0, kept = 0;
+  Transaction tx(out);  // all inputs or nothing
+  for (const auto& in : inputs) {
+    Database db(in, Database::Mode::read_only);
+    const bool has_journal = check_schema(db) >= 3;
+    Statement cfg(db.handle(), "SELECT hash, kind, json FROM configs");
+    Statement put(out.handle(), "INSERT OR IGNORE INTO configs(hash, kind, json) VALUES (?, ?, ?)");
+    while (cfg.step()) put.bind(1, cfg.column_text(0)).bind(2, cfg.column_text(1)).bind(3, cfg.column_text(2)).run();
+
+    std::vector<std::int64_t> ids;
+    Statement all(db.handle(), "SELECT run_id FROM runs ORDER BY run_id");
+    while (all.step()) ids.push_back(all.column_int(0));
+    for (const std::int64_t id : ids) {
+      const RunRecord theirs = read_run(db, id, has_journal);
+      const RunKey key = theirs.key();
+      const auto existing = find_run(out, key);
+      if (!existing) {
+        insert_run(out, theirs);
+        ++added;
+        continue;
+      }
+      const RunRecord ours = read_run(out, *existing, true);
+      if (theirs.status() == "done" && ours.status() == "done") {
+        if (!same_result(theirs, ours))
+          throw UsageError("merge: run " + key.text() + " in '" + in +
+                           "' conflicts with the same run already merged (same key, different evals); nothing was "
+                           "written");
+        ++identical;
+        continue;
+      }
+      // a finished run beats an unfinished one; of two unfinished ones the one further along
+      const bool take = rank(theirs.status()) > rank(ours.status()) ||
+                        (rank(theirs.status()) == rank(ours.status()) && theirs.status() == "running" &&
+                         theirs.committed() > ours.committed());
+      if (take) {
+        delete_run(out, *existing);
+        insert_run(out, theirs);
+        ++replaced;
+      } else {
+        ++kept;
+      }
+    }
+  }
+  tx.commit();
+  std::cerr << fmt::format(
+      "harness: merged {} files into {}: {} runs added, {} identical duplicates, {} unfinished runs replaced by "
+      "further ones, {} kept\n",
+      inputs.size(), into, added, identical, replaced, kept);
+  return 0;
+}
+
+}  // namespace dsb
