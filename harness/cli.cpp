@@ -196,10 +196,12 @@ int harness_main(int argc, char** argv) {
   check->add_option("--db", check_db, "results database")->required();
   check->add_option("--baseline", check_baseline, "baseline CSV (data/baselines/NAME.csv)")->required();
 
-  std::string export_db, export_out;
-  auto* exporter = app.add_subcommand("export", "write the database's result table as a baseline CSV");
+  std::string export_db, export_out, export_format = "csv";
+  auto* exporter = app.add_subcommand(
+      "export", "write the database's result table as a baseline CSV, or its runs in IOHprofiler's format");
   exporter->add_option("--db", export_db, "results database")->required();
-  exporter->add_option("--out", export_out, "CSV file to write")->required();
+  exporter->add_option("--out", export_out, "CSV file to write (csv), or a new or empty folder (ioh)")->required();
+  exporter->add_option("--format", export_format, "csv (default: the baseline result table) or ioh (IOHanalyzer)");
 
   std::string report_db = "results.sqlite", report_out = "report", report_landscapes;
   auto* report = app.add_subcommand("report", "comparison report (index.html, figures, tables) from a database");
@@ -228,7 +230,7 @@ int harness_main(int argc, char** argv) {
       return run_crosscheck(cc_envs, std::cout);
     }
     if (check->parsed()) return command_check(check_db, check_baseline);
-    if (exporter->parsed()) return command_export(export_db, export_out);
+    if (exporter->parsed()) return command_export(export_db, export_out, export_format);
     if (report->parsed()) return command_report(report_db, report_out, report_landscapes);
     if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
     if (gradcheck->parsed())
