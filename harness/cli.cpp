@@ -227,10 +227,12 @@ int harness_main(int argc, char** argv) {
   merge->add_option("--into", merge_into, "the merged database (created or added to)")->required();
   merge->add_option("inputs", merge_inputs, "shard databases to merge")->required();
 
-  std::string export_db, export_out;
-  auto* exporter = app.add_subcommand("export", "write the database's result table as a baseline CSV");
+  std::string export_db, export_out, export_format = "csv";
+  auto* exporter = app.add_subcommand(
+      "export", "write the database's result table as a baseline CSV, or its runs in IOHprofiler's format");
   exporter->add_option("--db", export_db, "results database")->required();
-  exporter->add_option("--out", export_out, "CSV file to write")->required();
+  exporter->add_option("--out", export_out, "CSV file to write (csv), or a new or empty folder (ioh)")->required();
+  exporter->add_option("--format", export_format, "csv (default: the baseline result table) or ioh (IOHanalyzer)");
 
   std::string report_db = "results.sqlite", report_out = "report", report_landscapes;
   auto* report = app.add_subcommand("report", "comparison report (index.html, figures, tables) from a database");
@@ -260,7 +262,7 @@ int harness_main(int argc, char** argv) {
     }
     if (check->parsed()) return command_check(check_db, check_baseline);
     if (merge->parsed()) return command_merge(merge_into, merge_inputs);
-    if (exporter->parsed()) return command_export(export_db, export_out);
+    if (exporter->parsed()) return command_export(export_db, export_out, export_format);
     if (report->parsed()) return command_report(report_db, report_out, report_landscapes);
     if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
     if (gradcheck->parsed())

@@ -31,8 +31,10 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
 // Regression gate: compares the database's result table with a baseline CSV. 0 equal, 1 any
 // difference (diff printed), 2 malformed baseline or unreadable database.
 int command_check(const std::string& db_path, const std::string& baseline_path);
-// Writes the database's result table (the baseline format) to a CSV file.
-int command_export(const std::string& db_path, const std::string& out_path);
+// Writes the database's result table (the baseline format) to a CSV file (format "csv"), or its
+// 'done' runs in IOHprofiler's format to a new or empty folder (format "ioh", export_ioh.hpp).
+// Exit 2 for a bad format, an unreadable database or an unusable --out.
+int command_export(const std::string& db_path, const std::string& out_path, const std::string& format = "csv");
 // Runs the Python report generator (reports/make_report.py) with Debian's system interpreter.
 int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes);
 

@@ -1,4 +1,4 @@
-// `harness check`, `harness export`, `harness report`: what is done with a finished database.
+// `harness check`, `harness export` (csv; ioh through export_ioh), `harness report`: what is done with a finished database.
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -9,6 +9,7 @@
 
 #include "common/error.hpp"
 #include "harness/commands.hpp"
+#include "harness/export_ioh.hpp"
 #include "harness/result_table.hpp"
 #include "harness/sqlite_db.hpp"
 
@@ -23,6 +24,34 @@ std::vector<ResultRow> database_table(const std::string& db_path) {
   } catch (const StoreError& e) {
     throw UsageError(std::string("--db: ") + e.what());
   }
+}
+
+// --out for ioh is a folder that does not exist yet (created) or an empty folder; anything else is
+// refused before a file is written, so an export never mixes with other files.
+int export_ioh(const std::string& db_path, const std::string& out_path) {
+  if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
+  std::error_code ec;
+  const std::filesystem::path out(out_path);
+  if (std::filesystem::exists(out, ec) &&
+      !(std::filesystem::is_directory(out, ec) && std::filesystem::is_empty(out, ec)))
+    throw UsageError("--out: '" + out_path + "' exists and is not an empty folder");
+  std::vector<IohRun> runs;
+  try {
+    Database db(db_path, Database::Mode::read_only);
+    runs = read_ioh_runs(db);
+  } catch (const StoreError& e) {
+    const std::string why = e.what();  // SQLite's message, without the statement it quotes
+    throw UsageError("--db: cannot read '" + db_path + "': " + why.substr(0, why.find(" in: ")));
+  }
+  std::filesystem::create_directories(out, ec);
+  if (ec || !std::filesystem::is_directory(out))
+    throw UsageError("--out: cannot create folder '" + out_path + "'" + (ec ? ": " + ec.message() : ""));
+  const IohExportSummary s = write_ioh_export(runs, out);
+  std::cerr << "harness: wrote " << s.runs << " runs (" << s.rows << " rows) of " << s.algorithms
+            << " algorithms on " << s.functions << " functions to " << out_path << " (IOHprofiler format)";
+  if (s.runs_left_out > 0) std::cerr << "; left out " << s.runs_left_out << " runs without a finite loss";
+  std::cerr << "\n";
+  return 0;
 }
 
 }  // namespace
@@ -46,7 +75,9 @@ int command_check(const std::string& db_path, const std::string& baseline_path) 
   return 1;
 }
 
-int command_export(const std::string& db_path, const std::string& out_path) {
+int command_export(const std::string& db_path, const std::string& out_path, const std::string& format) {
+  if (format != "csv" && format != "ioh") throw UsageError("--format must be csv or ioh, got '" + format + "'");
+  if (format == "ioh") return export_ioh(db_path, out_path);
   const auto rows = database_table(db_path);
   std::ofstream out(out_path);
   if (!out) throw UsageError("--out: cannot write '" + out_path + "'");
