@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <set>
 #include <iostream>
+#include <sstream>
 #include <thread>
 
 #include <CLI/CLI.hpp>
@@ -21,6 +22,8 @@
 #include "harness/merge_command.hpp"
 #include "envs/core/lazy_model.hpp"
 #include "harness/plan.hpp"
+#include "harness/plan_report.hpp"
+#include "harness/report_refresher.hpp"
 #include "harness/runner.hpp"
 #include "harness/store.hpp"
 #include "reference/crosscheck.hpp"
@@ -100,6 +103,24 @@ CheckedRun check_run_args(const RunArgs& a) {
   return {expand_grid(req), shard, a.jobs > 0 ? a.jobs : std::max(1, usable_cpus() / a.threads)};
 }
 
+// the grid of `a` as flags, for commands the plan suggests (shard and db left out)
+std::string grid_flags(const RunArgs& a) {
+  auto join = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+    return s;
+  };
+  std::string f = a.all ? "--all" : "";
+  if (!a.envs.empty()) f += (f.empty() ? "" : " ") + std::string("--env ") + join(a.envs);
+  if (!a.optimizers.empty()) f += " --optimizer " + join(a.optimizers);
+  f += fmt::format(" --seeds {} --budget {}", a.seeds, a.budget);
+  return f;
+}
+
+PlanContext plan_context(const RunArgs& a, const CheckedRun& run) {
+  return {a.db, run.jobs, a.threads, grid_flags(a)};
+}
+
 int command_plan(const RunArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   const CheckedRun run = check_run_args(a);
@@ -110,21 +131,37 @@ int command_plan(const RunArgs& a) {
     throw UsageError(std::string("--db: ") + e.what());
   }
   const GridPlan plan = plan_grid(run.grid, done, kVersion, run.shard);
+  const CostModel costs;
+  print_plan(std::cout, plan, costs, plan_context(a, run));
   const double planning_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double core_h = plan.pending_core_seconds / 3600.0;
-  const int parallel = std::max(1, std::min<int>(run.jobs, static_cast<int>(plan.pending.size())));
-  std::cout << fmt::format("plan: {} runs in the grid; {} already done in {}; {} to run ({} episodes)\n",
-                           plan.runs, plan.skipped, a.db, plan.pending.size(), plan.pending_episodes);
-  std::cout << fmt::format("  simulation: about {:.3g} core-hours from the envs' cost hints (optimizer overhead, "
-                           "e.g. bo's GP, not included)\n", core_h);
-  std::cout << fmt::format("  with --jobs {} --threads {}: about {:.3g} h wall for the simulation\n", run.jobs,
-                           a.threads, core_h / parallel);
   std::cout << fmt::format("  planned in {:.3f} s; env models built: {} (nothing was written)\n", planning_s,
                            lazy_model_builds());
   return 0;
 }
 
-int command_run(const RunArgs& a) {
+// `harness calibrate [grid flags] [--force]`: times the grid's envs on this machine, caches them
+int command_calibrate(const RunArgs& a, bool force) {
+  const CheckedRun run = check_run_args(a);
+  const GridPlan plan = plan_grid(run.grid, {}, kVersion, run.shard);
+  CostModel costs;
+  std::cout << fmt::format("{:<26} {:>12} {:>12} {:>10}  {}\n", "env", "forward s", "gradient s", "decisions",
+                           "source");
+  for (const auto& [name, config] : plan.env_configs) {
+    EpisodeCost c = costs.episode(name, config.hash);
+    const bool measure = force || !c.measured;
+    if (measure) {
+      std::cerr << "harness: timing " << name << " ..." << std::endl;
+      c = costs.calibrate(name, config.hash);
+      costs.save();  // after each env: an interrupted calibration keeps what it measured
+    }
+    std::cout << fmt::format("{:<26} {:>12.4g} {:>12.4g} {:>10}  {}\n", name, c.forward_s, c.gradient_s, c.decisions,
+                             measure ? "measured now" : "cached");
+  }
+  std::cout << "cost cache: " << costs.path() << "\n";
+  return 0;
+}
+
+int command_run(const RunArgs& a, const std::string& report_dir) {
   const CheckedRun run = check_run_args(a);
 
   std::unique_ptr<Store> store;
@@ -134,15 +171,33 @@ int command_run(const RunArgs& a) {
     throw UsageError(std::string("--db: ") + e.what());
   }
   const GridPlan plan = plan_grid(run.grid, store->done_keys(), kVersion, run.shard);
+  const CostModel costs;
+  if (!a.quiet) {
+    std::ostringstream text;
+    print_plan(text, plan, costs, plan_context(a, run));
+    std::fputs(text.str().c_str(), stderr);
+  }
+  // cheapest runs first, so partial reports come early (each run's result does not depend on order)
+  const std::vector<double> cost = run_costs(plan, costs);
+  std::vector<PlannedRun> pending;
+  std::vector<double> pending_cost;
+  for (const std::size_t i : cheapest_first(cost)) {
+    pending.push_back(plan.pending[i]);
+    pending_cost.push_back(cost[i]);
+  }
   std::FILE* progress = a.quiet ? nullptr : stderr;
   install_stop_handlers();
-  const auto s = run_grid(plan.pending, plan.skipped, *store, run.jobs, a.threads, progress);
+  std::unique_ptr<ReportRefresher> reports;
+  if (!report_dir.empty()) reports = std::make_unique<ReportRefresher>(a.db, report_dir);
+  const auto s = run_grid(pending, pending_cost, plan.skipped, *store, run.jobs, a.threads, progress,
+                          reports ? std::function<void()>([&] { reports->run_finished(); }) : std::function<void()>());
   if (s.resumed > 0)
     std::fprintf(stderr, "harness: resumed %lld interrupted runs, %lld of their episodes replayed from the database\n",
                  static_cast<long long>(s.resumed), static_cast<long long>(s.replayed_episodes));
   std::fprintf(stderr, "harness: %lld runs in the grid: %lld already done, %lld done now, %lld failed; database %s\n",
                static_cast<long long>(plan.runs), static_cast<long long>(s.skipped), static_cast<long long>(s.done),
                static_cast<long long>(s.failed), a.db.c_str());
+  if (reports) reports->final_build();
   if (const int sig = stop_signal(); sig != 0) {
     std::fprintf(stderr,
                  "harness: stopped by %s: %lld runs in progress committed their finished episodes; run the same "
@@ -175,9 +230,19 @@ int harness_main(int argc, char** argv) {
 
   auto* list = app.add_subcommand("list", "envs (dim, differentiable, rl) and optimizers");
 
+  std::string main_report, run_report;
+  app.add_option("--report", main_report, "keep a comparison report of the grid in this folder, rebuilt as runs finish");
+  run->add_option("--report", run_report, "keep a comparison report of the grid in this folder, rebuilt as runs finish");
+
   RunArgs plan_args;
-  auto* plan = app.add_subcommand("plan", "what a grid would run (runs, episodes, core-hours), writing nothing");
+  auto* plan = app.add_subcommand("plan", "what a grid would run (runs, core-hours per env and family, wall, Slurm), writing nothing");
   add_run_options(*plan, plan_args);
+
+  RunArgs calibrate_args;
+  bool calibrate_force = false;
+  auto* calibrate = app.add_subcommand("calibrate", "time one episode of each env of a grid on this machine (cached for plan and ETAs)");
+  add_run_options(*calibrate, calibrate_args);
+  calibrate->add_flag("--force", calibrate_force, "measure again envs already in the cache");
 
   std::string eval_env, eval_x;
   bool eval_grad = false;
@@ -252,6 +317,7 @@ int harness_main(int argc, char** argv) {
   try {
     if (list->parsed()) return command_list();
     if (plan->parsed()) return command_plan(plan_args);
+    if (calibrate->parsed()) return command_calibrate(calibrate_args, calibrate_force);
     if (landscape->parsed())
       return command_landscape(ls_env, ls_dims, ls_res, ls_center, ls_out,
                                landscape->count("--check-step") > 0 ? std::optional(ls_check) : std::nullopt);
@@ -267,7 +333,7 @@ int harness_main(int argc, char** argv) {
     if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
     if (gradcheck->parsed())
       return command_gradcheck(gc_env, gc, gc_json);
-    return command_run(run->parsed() ? run_args : main_args);
+    return run->parsed() ? command_run(run_args, run_report) : command_run(main_args, main_report);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "harness: error: %s\n", one_line(e.what()).c_str());
     return 2;

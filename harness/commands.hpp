@@ -36,7 +36,9 @@ int command_check(const std::string& db_path, const std::string& baseline_path);
 // Exit 2 for a bad format, an unreadable database or an unusable --out.
 int command_export(const std::string& db_path, const std::string& out_path, const std::string& format = "csv");
 // Runs the Python report generator (reports/make_report.py) with Debian's system interpreter.
-int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes);
+// quiet: the generator's stdout is dropped (refreshes during a grid run)
+int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
+                   bool quiet = false);
 
 // Parses a comma-separated list of finite numbers; UsageError naming the bad token.
 std::vector<double> parse_number_list(const std::string& option, const std::string& text);

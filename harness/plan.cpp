@@ -53,7 +53,6 @@ GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& don
       continue;
     }
     plan.pending_episodes += spec.budget;
-    plan.pending_core_seconds += static_cast<double>(spec.budget) * shared_env(spec.env)->info().cost_hint_s;
     plan.pending.push_back({spec, std::move(key), &env, &opt});
   }
   return plan;

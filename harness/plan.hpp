@@ -1,7 +1,7 @@
 #pragma once
 // What a grid will do before it does it: each run's key (configs resolved once per distinct env
-// and optimizer name, from metadata: no env model is built), the runs already done in the store,
-// and an estimate of the work left from each env's cost hint. Used by run_grid and by
+// and optimizer name, from metadata: no env model is built), the shard's runs, and which of them
+// are already done in the store (their costs: harness/cost_model.hpp). Used by grid runs and by
 // `harness plan`, which writes nothing.
 #include <cstdint>
 #include <map>
@@ -33,7 +33,6 @@ struct GridPlan {
   std::vector<PlannedRun> pending;  // grid order, runs not done yet
   std::int64_t skipped = 0;         // runs already done
   std::int64_t pending_episodes = 0;
-  double pending_core_seconds = 0.0;  // sum of budget x env cost hint over pending runs
   std::map<std::string, ResolvedConfig> env_configs, opt_configs;  // by name
 };
 

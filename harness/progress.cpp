@@ -2,13 +2,18 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 namespace dsb {
 
-Progress::Progress(std::int64_t total_runs, std::int64_t total_episodes, std::FILE* out)
-    : total_runs_(total_runs), total_episodes_(total_episodes), out_(out),
-      tty_(out && isatty(fileno(out)) == 1) {}
+Progress::Progress(std::int64_t total_runs, std::int64_t total_episodes, double total_cost_s, int workers,
+                   std::FILE* out)
+    : total_runs_(total_runs), total_episodes_(total_episodes), total_cost_s_(total_cost_s), out_(out),
+      tty_(out && isatty(fileno(out)) == 1) {
+  for (int w = 0; w < std::max(1, workers); ++w) slots_.push_back(std::make_unique<Slot>());
+}
 
 void Progress::start() {
   start_ = std::chrono::steady_clock::now();
@@ -25,25 +30,41 @@ Progress::~Progress() {
   if (out_) std::fprintf(out_, "%s%s\n", tty_ ? "\r\033[K" : "", line().c_str());
 }
 
-void Progress::run_finished(bool failed) {
+void Progress::run_started(int worker, double seconds_per_episode) {
+  Slot& s = *slots_[static_cast<std::size_t>(worker)];
+  s.run_start.store(s.episodes.load());
+  s.per_episode_s.store(seconds_per_episode);
+}
+
+void Progress::run_finished(int worker, bool failed, double run_cost_s) {
+  Slot& s = *slots_[static_cast<std::size_t>(worker)];
+  s.per_episode_s.store(0.0);
+  finished_cost_s_.fetch_add(run_cost_s);
   runs_done_.fetch_add(1);
   if (failed) runs_failed_.fetch_add(1);
+}
+
+std::int64_t Progress::episodes() const {
+  std::int64_t n = 0;
+  for (const auto& s : slots_) n += s->episodes.load();
+  return n;
 }
 
 std::string Progress::line() const {
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  const std::int64_t eps = episodes_.load();
-  const double rate = elapsed > 0.0 ? eps / elapsed : 0.0;
+  // the estimated work done: finished runs, and running runs' episodes at their estimated cost
+  double done_s = finished_cost_s_.load();
+  for (const auto& s : slots_) done_s += static_cast<double>(s->episodes.load() - s->run_start.load()) * s->per_episode_s.load();
   std::string eta = "--";
-  if (rate > 0.0 && eps > 0) {
-    const double left = static_cast<double>(total_episodes_ - eps) / rate;
-    eta = fmt::format("{:02d}:{:02d}:{:02d}", static_cast<int>(left / 3600),
-                      static_cast<int>(left / 60) % 60, static_cast<int>(left) % 60);
+  if (done_s > 0.0 && elapsed > 1.0 && total_cost_s_ > 0.0) {
+    const double left = std::max(0.0, (total_cost_s_ - done_s) * elapsed / done_s);
+    eta = fmt::format("{:02d}:{:02d}:{:02d}", static_cast<int>(left / 3600), static_cast<int>(left / 60) % 60,
+                      static_cast<int>(left) % 60);
   }
-  return fmt::format("runs {}/{} ({} failed), episodes {}/{}, {:.0f} episodes/s, elapsed {:.1f} s, ETA {}",
-                     runs_done_.load(), total_runs_, runs_failed_.load(), eps, total_episodes_, rate,
-                     elapsed, eta);
+  return fmt::format("runs {}/{} ({} failed), episodes {}/{}, elapsed {:.1f} s, {:.1f}% of the estimated work, ETA {}",
+                     runs_done_.load(), total_runs_, runs_failed_.load(), episodes(), total_episodes_, elapsed,
+                     total_cost_s_ > 0.0 ? 100.0 * std::min(1.0, done_s / total_cost_s_) : 0.0, eta);
 }
 
 void Progress::loop() {

@@ -1,4 +1,5 @@
 // `harness check`, `harness export` (csv; ioh through export_ioh), `harness report`: what is done with a finished database.
+#include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -88,7 +89,8 @@ int command_export(const std::string& db_path, const std::string& out_path, cons
   return 0;
 }
 
-int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes) {
+int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
+                   bool quiet) {
   if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
   // Debian's pandas/matplotlib/scipy import only in Debian's interpreter; DSB_PYTHON overrides
   const char* python_env = std::getenv("DSB_PYTHON");
@@ -108,6 +110,10 @@ int command_report(const std::string& db_path, const std::string& out_dir, const
   std::cout.flush();
   const pid_t pid = fork();
   if (pid == 0) {
+    if (quiet) {
+      const int devnull = open("/dev/null", O_WRONLY);
+      if (devnull >= 0) dup2(devnull, STDOUT_FILENO);
+    }
     execvp(argv[0], argv.data());
     std::perror(("harness: cannot run " + python).c_str());
     _exit(127);

@@ -81,14 +81,20 @@ class CommitListener : public EpisodeListener {
 
 }  // namespace
 
-GridSummary run_grid(const std::vector<PlannedRun>& pending, std::int64_t skipped, Store& store, int jobs,
-                     int threads, std::FILE* progress_out) {
+GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
+                     std::int64_t skipped, Store& store, int jobs, int threads, std::FILE* progress_out,
+                     const std::function<void()>& on_run_finished) {
   GridSummary summary;
   summary.skipped = skipped;
   std::int64_t pending_episodes = 0;
-  for (const auto& p : pending) pending_episodes += p.spec.budget;
-
-  Progress progress(static_cast<std::int64_t>(pending.size()), pending_episodes, progress_out);
+  double pending_cost_s = 0.0;
+  for (std::size_t i = 0; i < pending.size(); ++i) {
+    pending_episodes += pending[i].spec.budget;
+    pending_cost_s += run_cost_s.at(i);
+  }
+  const int n_workers = std::max(1, std::min<int>(jobs, static_cast<int>(pending.size())));
+  Progress progress(static_cast<std::int64_t>(pending.size()), pending_episodes, pending_cost_s, n_workers,
+                    progress_out);
   if (progress_out && summary.skipped > 0)
     std::fprintf(progress_out, "resuming: %lld runs already done, %zu to run\n",
                  static_cast<long long>(summary.skipped), pending.size());
@@ -99,7 +105,8 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, std::int64_t skippe
   std::atomic<std::int64_t> n_done{0}, n_failed{0}, n_interrupted{0}, n_resumed{0}, n_replayed{0};
   std::mutex error_mutex;
   std::exception_ptr store_error;
-  auto worker = [&] {
+  std::mutex finished_mutex;
+  auto worker = [&](int w) {
     ThreadTeam team(threads);  // this job's threads, reused by all its runs
     for (;;) {
       if (stop.load()) return;  // no new run after a stop request
@@ -109,13 +116,14 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, std::int64_t skippe
       try {
         RunStart start = store.begin_run(p.key, p.spec.rng_seed, p.env_config->config, p.opt_config->config);
         const auto env = shared_env(p.spec.env);
+        progress.run_started(w, run_cost_s[i] / static_cast<double>(p.spec.budget));
         RunResult r;
         for (int attempt = 0;; ++attempt) {
           // a resumed run replays its journal; one that diverged from it starts over without
           const auto opt = make_optimizer(p.spec.optimizer);
           CommitListener listener(store, start.run_id, start.committed_episodes);
           RunControl control{&listener, &stop, std::move(start.journal), start.committed_episodes};
-          r = execute_run(p.spec, *env, *opt, &progress.episodes(), &team, &control);
+          r = execute_run(p.spec, *env, *opt, &progress.episodes_of(w), &team, &control);
           if (r.status != "diverged" || attempt > 0) break;
           if (progress_out)
             std::fprintf(progress_out, "\nharness: %s: %s; running it again from the start\n", p.key.text().c_str(),
@@ -123,7 +131,7 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, std::int64_t skippe
           store.reset_progress(start.run_id);
           start = RunStart{start.run_id, 0, {}};
         }
-        fault_maybe_kill(progress.episodes().load());
+        fault_maybe_kill(progress.episodes());
         if (start.committed_episodes > 0) {
           n_resumed.fetch_add(1);
           n_replayed.fetch_add(r.replayed_episodes);
@@ -135,7 +143,11 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, std::int64_t skippe
         if (r.status == "diverged") r.status = "failed";
         store.finish_run(start.run_id, r);
         (r.status == "done" ? n_done : n_failed).fetch_add(1);
-        progress.run_finished(r.status != "done");
+        progress.run_finished(w, r.status != "done", run_cost_s[i]);
+        if (on_run_finished) {
+          std::lock_guard lock(finished_mutex);
+          on_run_finished();
+        }
       } catch (...) {
         // a store failure stops the grid; runs already committed stay
         std::lock_guard lock(error_mutex);
@@ -145,9 +157,8 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, std::int64_t skippe
       }
     }
   };
-  const int n_workers = std::max(1, std::min<int>(jobs, static_cast<int>(pending.size())));
   std::vector<std::thread> workers;
-  for (int t = 0; t < n_workers; ++t) workers.emplace_back(worker);
+  for (int t = 0; t < n_workers; ++t) workers.emplace_back(worker, t);
   for (auto& t : workers) t.join();
   if (store_error) std::rethrow_exception(store_error);
   summary.done = n_done.load();

@@ -5,6 +5,7 @@
 // an earlier harness left unfinished resumes by replaying its journal (harness/replay.hpp). A stop
 // request (harness/interrupt.hpp) ends every run after its current episode, committed.
 #include <cstdio>
+#include <functional>
 #include <vector>
 
 #include "common/thread_team.hpp"
@@ -46,7 +47,10 @@ struct GridSummary {
 // `jobs` runs at once, each with a team of `threads` threads. Runs already done are recognised by
 // their keys alone: configs are resolved once per distinct env and optimizer name, and no env
 // model is built for a run that is skipped.
-GridSummary run_grid(const std::vector<PlannedRun>& pending, std::int64_t skipped, Store& store, int jobs,
-                     int threads, std::FILE* progress_out);
+// `pending` in the order to run them; `run_cost_s` their estimated seconds (the progress line's
+// ETA); on_run_finished (may be empty) is called after every run that ends (done or failed).
+GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
+                     std::int64_t skipped, Store& store, int jobs, int threads, std::FILE* progress_out,
+                     const std::function<void()>& on_run_finished = {});
 
 }  // namespace dsb

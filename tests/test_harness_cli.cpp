@@ -507,6 +507,38 @@ TEST_F(HarnessCli, ShardsAreCutFromRunKeysSoAddingAnEnvMovesNoRun) {
   EXPECT_EQ(a, scalar(db("b.sqlite"), runs_sql));
 }
 
+TEST_F(HarnessCli, CalibrateCachesEpisodeCostsThatPlanAndTheRunOrderUse) {
+  const std::string cache = "DSB_COST_CACHE=" + db("costs.json") + " ";
+  const std::string grid = "--env cartpole1,sphere-2 --optimizer random --seeds 1 --budget 5";
+  const auto before = harness("plan " + grid + " --db " + db("p.sqlite"), cache);
+  EXPECT_NE(before.out.find("measured on this machine for 0 of 2 envs"), std::string::npos) << before.out;
+  EXPECT_NE(before.out.find("`harness calibrate " + grid + "` measures them"), std::string::npos) << before.out;
+  const auto c = harness("calibrate " + grid, cache);
+  ASSERT_EQ(c.code, 0) << c.err;
+  EXPECT_NE(c.out.find("measured now"), std::string::npos) << c.out;
+  const auto j = nlohmann::json::parse(read(db("costs.json")));
+  EXPECT_EQ(j.at("costs").size(), 2u);
+  for (const auto& [key, v] : j.at("costs").items()) {
+    EXPECT_GT(v.at("forward_s").get<double>(), 0.0) << key;
+    EXPECT_GT(v.at("gradient_s").get<double>(), 0.0) << key;
+  }
+  const auto again = harness("calibrate " + grid, cache);
+  EXPECT_EQ(again.out.find("measured now"), std::string::npos) << again.out;  // cached
+  const auto after = harness("plan " + grid + " --db " + db("p.sqlite"), cache);
+  EXPECT_NE(after.out.find("measured on this machine for 2 of 2 envs"), std::string::npos) << after.out;
+  // the run starts the cheaper env first (sphere-2, though named second)
+  ASSERT_EQ(harness(grid + " --jobs 1 --quiet --db " + db("r.sqlite"), cache).code, 0);
+  EXPECT_EQ(scalar(db("r.sqlite"), "SELECT env FROM runs ORDER BY run_id LIMIT 1"), "sphere-2");
+}
+
+TEST_F(HarnessCli, ReportOptionWritesTheReportWhenTheGridEnds) {
+  const auto r = harness("--env sphere-2,branin --optimizer random,cmaes --seeds 2 --budget 10 --quiet --db " +
+                         db("r.sqlite") + " --report " + db("rep"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("report written to " + db("rep")), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "rep" / "index.html"));
+}
+
 TEST_F(HarnessCli, MergeCombinesShardsAndRefusesConflicts) {
   const std::string grid = "--env sphere-2,branin,cartpole1 --optimizer random,cmaes,gd --seeds 2 --budget 8 --quiet";
   ASSERT_EQ(harness(grid + " --db " + db("all.sqlite")).code, 0);

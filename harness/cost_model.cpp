@@ -1,0 +1,143 @@
+#include "harness/cost_model.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "common/error.hpp"
+#include "common/parallel.hpp"
+#include "envs/core/registry.hpp"
+#include "optimizers/core/registry.hpp"
+
+namespace dsb {
+namespace {
+
+std::string default_cache_path() {
+  if (const char* p = std::getenv("DSB_COST_CACHE"); p && *p) return p;
+  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return std::string(x) + "/diffsim-bench/episode-costs.json";
+  if (const char* h = std::getenv("HOME"); h && *h) return std::string(h) + "/.cache/diffsim-bench/episode-costs.json";
+  return ".diffsim-bench-episode-costs.json";
+}
+
+// the median of repeated timings of f, repeated until `min_total_s` has passed (at least once,
+// at most 25 times)
+template <class F>
+double median_seconds(F&& f, double min_total_s) {
+  std::vector<double> times;
+  double total = 0.0;
+  while (times.empty() || (total < min_total_s && times.size() < 25)) {
+    const auto start = std::chrono::steady_clock::now();
+    f();
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    times.push_back(t);
+    total += t;
+  }
+  std::sort(times.begin(), times.end());
+  return times[times.size() / 2];
+}
+
+}  // namespace
+
+std::string cpu_model_name() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) {
+        std::string name = line.substr(colon + 1);
+        name.erase(0, name.find_first_not_of(' '));
+        return name;
+      }
+    }
+  }
+  return "unknown";
+}
+
+std::string human_duration(double s) {
+  if (s < 10.0) return fmt::format("{:.2g} s", s);
+  if (s < 90.0) return fmt::format("{:.0f} s", s);
+  if (s < 5400.0) return fmt::format("{:.0f} min", s / 60.0);
+  if (s < 2.0 * 86400.0) return fmt::format("{:.1f} h", s / 3600.0);
+  return fmt::format("{:.1f} days", s / 86400.0);
+}
+
+CostModel::CostModel() : path_(default_cache_path()), cpu_(cpu_model_name()) {
+  std::ifstream in(path_);
+  if (!in) return;
+  try {
+    const auto j = nlohmann::json::parse(in);
+    for (const auto& [k, v] : j.at("costs").items())
+      table_[k] = {v.at("forward_s").get<double>(), v.at("gradient_s").get<double>(), v.at("decisions").get<int>(), true};
+  } catch (const std::exception&) {
+    table_.clear();  // an unreadable cache is an empty one; `calibrate` rewrites it
+  }
+}
+
+std::string CostModel::key(const std::string& env_name, const std::string& env_config_hash) const {
+  return env_name + "|" + env_config_hash + "|" + DSB_VERSION + "|" + cpu_;
+}
+
+EpisodeCost CostModel::episode(const std::string& env_name, const std::string& env_config_hash) const {
+  if (const auto it = table_.find(key(env_name, env_config_hash)); it != table_.end()) return it->second;
+  const EnvInfo& info = shared_env(env_name)->info();  // metadata: no model is built
+  return {info.cost_hint_s, info.cost_hint_s, 0, false};
+}
+
+double CostModel::run_seconds(const PlannedRun& run) const {
+  const EpisodeCost c = episode(run.spec.env, run.key.env_config_hash);
+  const OptimizerEntry& opt = optimizer_entry(run.spec.optimizer);
+  double per_episode = opt.needs_gradient ? c.gradient_s : c.forward_s;
+  if (opt.needs_rl) {
+    // the hint alone knows no decision count: one per 5 env steps of a 50-step episode
+    const int decisions = c.decisions > 0 ? c.decisions : 10;
+    per_episode += decisions * (run.spec.optimizer == "sac" ? kSacLearnerSecondsPerDecision
+                                                              : kPpoLearnerSecondsPerDecision);
+  }
+  return per_episode * static_cast<double>(run.spec.budget);
+}
+
+EpisodeCost CostModel::calibrate(const std::string& env_name, const std::string& env_config_hash) {
+  const auto env = shared_env(env_name);
+  const auto ws = env->make_workspace();
+  const std::vector<double> x(static_cast<std::size_t>(env->dim()), 0.0);
+  std::vector<double> grad(x.size());
+  EpisodeCost c;
+  c.measured = true;
+  env->loss(x, *ws, serial_team());  // builds the model and warms the workspace, untimed
+  c.forward_s = median_seconds([&] { env->loss(x, *ws, serial_team()); }, 0.2);
+  c.gradient_s = env->differentiable() ? median_seconds([&] { env->loss_and_grad(x, grad, *ws, serial_team()); }, 0.2)
+                                       : c.forward_s;
+  if (env->supports_rl()) {
+    const auto rl = env->make_rl();
+    c.decisions = (rl->horizon() + rl->action_repeat() - 1) / rl->action_repeat();
+  }
+  table_[key(env_name, env_config_hash)] = c;
+  return c;
+}
+
+void CostModel::save() const {
+  nlohmann::json costs = nlohmann::json::object();
+  for (const auto& [k, c] : table_)
+    costs[k] = {{"forward_s", c.forward_s}, {"gradient_s", c.gradient_s}, {"decisions", c.decisions}};
+  const nlohmann::json j = {{"what", "diffsim-bench seconds per episode, one core: env|env config hash|harness "
+                                     "version|CPU model"},
+                            {"costs", costs}};
+  std::error_code ec;
+  const auto dir = std::filesystem::path(path_).parent_path();
+  if (!dir.empty()) std::filesystem::create_directories(dir, ec);
+  const std::string tmp = path_ + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << j.dump(2) << "\n";
+    if (!out) throw UsageError("cannot write the cost cache '" + tmp + "'");
+  }
+  std::filesystem::rename(tmp, path_, ec);
+  if (ec) throw UsageError("cannot write the cost cache '" + path_ + "': " + ec.message());
+}
+
+}  // namespace dsb

@@ -1,0 +1,101 @@
+#include "harness/plan_report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "optimizers/core/registry.hpp"
+
+namespace dsb {
+namespace {
+
+// a Slurm array task's target length: long enough that start-up is nothing, short enough for
+// common partition limits and for a lost node to cost little
+constexpr double kShardTargetSeconds = 6.0 * 3600.0;
+
+std::string family_of(const std::string& optimizer) {
+  const OptimizerEntry& e = optimizer_entry(optimizer);
+  if (e.needs_rl) return "rl (learner per decision)";
+  if (e.needs_gradient) return "gradient episodes";
+  return "forward episodes";
+}
+
+struct Tally {
+  std::int64_t runs = 0;
+  double seconds = 0.0, longest = 0.0;
+  std::set<std::string> names;
+};
+
+}  // namespace
+
+std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs) {
+  std::vector<double> c;
+  c.reserve(plan.pending.size());
+  for (const auto& p : plan.pending) c.push_back(costs.run_seconds(p));
+  return c;
+}
+
+std::vector<std::size_t> cheapest_first(const std::vector<double>& run_cost_s) {
+  std::vector<std::size_t> order(run_cost_s.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return run_cost_s[a] < run_cost_s[b]; });
+  return order;
+}
+
+void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& ctx) {
+  const std::vector<double> cost = run_costs(plan, costs);
+  std::map<std::string, Tally> by_env, by_family;
+  std::set<std::string> measured, hinted;
+  double total = 0.0, longest = 0.0;
+  for (std::size_t i = 0; i < plan.pending.size(); ++i) {
+    const auto& p = plan.pending[i];
+    for (Tally* t : {&by_env[p.spec.env], &by_family[family_of(p.spec.optimizer)]}) {
+      ++t->runs;
+      t->seconds += cost[i];
+      t->longest = std::max(t->longest, cost[i]);
+      t->names.insert(p.spec.optimizer);
+    }
+    (costs.episode(p.spec.env, p.key.env_config_hash).measured ? measured : hinted).insert(p.spec.env);
+    total += cost[i];
+    longest = std::max(longest, cost[i]);
+  }
+  out << fmt::format("plan: {} runs in the grid; {} already done in {}; {} to run ({} episodes)\n", plan.runs,
+                     plan.skipped, ctx.db, plan.pending.size(), plan.pending_episodes);
+  if (plan.pending.empty()) return;
+  out << fmt::format("  episode costs: measured on this machine for {} of {} envs (cache {}){}\n", measured.size(),
+                     measured.size() + hinted.size(), costs.path(),
+                     hinted.empty() ? std::string()
+                                    : "; the others from their cost hints (a gradient episode on the reference "
+                                      "machine, for every kind): `harness calibrate " + ctx.grid_flags +
+                                          "` measures them, one episode each");
+  out << fmt::format("  {:<26} {:>6} {:>11} {:>12}\n", "env", "runs", "core-hours", "longest run");
+  std::vector<std::pair<std::string, Tally>> envs(by_env.begin(), by_env.end());
+  std::stable_sort(envs.begin(), envs.end(), [](const auto& a, const auto& b) { return a.second.seconds > b.second.seconds; });
+  for (const auto& [name, t] : envs)
+    out << fmt::format("  {:<26} {:>6} {:>11.2f} {:>12}\n", name, t.runs, t.seconds / 3600.0, human_duration(t.longest));
+  out << fmt::format("  {:<26} {:>6} {:>11}  {}\n", "optimizer family", "runs", "core-hours", "optimizers");
+  for (const auto& [name, t] : by_family) {
+    std::string names;
+    for (const auto& n : t.names) names += (names.empty() ? "" : ", ") + n;
+    out << fmt::format("  {:<26} {:>6} {:>11.2f}  {}\n", name, t.runs, t.seconds / 3600.0, names);
+  }
+  // wall: the work over the runs at once, but never less than the longest run
+  const int parallel = std::max(1, std::min<int>(ctx.jobs, static_cast<int>(plan.pending.size())));
+  const double wall = std::max(total / parallel, longest);
+  out << fmt::format("  total: about {:.4g} core-hours (bo's GP and the other optimizers' own time not included); "
+                     "with --jobs {} --threads {}: about {} wall (the longest run alone {})\n",
+                     total / 3600.0, ctx.jobs, ctx.threads, human_duration(wall), human_duration(longest));
+  // array tasks of about kShardTargetSeconds each, or one per job when --jobs names a cluster's cores
+  const int shards = static_cast<int>(std::clamp<double>(std::max(std::ceil(total / kShardTargetSeconds), 1.0 * ctx.jobs),
+                                                         1.0, static_cast<double>(plan.pending.size())));
+  if (wall > 24.0 * 3600.0 || shards > 1)
+    out << fmt::format("  on a Slurm cluster: harness slurm {} --shards {} --dir slurm-run && bash slurm-run/submit.sh "
+                       "({} array tasks of about {} on one core each; README \"Running on a Slurm cluster\")\n",
+                       ctx.grid_flags, shards, shards, human_duration(std::max(total / shards, longest)));
+}
+
+}  // namespace dsb

@@ -1,0 +1,29 @@
+#pragma once
+// `harness plan`'s text (also printed by a grid run before it starts): runs to do, their
+// estimated core-hours per env and per optimizer family (harness/cost_model.hpp), the wall time
+// for the given jobs, and the Slurm route for grids bigger than one machine.
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "harness/cost_model.hpp"
+#include "harness/plan.hpp"
+
+namespace dsb {
+
+struct PlanContext {
+  std::string db;          // the results file
+  int jobs = 1, threads = 1;
+  std::string grid_flags;  // the grid as command-line flags (for the Slurm command)
+};
+
+// the pending runs' estimated seconds, in plan order
+std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs);
+
+// the order to run them: cheapest first (stable, so equal costs keep grid order), so partial
+// reports come early; results do not depend on the order
+std::vector<std::size_t> cheapest_first(const std::vector<double>& run_cost_s);
+
+void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& context);
+
+}  // namespace dsb
