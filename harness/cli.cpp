@@ -25,6 +25,7 @@
 #include "harness/plan_report.hpp"
 #include "harness/report_refresher.hpp"
 #include "harness/runner.hpp"
+#include "harness/slurm_command.hpp"
 #include "harness/store.hpp"
 #include "reference/crosscheck.hpp"
 
@@ -45,12 +46,17 @@ struct RunArgs {
   bool quiet = false;
 };
 
-void add_run_options(CLI::App& app, RunArgs& a) {
+// the flags that define the grid (also those of `harness slurm`)
+void add_grid_options(CLI::App& app, RunArgs& a) {
   app.add_flag("--all", a.all, "every registered env x every applicable optimizer");
   app.add_option("--env", a.envs, "env names, comma-separated (see `harness list`)")->delimiter(',');
   app.add_option("--optimizer", a.optimizers, "optimizer names, comma-separated")->delimiter(',');
   app.add_option("--seeds", a.seeds, "number of seeds per (env, optimizer), seed indices 0..N-1");
   app.add_option("--budget", a.budget, "episodes per run (default 1000)");
+}
+
+void add_run_options(CLI::App& app, RunArgs& a) {
+  add_grid_options(app, a);
   app.add_option("--db", a.db, "SQLite results file (default ./results.sqlite); resumes");
   app.add_option("--jobs", a.jobs, "runs at once (default: the CPUs this process may use, divided by --threads)");
   app.add_option("--threads", a.threads, "threads inside one run's rollouts and batches (default 1; same results for any value)");
@@ -208,6 +214,19 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
   return 0;
 }
 
+// `harness slurm`: the grid is checked like a run's before anything is written; the runs of each
+// shard are counted from the run keys (metadata only)
+int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
+  const CheckedRun run = check_run_args(a);
+  std::vector<std::int64_t> shard_runs;
+  if (options.shards >= 1 && options.shards <= kMaxSlurmShards) {
+    shard_runs.assign(options.shards, 0);
+    for (const PlannedRun& p : plan_grid(run.grid, {}, kVersion).pending) ++shard_runs[shard_of(p.key, options.shards)];
+  }
+  const SlurmGridFlags flags{a.all, a.envs, a.optimizers, a.seeds, a.budget};
+  return command_slurm(flags, run.grid.size(), shard_runs, options, running_binary_path(), std::cout);
+}
+
 std::string one_line(std::string s) {
   for (auto& c : s)
     if (c == '\n' || c == '\r') c = ' ';
@@ -241,8 +260,19 @@ int harness_main(int argc, char** argv) {
   RunArgs calibrate_args;
   bool calibrate_force = false;
   auto* calibrate = app.add_subcommand("calibrate", "time one episode of each env of a grid on this machine (cached for plan and ETAs)");
-  add_run_options(*calibrate, calibrate_args);
+  add_grid_options(*calibrate, calibrate_args);
   calibrate->add_flag("--force", calibrate_force, "measure again envs already in the cache");
+
+  RunArgs slurm_args;
+  SlurmOptions slurm_opts;
+  auto* slurm = app.add_subcommand("slurm", "write sbatch scripts that run the grid as a Slurm job array, then merge");
+  add_grid_options(*slurm, slurm_args);
+  slurm->add_option("--shards", slurm_opts.shards, "array tasks N: task I runs shard I/N")->required();
+  slurm->add_option("--dir", slurm_opts.dir, "folder for the scripts, logs, shard databases and results.sqlite")
+      ->required();
+  slurm->add_option("--cpus-per-task", slurm_opts.cpus_per_task, "CPUs per task, its --jobs (default 1)");
+  slurm->add_option("--time", slurm_opts.time, "time limit per task, e.g. 12:00:00 (default: the cluster's)");
+  slurm->add_option("--partition", slurm_opts.partition, "Slurm partition (default: the cluster's)");
 
   std::string eval_env, eval_x;
   bool eval_grad = false;
@@ -318,6 +348,7 @@ int harness_main(int argc, char** argv) {
     if (list->parsed()) return command_list();
     if (plan->parsed()) return command_plan(plan_args);
     if (calibrate->parsed()) return command_calibrate(calibrate_args, calibrate_force);
+    if (slurm->parsed()) return command_slurm_scripts(slurm_args, slurm_opts);
     if (landscape->parsed())
       return command_landscape(ls_env, ls_dims, ls_res, ls_center, ls_out,
                                landscape->count("--check-step") > 0 ? std::optional(ls_check) : std::nullopt);

@@ -1,0 +1,144 @@
+#!/usr/bin/env bash
+# The Slurm route for real (ctest label `slurm`): a single-node Slurm cluster in a scratch folder
+# (slurm_cluster.sh), `harness slurm` for a small grid in 4 shards submitted with its submit.sh; the
+# merged database's result table must equal a single-process run's byte for byte. Then the TERM
+# case: a task stopped mid-grid by TERM (as at a time limit) copies back what it committed, its
+# merge never runs, a second submit resumes it, and the result again equals a single-process run.
+# Usage: run_slurm_test.sh BUILD_DIR. Exit 77 (skipped) when not root: the daemons run as root.
+set -euo pipefail
+
+build=${1:?usage: run_slurm_test.sh BUILD_DIR}
+harness=$(cd "$build/bin" && pwd)/harness
+here=$(cd "$(dirname "$0")" && pwd)
+if [[ $(id -u) -ne 0 ]]; then
+  echo "skipped: a test Slurm cluster needs root"
+  exit 77
+fi
+for tool in slurmctld slurmd sbatch squeue scontrol scancel munged mungekey sqlite3; do
+  command -v "$tool" >/dev/null || { echo "FAIL: $tool missing (scripts/install-deps.sh installs it)"; exit 1; }
+done
+
+# shellcheck source=slurm_cluster.sh
+source "$here/slurm_cluster.sh"
+work=$(mktemp -d /tmp/dsb-slurm-test.XXXXXX)
+chmod 755 "$work"
+
+# tear everything down on any exit (nothing in here may stop it: no -e); on failure show the logs
+cleanup() {
+  local rc=$?
+  set +e
+  trap - EXIT
+  if ((rc != 0)); then
+    for f in "$work"/*/logs/* "$work"/cluster/log/*.log; do
+      [[ -f $f ]] && { echo "--- $f"; tail -n 20 "$f"; }
+    done
+  fi
+  slurm_cluster_stop
+  rm -rf "$work"
+  exit "$rc"
+}
+trap cleanup EXIT
+trap 'exit 143' TERM INT  # a signal ends the script through cleanup too
+
+now() { date +%s.%N; }
+since() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.1f", b - a }'; }
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+# wait (at most $1 s) until none of the jobs $2 (comma-separated ids) is pending, running or completing
+wait_jobs() {
+  timeout "$1" bash -c 'while [[ -n $(squeue -h -t PD,R,CG -j "$1" -o %i 2>/dev/null) ]]; do sleep 0.3; done' _ "$2" ||
+    fail "jobs $2 still queued after $1 s"
+}
+
+# the states of job $1's tasks (an array: one line per task), e.g. "COMPLETED"
+job_states() { scontrol show job "$1" -o 2>/dev/null | grep -o 'JobState=[A-Z_]*' | cut -d= -f2 | sort | uniq -c | xargs; }
+
+# submit DIR: runs DIR/submit.sh, sets array_id and merge_id from what it prints
+submit() {
+  local out
+  out=$(bash "$1/submit.sh")
+  echo "$out" | sed 's/^/  submit.sh: /'
+  array_id=$(echo "$out" | sed -n 's/^array job \([0-9]*\):.*/\1/p')
+  merge_id=$(echo "$out" | sed -n 's/^merge job \([0-9]*\):.*/\1/p')
+  [[ -n $array_id && -n $merge_id ]] || fail "submit.sh printed no job ids"
+}
+
+# export_digest DB CSV: the result table as CSV, prints its sha256
+export_digest() {
+  local out
+  out=$("$harness" export --db "$1" --out "$2" 2>&1) || fail "harness export --db $1: $out"
+  sha256sum "$2" | cut -d' ' -f1
+}
+
+# show_log FILE: a task's log, indented
+show_log() { grep -v '^\[' "$1" | sed 's/^/    log: /'; }
+
+# 1. the cluster; tasks' node-local scratch goes under $work/node (sbatch passes TMPDIR on)
+t=$(now)
+slurm_cluster_start "$work/cluster"
+mkdir -p "$work/node"
+export TMPDIR=$work/node
+echo "slurm: single-node cluster up in $(since "$t") s ($(sinfo -h -N -o '%N %c CPUs %t'))"
+
+# 2. the grid as a 4-task array, 1 CPU each, and its merge
+grid=(--env sphere-10,branin --optimizer random,cmaes --seeds 2 --budget 20)
+t=$(now)
+"$harness" slurm "${grid[@]}" --shards 4 --cpus-per-task 1 --dir "$work/array" | sed 's/^/  /'
+submit "$work/array"
+wait_jobs 180 "$array_id,$merge_id"
+echo "slurm: array $array_id [$(job_states "$array_id")], merge $merge_id [$(job_states "$merge_id")] in $(since "$t") s"
+[[ $(job_states "$array_id") == "4 COMPLETED" ]] || fail "not every array task completed"
+[[ $(job_states "$merge_id") == "1 COMPLETED" ]] || fail "the merge job did not complete"
+for i in 0 1 2 3; do
+  [[ -f $work/array/shards/shard-$i.sqlite ]] || fail "no database for shard $i"
+done
+[[ -f $work/array/results.sqlite ]] || fail "no merged database $work/array/results.sqlite"
+
+# 3. the same grid in one process: the result tables must be byte-identical
+t=$(now)
+"$harness" "${grid[@]}" --jobs 1 --quiet --db "$work/single.sqlite" 2>/dev/null
+echo "slurm: single-process run in $(since "$t") s"
+merged=$(export_digest "$work/array/results.sqlite" "$work/array.csv")
+single=$(export_digest "$work/single.sqlite" "$work/single.csv")
+echo "  sha256 merged shards:  $merged ($(($(wc -l <"$work/array.csv") - 1)) rows)"
+echo "  sha256 single process: $single"
+cmp -s "$work/array.csv" "$work/single.csv" || fail "the merged export differs from the single-process export"
+
+# 4. TERM mid-grid: one task, a grid of two quick runs and two slow ones (sac, a few s each)
+grid=(--env cartpole1 --optimizer random,sac --seeds 2 --budget 6)
+t=$(now)
+"$harness" slurm "${grid[@]}" --shards 1 --cpus-per-task 1 --dir "$work/term" >/dev/null
+submit "$work/term"
+# wait until the task's node-local database holds 3 finished runs, then TERM the batch shell alone,
+# as `#SBATCH --signal=B:TERM@120` does before a time limit
+timeout 120 bash -c 'until [[ $(sqlite3 -readonly "$1"/dsb-shard-0.*/shard-0.sqlite "SELECT count(*) FROM runs WHERE status='"'done'"'" 2>/dev/null) == 3 ]]; do sleep 0.2; done' _ "$work/node" ||
+  fail "the TERM case's task did not reach 3 finished runs"
+scancel --signal=TERM --batch "$array_id"
+wait_jobs 60 "$array_id,$merge_id"
+echo "slurm: TERM sent after 3 runs: array $array_id [$(job_states "$array_id")], merge $merge_id [$(job_states "$merge_id")] in $(since "$t") s"
+copied=$(sqlite3 "$work/term/shards/shard-0.sqlite" "SELECT count(*) FROM runs WHERE status='done'")
+[[ $copied == 3 ]] || fail "after TERM the copied-back shard holds $copied finished runs, not 3"
+[[ ! -f $work/term/results.sqlite ]] || fail "the merge ran although the array failed"
+show_log "$work"/term/logs/shard-0-job-"$array_id".out
+grep -q "TERM received" "$work"/term/logs/shard-0-job-"$array_id".out || fail "the task's log shows no TERM"
+
+# 5. submit again: the shard resumes (3 runs done, the fourth from its committed episodes) and the
+#    merge follows
+t=$(now)
+submit "$work/term"
+wait_jobs 120 "$array_id,$merge_id"
+echo "slurm: resubmitted: array $array_id [$(job_states "$array_id")], merge $merge_id [$(job_states "$merge_id")] in $(since "$t") s"
+show_log "$work"/term/logs/shard-0-job-"$array_id".out
+grep -q "resuming: 3 runs already done" "$work"/term/logs/shard-0-job-"$array_id".out || fail "the second attempt did not resume"
+grep -q "resumed 1 interrupted run" "$work"/term/logs/shard-0-job-"$array_id".out || fail "the run in progress was not resumed"
+[[ -f $work/term/results.sqlite ]] || fail "no merged database after the resubmission"
+t=$(now)
+"$harness" "${grid[@]}" --jobs 1 --quiet --db "$work/term-single.sqlite" 2>/dev/null
+echo "slurm: single-process run in $(since "$t") s"
+merged=$(export_digest "$work/term/results.sqlite" "$work/term.csv")
+single=$(export_digest "$work/term-single.sqlite" "$work/term-single.csv")
+echo "  sha256 after TERM + resume: $merged ($(($(wc -l <"$work/term.csv") - 1)) rows)"
+echo "  sha256 single process:      $single"
+cmp -s "$work/term.csv" "$work/term-single.csv" || fail "the resumed export differs from the single-process export"
+
+echo "slurm: passed"
