@@ -94,15 +94,22 @@ for i in 0 1 2 3; do
 done
 [[ -f $work/array/results.sqlite ]] || fail "no merged database $work/array/results.sqlite"
 
+# the grid "${grid[@]}" in one process: `harness export` of database $1 must equal its export byte
+# for byte ($2 names the case in files and messages)
+expect_single_process_result() {
+  local db=$1 label=$2 t merged single
+  t=$(now)
+  "$harness" "${grid[@]}" --jobs 1 --quiet --db "$work/$label-single.sqlite" 2>/dev/null
+  echo "slurm: single-process run in $(since "$t") s"
+  merged=$(export_digest "$db" "$work/$label.csv")
+  single=$(export_digest "$work/$label-single.sqlite" "$work/$label-single.csv")
+  echo "  sha256 $label: $merged ($(($(wc -l <"$work/$label.csv") - 1)) rows)"
+  echo "  sha256 single process: $single"
+  cmp -s "$work/$label.csv" "$work/$label-single.csv" || fail "the $label export differs from the single-process export"
+}
+
 # 3. the same grid in one process: the result tables must be byte-identical
-t=$(now)
-"$harness" "${grid[@]}" --jobs 1 --quiet --db "$work/single.sqlite" 2>/dev/null
-echo "slurm: single-process run in $(since "$t") s"
-merged=$(export_digest "$work/array/results.sqlite" "$work/array.csv")
-single=$(export_digest "$work/single.sqlite" "$work/single.csv")
-echo "  sha256 merged shards:  $merged ($(($(wc -l <"$work/array.csv") - 1)) rows)"
-echo "  sha256 single process: $single"
-cmp -s "$work/array.csv" "$work/single.csv" || fail "the merged export differs from the single-process export"
+expect_single_process_result "$work/array/results.sqlite" "merged-shards"
 
 # 4. TERM mid-grid: one task, a grid of two quick runs and two slow ones (sac, a few s each)
 grid=(--env cartpole1 --optimizer random,sac --seeds 2 --budget 6)
@@ -132,13 +139,6 @@ show_log "$work"/term/logs/shard-0-job-"$array_id".out
 grep -q "resuming: 3 runs already done" "$work"/term/logs/shard-0-job-"$array_id".out || fail "the second attempt did not resume"
 grep -q "resumed 1 interrupted run" "$work"/term/logs/shard-0-job-"$array_id".out || fail "the run in progress was not resumed"
 [[ -f $work/term/results.sqlite ]] || fail "no merged database after the resubmission"
-t=$(now)
-"$harness" "${grid[@]}" --jobs 1 --quiet --db "$work/term-single.sqlite" 2>/dev/null
-echo "slurm: single-process run in $(since "$t") s"
-merged=$(export_digest "$work/term/results.sqlite" "$work/term.csv")
-single=$(export_digest "$work/term-single.sqlite" "$work/term-single.csv")
-echo "  sha256 after TERM + resume: $merged ($(($(wc -l <"$work/term.csv") - 1)) rows)"
-echo "  sha256 single process:      $single"
-cmp -s "$work/term.csv" "$work/term-single.csv" || fail "the resumed export differs from the single-process export"
+expect_single_process_result "$work/term/results.sqlite" "after-TERM-and-resume"
 
 echo "slurm: passed"
