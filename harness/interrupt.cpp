@@ -30,6 +30,7 @@ void install_stop_handlers() {
   sa.sa_flags = SA_RESTART;  // interrupted system calls go on; the workers poll the flag between episodes
   sigaction(SIGTERM, &sa, nullptr);
   sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);  // a closed terminal or ssh session: the same orderly stop
 }
 
 const std::atomic<bool>& stop_requested() { return g_stop; }
