@@ -88,6 +88,17 @@ EpisodeCost CostModel::episode(const std::string& env_name, const std::string& e
   return {info.cost_hint_s, info.cost_hint_s, 0, false};
 }
 
+double optimizer_overhead_seconds(const std::string& optimizer, int dim, std::int64_t budget) {
+  double at_10 = 0.0, at_400 = 0.0;
+  if (optimizer == "bo") at_10 = 53.8, at_400 = 290.0;
+  if (optimizer == "boleap") at_10 = 12.6, at_400 = 200.0;
+  if (at_10 == 0.0) return 0.0;
+  const double d = std::clamp(static_cast<double>(dim), 10.0, 400.0);
+  const double per_1000 = at_10 + (at_400 - at_10) * (d - 10.0) / 390.0;
+  const double scale = static_cast<double>(budget) / 1000.0;
+  return per_1000 * scale * scale;
+}
+
 double CostModel::run_seconds(const PlannedRun& run) const {
   const EpisodeCost c = episode(run.spec.env, run.key.env_config_hash);
   const OptimizerEntry& opt = optimizer_entry(run.spec.optimizer);
@@ -98,7 +109,9 @@ double CostModel::run_seconds(const PlannedRun& run) const {
     per_episode += decisions * (run.spec.optimizer == "sac" ? kSacLearnerSecondsPerDecision
                                                               : kPpoLearnerSecondsPerDecision);
   }
-  return per_episode * static_cast<double>(run.spec.budget);
+  const int dim = shared_env(run.spec.env)->info().dim;  // metadata
+  return per_episode * static_cast<double>(run.spec.budget) +
+         optimizer_overhead_seconds(run.spec.optimizer, dim, run.spec.budget);
 }
 
 EpisodeCost CostModel::calibrate(const std::string& env_name, const std::string& env_config_hash) {

@@ -9,6 +9,7 @@
 // ~/.cache/diffsim-bench/episode-costs.json. Envs not measured yet fall back to their cost hint
 // (seconds of a gradient episode on the machine the hint was written on), and the plan says so.
 // Reading the cache never builds an env model.
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -30,6 +31,14 @@ struct EpisodeCost {
 // cartpole3: ppo 241 us acting + amortised update; sac 7.3 ms per gradient step, one per decision)
 inline constexpr double kPpoLearnerSecondsPerDecision = 2.41e-4;
 inline constexpr double kSacLearnerSecondsPerDecision = 7.3e-3;
+
+// the GP optimizers' own seconds per 1,000-episode run on the reference machine (README
+// "Performance", bench_bo and whole runs): bo 53.8 s on a 10-D env and about 290 s on the 400-D
+// cartpole3, boleap 12.6 s and about 200 s; in between linear in the dimension, and scaled by
+// (budget / 1,000)^2 for other budgets (refits grow with the points the GP holds). A rough model:
+// it orders the grid (bo's runs are not cheap even where the env is) and keeps the plan honest
+// about where the hours go.
+double optimizer_overhead_seconds(const std::string& optimizer, int dim, std::int64_t budget);
 
 class CostModel {
  public:

@@ -20,6 +20,7 @@ constexpr double kShardTargetSeconds = 6.0 * 3600.0;
 std::string family_of(const std::string& optimizer) {
   const OptimizerEntry& e = optimizer_entry(optimizer);
   if (e.needs_rl) return "rl (learner per decision)";
+  if (optimizer == "bo" || optimizer == "boleap") return "gp (episodes + GP time)";
   if (e.needs_gradient) return "gradient episodes";
   return "forward episodes";
 }
@@ -86,7 +87,7 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
   // wall: the work over the runs at once, but never less than the longest run
   const int parallel = std::max(1, std::min<int>(ctx.jobs, static_cast<int>(plan.pending.size())));
   const double wall = std::max(total / parallel, longest);
-  out << fmt::format("  total: about {:.4g} core-hours (bo's GP and the other optimizers' own time not included); "
+  out << fmt::format("  total: about {:.4g} core-hours (with the GP optimizers' and RL learners' own time, roughly); "
                      "with --jobs {} --threads {}: about {} wall (the longest run alone {})\n",
                      total / 3600.0, ctx.jobs, ctx.threads, human_duration(wall), human_duration(longest));
   // array tasks of about kShardTargetSeconds each, or one per job when --jobs names a cluster's cores

@@ -115,6 +115,12 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
       const PlannedRun& p = pending[i];
       try {
         RunStart start = store.begin_run(p.key, p.spec.rng_seed, p.env_config->config, p.opt_config->config);
+        if (start.committed_episodes > 0 && start.journal.empty()) {
+          // episodes without the journal that regenerates them (e.g. left by an older harness):
+          // nothing to replay, so the run starts over
+          store.reset_progress(start.run_id);
+          start.committed_episodes = 0;
+        }
         const auto env = shared_env(p.spec.env);
         progress.run_started(w, run_cost_s[i] / static_cast<double>(p.spec.budget));
         RunResult r;
