@@ -3,6 +3,7 @@
 self-contained folder with index.html, summary.md, PNG figures and CSV tables.
 
 usage: /usr/bin/python3 reports/make_report.py --db FILE --out DIR [--landscapes DIR] [--build-type T]
+                                              [--claims FILE]
 
 Needs pandas, matplotlib and scipy (Debian: python3-pandas python3-matplotlib python3-scipy, which
 only Debian's /usr/bin/python3 sees). Exit codes: 0 written, 2 bad input or missing modules.
@@ -52,6 +53,8 @@ def parse_args(argv):
     p.add_argument("--out", required=True, help="output folder (created; files overwritten)")
     p.add_argument("--landscapes", help="folder of <env>_<i>_<j>.csv from `harness landscape`")
     p.add_argument("--build-type", default="unknown", help="build type of the harness (provenance)")
+    p.add_argument("--claims", default=os.path.join(HERE, "paper_claims.csv"),
+                   help="the paper's claims to test (default: reports/paper_claims.csv)")
     return p.parse_args(argv)
 
 
@@ -64,13 +67,17 @@ def main(argv=None) -> int:
     args = parse_args(sys.argv[1:] if argv is None else argv)
     if HERE not in sys.path:
         sys.path.insert(0, HERE)
-    from dsb_report import build
+    from dsb_report import build, claims
     from dsb_report.data import DataError, load
 
     t0 = time.monotonic()
     try:
         data = load(args.db)
     except DataError as e:
+        return fail(str(e))
+    try:
+        claim_list = claims.load(args.claims)
+    except claims.ClaimsError as e:
         return fail(str(e))
     if args.landscapes is not None and not os.path.isdir(args.landscapes):
         return fail(f"--landscapes '{args.landscapes}' is not a directory")
@@ -83,7 +90,7 @@ def main(argv=None) -> int:
     except OSError as e:
         return fail(f"cannot write to --out '{args.out}': {e.strerror or e}")
     made = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-    written = build.build(data, args.out, args.landscapes, args.build_type, made)
+    written = build.build(data, args.out, args.landscapes, args.build_type, made, claim_list)
     for name in sorted(os.listdir(args.out)):        # stale figures/tables of an older report
         if OWN_FILES.match(name) and name not in written:
             os.remove(os.path.join(args.out, name))

@@ -117,8 +117,10 @@ def row_cells(row):
 
 
 class ReportCase(unittest.TestCase):
-    """Runs the generator once on a copy of the database (after `modify`, if any)."""
+    """Runs the generator once on a copy of the database (after `modify`, if any), with `extra`
+    arguments (a function of the temporary folder) if given."""
     modify = None
+    extra = None
 
     @classmethod
     def setUpClass(cls):
@@ -134,7 +136,9 @@ class ReportCase(unittest.TestCase):
         write_sphere_landscape(cls.land)
         write_sphere_landscape(cls.land, checked=True)
         cls.out = os.path.join(cls.tmp, "report")
-        cls.proc = run_report(cls.db, cls.out, "--landscapes", cls.land, "--build-type", "TestBuild")
+        extra = cls.extra(cls.tmp) if cls.extra else ()
+        cls.proc = run_report(cls.db, cls.out, "--landscapes", cls.land, "--build-type", "TestBuild",
+                              *extra)
         if cls.proc.returncode != 0:
             raise AssertionError(f"make_report exited {cls.proc.returncode}:\n{cls.proc.stderr}")
         with open(os.path.join(cls.out, "index.html"), encoding="utf-8") as f:
@@ -240,6 +244,18 @@ class TestReport(ReportCase):
         for env, _ in self.cells:
             self.assertIn(env, md)
 
+    def test_claims_without_the_papers_envs_say_env_missing(self):
+        rows = read_csv(self.file("claims.csv"))
+        with open(os.path.join(HERE, "paper_claims.csv"), newline="", encoding="utf-8") as f:
+            want = sum(len(r["env"].split()) for r in csv.DictReader(f))
+        self.assertEqual(len(rows), want)
+        paper_envs = {r["env"] for r in rows}
+        if not paper_envs & {e for e, _ in self.cells}:
+            self.assertEqual({r["verdict"] for r in rows}, {"env missing"})
+        top = self.html.index('id="claims"')
+        self.assertLess(top, self.html.index('id="provenance"'))
+        self.assertIn("The paper&#x27;s claims", self.html)
+
     def test_ranks_and_ecdf_tables(self):
         ranks = read_csv(self.file("ranks.csv"))
         opts = {o for per in self.cells.values() for o in per}
@@ -333,6 +349,148 @@ class TestMetric(ReportCase):
         self.assertIn("metric at best (median)", self.html)
 
 
+# Final best losses per (env, optimizer), one per seed, for the claims tests (paper_claims.csv).
+CLAIM_CELLS = {
+    ("plb-torus", "boleap"): [1, 2, 3, 4, 5, 6],        # clearly below cmaes: holds
+    ("plb-torus", "cmaes"): [11, 12, 13, 14, 15, 16],
+    ("plb-assembly", "boleap"): [11, 12, 13, 14, 15, 16],  # clearly above cmaes: does not hold
+    ("plb-assembly", "cmaes"): [1, 2, 3, 4, 5, 6],
+    ("plb-pinch", "boleap"): [1, 3, 5, 7, 9, 11],        # interleaved: no difference, holds
+    ("plb-pinch", "cmaes"): [2, 4, 6, 8, 10, 12],
+    ("plb-table", "boleap"): [1, 2, 3],                  # 3 seeds: not enough data
+    ("plb-table", "cmaes"): [11, 12, 13],
+    ("cartpole1", "cmaes"): [1, 3, 5, 7, 9, 11],         # 2 comparisons for Holm
+    ("cartpole1", "rand-descents"): [2, 4, 6, 8, 10, 13],
+    ("cartpole1", "bo"): [20, 21, 22, 23, 24, 25],
+    ("fluid", "boleap"): [1, 2, 3, 4, 5, 6],             # best, but no lift metric stored
+    ("fluid", "cmaes"): [11, 12, 13, 14, None, 16],      # None: a run without a finite loss
+}
+
+
+def _synthetic_runs(con, cells=CLAIM_CELLS):
+    """Replace every run by 'done' runs of budget 2 with the given final best losses (episode 0
+    one higher, episode 1 the final loss), keeping the copied database's schema and config rows."""
+    env_h, opt_h, ver = con.execute(
+        "SELECT env_config_hash, opt_config_hash, harness_version FROM runs LIMIT 1").fetchone()
+    for table in ("replay", "evals", "runs"):
+        con.execute(f"DELETE FROM {table}")
+    for (env, opt), losses in cells.items():
+        for seed, best in enumerate(losses):
+            cur = con.execute(
+                "INSERT INTO runs(env, optimizer, seed, budget, env_config_hash, opt_config_hash, "
+                "rng_seed, status, episodes, best_loss, wall_s, harness_version, git_sha, host) "
+                "VALUES (?, ?, ?, 2, ?, ?, '0', 'done', 2, ?, 0.1, ?, 'test', 'test')",
+                (env, opt, seed, env_h, opt_h, best, ver))
+            first = None if best is None else best + 1
+            for ep, (loss, b) in enumerate([(first, first), (best, best)]):
+                con.execute("INSERT INTO evals(run_id, episode, loss, best_loss, used_grad, wall_s, "
+                            "failed) VALUES (?, ?, ?, ?, 0, 0.05, ?)",
+                            (cur.lastrowid, ep, loss, b, int(loss is None)))
+
+
+def _paper_and_metric_claims(tmp):
+    """--claims: reports/paper_claims.csv plus three claims on the share of seeds reaching a
+    metric (plb-torus: boleap's runs at 0.9, cmaes's at 0.1, see _synthetic_with_metric)."""
+    path = os.path.join(tmp, "claims.csv")
+    shutil.copy(os.path.join(HERE, "paper_claims.csv"), path)
+    with open(path, "a", newline="", encoding="utf-8") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["lifts", "plb-torus", "metric_most", "boleap", "", "0.5", "lifts", "t", ""])
+        w.writerow(["drops", "plb-torus", "metric_few", "cmaes", "", "0.5", "drops", "t", ""])
+        w.writerow(["wrong", "plb-torus", "metric_most", "cmaes", "", "0.5", "wrong", "t", ""])
+    return ("--claims", path)
+
+
+def _synthetic_with_metric(con):
+    """The claims runs, with plb-torus's boleap episodes at metric 0.9 and cmaes's at 0.1."""
+    _synthetic_runs(con)
+    con.execute("UPDATE evals SET metric = CASE (SELECT optimizer FROM runs r WHERE r.run_id = "
+                "evals.run_id) WHEN 'boleap' THEN 0.9 ELSE 0.1 END WHERE run_id IN "
+                "(SELECT run_id FROM runs WHERE env = 'plb-torus')")
+
+
+class TestPaperClaims(ReportCase):
+    """The paper's claims (reports/paper_claims.csv, plus three metric claims) on a synthetic
+    database: each verdict."""
+    modify = staticmethod(_synthetic_with_metric)
+    extra = staticmethod(_paper_and_metric_claims)
+
+    def claim(self, cid, env):
+        rows = [r for r in read_csv(self.file("claims.csv")) if (r["id"], r["env"]) == (cid, env)]
+        self.assertEqual(len(rows), 1, f"{cid} on {env}")
+        return rows[0]
+
+    def comparisons(self, cid, env):
+        return {(r["a"], r["b"]): r for r in read_csv(self.file("claims_comparisons.csv"))
+                if (r["id"], r["env"]) == (cid, env)}
+
+    def test_clear_difference_holds(self):
+        r = self.claim("plb-boleap-beats-cmaes", "plb-torus")
+        self.assertEqual(r["verdict"], "holds", r["reason"])
+        c = self.comparisons("plb-boleap-beats-cmaes", "plb-torus")[("boleap", "cmaes")]
+        # perfectly separated, 6 vs 6, one-sided exact: 1 / C(12, 6); one comparison: Holm = raw
+        self.assertAlmostEqual(float(c["p_raw"]), 1 / math.comb(12, 6), delta=1e-12)
+        self.assertAlmostEqual(float(c["p_holm"]), float(c["p_raw"]), delta=1e-15)
+        self.assertEqual(float(c["a12"]), 1.0)
+        self.assertEqual(r["n"], "boleap 6; cmaes 6")
+        self.assertEqual(self.claim("fluid-boleap-best", "fluid")["verdict"], "holds")
+
+    def test_reversed_difference_does_not_hold(self):
+        r = self.claim("plb-boleap-beats-cmaes", "plb-assembly")
+        self.assertEqual(r["verdict"], "does not hold", r["reason"])
+        self.assertEqual(float(r["a12_claim"]), 0.0)
+        # a 'no difference' claim fails where the two clearly differ (two-sided 2/C(12,6))
+        self.assertEqual(self.claim("cartpole1-cmaes-like-gradient", "cartpole1")["verdict"],
+                         "does not hold")
+
+    def test_no_difference_holds(self):
+        r = self.claim("plb-boleap-like-cmaes", "plb-pinch")
+        self.assertEqual(r["verdict"], "holds", r["reason"])
+        self.assertGreaterEqual(float(r["p_claim"]), 0.05)
+
+    def test_three_seeds_are_not_enough(self):
+        r = self.claim("plb-boleap-like-cmaes", "plb-table")
+        self.assertEqual(r["verdict"], "not enough data", r["reason"])
+        self.assertEqual(int(r["min_n"]), 4)   # two-sided, one comparison: 2/C(8,4) = 0.029
+        self.assertIn("needs >= 4 seeds", r["reason"])
+
+    def test_env_or_optimizer_missing(self):
+        r = self.claim("plb-boleap-beats-cmaes", "plb-triplemove")
+        self.assertEqual((r["verdict"], r["reason"]), ("env missing", "no done run of plb-triplemove"))
+        r = self.claim("plb-boleap-beats-gradient", "plb-torus")
+        self.assertEqual(r["verdict"], "env missing")
+        self.assertIn("gd, rand-descents, nlopt-lbfgs", r["reason"])
+        self.assertEqual(self.claim("cartpole1-boleap-best", "cartpole1")["verdict"], "env missing")
+
+    def test_holm_over_a_two_comparison_claim(self):
+        c = self.comparisons("cartpole1-cmaes-like-gradient", "cartpole1")
+        self.assertEqual(set(c), {("cmaes", "rand-descents"), ("cmaes", "bo")})
+        lo, hi = sorted(c.values(), key=lambda r: float(r["p_raw"]))
+        self.assertEqual(lo["b"], "bo")
+        self.assertAlmostEqual(float(lo["p_raw"]), 2 / math.comb(12, 6), delta=1e-12)
+        # Holm: the smallest p times 2, the next times 1 but never below the one before
+        self.assertAlmostEqual(float(lo["p_holm"]), 2 * float(lo["p_raw"]), delta=1e-12)
+        self.assertAlmostEqual(float(hi["p_holm"]),
+                               min(1.0, max(float(hi["p_raw"]), 2 * float(lo["p_raw"]))),
+                               delta=1e-12)
+        self.assertGreater(float(hi["p_raw"]), 0.05)
+
+    def test_lifting_is_not_testable_without_a_metric(self):
+        r = self.claim("fluid-boleap-lifts", "fluid")
+        self.assertEqual(r["verdict"], "not testable from the database")
+        self.assertIn("no per-episode metric", r["reason"])
+
+    def test_metric_rate_verdicts(self):
+        got = {i: self.claim(i, "plb-torus")["verdict"] for i in ("lifts", "drops", "wrong")}
+        self.assertEqual(got, {"lifts": "holds", "drops": "holds", "wrong": "does not hold"})
+
+    def test_table_near_the_top_of_the_page(self):
+        rows = [row_cells(x) for x in html_rows(self.html)]
+        verdicts = {c[7] for c in rows if len(c) == 9}
+        self.assertTrue({"holds", "does not hold", "not enough data", "env missing"} <= verdicts)
+        self.assertLess(self.html.index('id="claims"'), self.html.index('id="provenance"'))
+
+
 class TestBadInput(unittest.TestCase):
     def setUp(self):
         self.tmp = tempfile.mkdtemp(prefix="dsb_report_bad_")
@@ -350,6 +508,14 @@ class TestBadInput(unittest.TestCase):
         bad = os.path.join(self.tmp, "no", "such.sqlite")
         line = self.assert_one_line_exit_2(run_report(bad, os.path.join(self.tmp, "out")))
         self.assertIn(bad, line)
+
+    def test_bad_claims_file(self):
+        bad = os.path.join(self.tmp, "claims.csv")
+        with open(bad, "w") as f:
+            f.write("id,env,kind,a,b,statement,source\nx,cartpole1,a_beats_b,boleap,cmaes,s,t\n")
+        line = self.assert_one_line_exit_2(run_report(db_path(), os.path.join(self.tmp, "out"),
+                                                      "--claims", bad))
+        self.assertIn("a_beats_b", line)
 
     def test_not_a_database(self):
         bad = os.path.join(self.tmp, "text.sqlite")

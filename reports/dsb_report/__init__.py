@@ -3,7 +3,8 @@
 Modules, one purpose each:
   data        read a harness database (read-only) into runs, panels and best-so-far matrices
   grid        the expected (env, optimizer, seed, budget) grid: missing, failed and running runs
-  stats       per-cell statistics, Student-t CIs, Mann-Whitney + Holm, ranks, ECDF of targets
+  stats       per-cell statistics, Student-t CIs, Mann-Whitney + Holm, A12, ranks, ECDF of targets
+  claims      the paper's qualitative claims (paper_claims.csv) tested over the database, verdicts
   style       palette (one fixed color per optimizer), fonts, the log-scale rule
   plots       the figures: curves, finals, ranks, ECDF
   landscape   heat maps with gradient arrows from `harness landscape` CSVs

@@ -9,7 +9,7 @@ import matplotlib
 import pandas as pd
 import scipy
 
-from . import captions, grid, html, landscape, plots, stats, style, summary
+from . import captions, claims, grid, html, landscape, plots, stats, style, summary
 from .data import main_panels, slugify
 from .tables import FINAL_COLUMNS, SIGNIFICANCE_COLUMNS, mark, write_csv
 
@@ -78,7 +78,7 @@ def _provenance(data, build_type, made, stored_episodes) -> list:
     ]
 
 
-def build(data, out: str, landscape_dir, build_type: str, made: str) -> list:
+def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=()) -> list:
     style.setup()
     pal = style.palette(data.optimizers)
     written = []
@@ -101,6 +101,9 @@ def build(data, out: str, landscape_dir, build_type: str, made: str) -> list:
         tables.append(t)
 
     mp = main_panels(data)
+    verdicts, comparisons = claims.evaluate(list(claim_list), mp)
+    write_csv(verdicts, path("claims.csv"))
+    write_csv(comparisons, path("claims_comparisons.csv"))
     by_env = stats.ranks(mp)
     mr = stats.mean_ranks(by_env)
     write_csv(mr, path("ranks.csv"))
@@ -161,7 +164,8 @@ def build(data, out: str, landscape_dir, build_type: str, made: str) -> list:
                   f"made {made}."),
         notes=notes,
         provenance=_provenance(data, build_type, made, int(sum(p.best.size for p in data.panels))),
-        panels=items, mean_ranks=mr, ranks_png="ranks.png", ecdf_png="ecdf.png", targets=tinfo,
+        claims=verdicts, panels=items, mean_ranks=mr, ranks_png="ranks.png", ecdf_png="ecdf.png",
+        targets=tinfo,
         overview=summary.overview(items, data.optimizers), significance=sig,
         minp_text=_minp_text(tables), landscapes=lands, landscape_errors=lerrors,
         landscape_dir=landscape_dir, missing=missing, failed=failed, running=running,

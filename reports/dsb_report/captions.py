@@ -29,6 +29,17 @@ ECDF = ("COCO-style data profile. For each env, f* is the best loss any optimize
         "optimizer's triples solved after e episodes (over the envs it ran on): higher and further "
         "left is better; the right end is the fraction solved within the budget.")
 
+CLAIMS = ("Each row is a qualitative claim of Antonova et al. (CoRL 2022) tested on the final best "
+          "losses over seeds (the env's largest budget; no finite loss = +inf): one-sided "
+          "Mann-Whitney U tests (two-sided for 'no difference' claims), Holm-corrected over the "
+          "claim's comparisons, α = 0.05; p is the deciding corrected p (the largest for a claim of "
+          "differences, the smallest for a claim of none), A12 the probability that a run of the "
+          "first optimizer ends lower than one of the other (0.5 = no effect). 'not enough data': "
+          "even perfectly separated samples could not reach α after Holm (comparisons × "
+          "1/C(nA+nB, nA), doubled if two-sided, ≥ α: one comparison needs 4 seeds a side); "
+          "'env missing': the env or an optimizer of the claim has no done run; 'not testable': "
+          "the database does not record what the paper judged.")
+
 SIGNIFICANCE = ("For each env, the best optimizer is the one with the lowest median final loss. Every "
                 "other optimizer's final best losses over seeds are compared with the best one's by a "
                 "two-sided Mann-Whitney U test (scipy.stats.mannwhitneyu: exact for small samples "

@@ -54,6 +54,21 @@ def _provenance(ctx) -> str:
     return "<h2 id=\"provenance\">Provenance</h2>\n" + table(["item", "value"], rows)
 
 
+def _claims(ctx) -> str:
+    c = ctx["claims"]
+    rows = [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"],
+             f"{r['statement']} ({r['source']})", r["test"], r["n"],
+             fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2), r["verdict"], r["reason"]]
+            for _, r in c.iterrows()]
+    cls = ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
+    counts = ", ".join(f"{v} {n}" for v, n in c["verdict"].value_counts().sort_index().items())
+    return ('<h2 id="claims">The paper\'s claims</h2>\n<p>' + escape(captions.CLAIMS) + "</p>\n"
+            f"<p>{escape(counts or 'No claims.')} ({link('claims.csv')}; every comparison: "
+            f"{link('claims_comparisons.csv')})</p>\n" +
+            table(["claim", "env (budget)", "the paper says", "tested as", "seeds", "p (Holm)", "A12",
+                   "verdict", "why"], rows, cls, numeric={5, 6}))
+
+
 def _across(ctx) -> str:
     p = ['<h2 id="across">Across envs</h2>']
     p.append(figure(ctx["ranks_png"], "average ranks", captions.RANKS))
@@ -153,7 +168,8 @@ def _problems(ctx) -> str:
 
 
 def render(ctx) -> str:
-    toc = [("provenance", "Provenance"), ("across", "Across envs: ranks and data profile")]
+    toc = [("claims", "The paper's claims"), ("provenance", "Provenance"),
+           ("across", "Across envs: ranks and data profile")]
     toc += [(f"env-{it['panel'].slug}", f"{it['panel'].env} (budget {it['panel'].budget})")
             for it in ctx["panels"]]
     toc += [("significance", "Significance"), ("landscapes", "Landscapes"),
@@ -167,6 +183,7 @@ def render(ctx) -> str:
         parts.append(f'<p class="note">{escape(note)}</p>')
     parts.append("<ul>" + "".join(f'<li><a href="#{escape(a)}">{escape(t)}</a></li>'
                                   for a, t in toc) + "</ul>")
+    parts.append(_claims(ctx))
     parts.append(_provenance(ctx))
     parts.append(_across(ctx))
     parts.append('<h2 id="envs">Per env</h2>')

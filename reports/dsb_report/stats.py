@@ -1,4 +1,5 @@
-"""Statistics: per-cell summaries, Student-t CIs, Mann-Whitney U with Holm, ranks, target ECDF.
+"""Statistics: per-cell summaries, Student-t CIs, Mann-Whitney U with Holm (one- or two-sided),
+the smallest reachable p and seed count, Vargha-Delaney A12, ranks, target ECDF.
 
 Conventions (also stated in the report):
 - final best loss of a run = runs.best_loss of a 'done' run; NULL (no finite episode) counts as +inf;
@@ -62,20 +63,46 @@ def holm(pvals: list) -> list:
     return out
 
 
-def mwu_p(a: np.ndarray, b: np.ndarray) -> float:
+def mwu_p(a: np.ndarray, b: np.ndarray, alternative: str = "two-sided") -> float:
+    """Mann-Whitney U p-value of samples a and b (scipy: exact for small samples without ties,
+    normal approximation otherwise). alternative 'less' tests whether a tends to be lower than b
+    (one-sided); 'two-sided' whether they differ. NaN when a side is empty; 1.0 when every value
+    is the same (nothing to tell apart)."""
     if len(a) == 0 or len(b) == 0:
         return float("nan")
     both = np.concatenate([a, b])
     if np.all(both == both[0]):
-        return 1.0                      # identical samples: nothing to tell apart
-    return float(sps.mannwhitneyu(a, b, alternative="two-sided").pvalue)
+        return 1.0
+    return float(sps.mannwhitneyu(a, b, alternative=alternative).pvalue)
 
 
-def min_exact_p(n1: int, n2: int) -> float:
-    """Smallest two-sided exact Mann-Whitney p-value for sample sizes n1, n2 (no ties)."""
+def min_exact_p(n1: int, n2: int, sides: int = 2) -> float:
+    """Smallest exact Mann-Whitney p-value for sample sizes n1, n2 (no ties): the probability of
+    the one most extreme ranking, 1/C(n1+n2, n1), doubled for a two-sided test (sides=2)."""
     if n1 < 1 or n2 < 1:
         return float("nan")
-    return min(1.0, 2.0 / math.comb(n1 + n2, n1))
+    return min(1.0, sides / math.comb(n1 + n2, n1))
+
+
+def min_seeds(comparisons: int, sides: int, alpha: float = ALPHA, limit: int = 100) -> int:
+    """Smallest n such that, with n seeds on each side, a claim of `comparisons` Holm-corrected
+    Mann-Whitney tests can reach alpha at all: comparisons * min_exact_p(n, n, sides) < alpha
+    (Holm multiplies the smallest p by the number of comparisons). One comparison: 4 seeds
+    (one-sided 1/70, two-sided 2/70); with 3 the best possible one-sided p is 1/20 = alpha."""
+    for n in range(1, limit + 1):
+        if comparisons * min_exact_p(n, n, sides) < alpha:
+            return n
+    return limit
+
+
+def a12_lower(a: np.ndarray, b: np.ndarray) -> float:
+    """Vargha-Delaney A12 oriented to 'lower is better': the probability that a run of a ends
+    with a lower final loss than a run of b, ties counting half (0.5 = no effect, 1 = a always
+    lower, 0 = a always higher). +inf (no finite loss) ties with +inf. NaN when a side is empty."""
+    if len(a) == 0 or len(b) == 0:
+        return float("nan")
+    x, y = np.asarray(a, float)[:, None], np.asarray(b, float)[None, :]
+    return float(np.mean((x < y) + 0.5 * (x == y)))
 
 
 def final_table(panel, all_runs: pd.DataFrame) -> pd.DataFrame:

@@ -26,6 +26,11 @@ def overview(panels: list, optimizers: list) -> tuple:
 def render(ctx) -> str:
     out = ["# diffsim-bench comparison report", "", ctx["headline"], ""]
     out += [f"> {n}" for n in ctx["notes"]] + ([""] if ctx["notes"] else [])
+    c = ctx["claims"]
+    out += ["## The paper's claims", "", captions.CLAIMS, "", md_table(
+        ["claim", "env (budget)", "tested as", "seeds", "p (Holm)", "A12", "verdict", "why"],
+        [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"], r["test"], r["n"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2),
+          r["verdict"], r["reason"]] for _, r in c.iterrows()]), ""]
     out += ["## Provenance", "", md_table(["item", "value"], ctx["provenance"]), ""]
     out += ["## Overview: median final best loss", "",
             "Marks: (best) = lowest median on the env; (≈ best) = not distinguishable from it "

@@ -1,0 +1,220 @@
+"""The paper's qualitative claims as tests over the database, each with a verdict.
+
+The claims are data (reports/paper_claims.csv, one row per claim; `--claims FILE` for another):
+id, env (one env or several separated by spaces: one verdict per env), kind, a and b (optimizer
+names separated by spaces), threshold (metric kinds only), statement (the paper's words), source
+(figure), note (why a claim cannot be tested, shown as the reason).
+
+Kinds and how each is decided, on the final best losses of the env's 'done' runs (the panel with
+the env's largest budget; NULL = +inf, stats.final_values):
+- a_below_b:       every optimizer of a has a lower final loss than every one of b: one one-sided
+                   Mann-Whitney U test (a < b) per pair; holds when every Holm-corrected p < alpha.
+- a_best:          a_below_b with b = every other optimizer with a done run on the env.
+- not_below:       a is not significantly lower than b: one-sided tests (a < b); holds when no
+                   Holm-corrected p < alpha.
+- not_significant: a and b do not differ: two-sided tests; holds when no Holm-corrected p < alpha.
+- metric_most / metric_few: each optimizer of a reaches the env's second metric (evals.metric at
+                   each run's best episode) >= threshold in more / fewer than half of its seeds.
+- not_testable:    what the paper says cannot be read from the database (the note says why).
+Holm runs over the comparisons of one claim on one env. Verdicts: 'env missing' (no done run of
+the env, or of an optimizer of the claim), 'not enough data' (some comparison could not reach
+alpha even with perfectly separated samples: comparisons x smallest exact p >= alpha, see
+stats.min_seeds), 'not testable from the database', else 'holds' or 'does not hold'.
+"""
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from . import stats
+
+HOLDS, FAILS = "holds", "does not hold"
+NO_DATA, MISSING, UNTESTABLE = "not enough data", "env missing", "not testable from the database"
+TEST_KINDS = {"a_below_b": (1, True), "a_best": (1, True),      # (sides, holds if significant)
+              "not_below": (1, False), "not_significant": (2, False)}
+METRIC_KINDS = ("metric_most", "metric_few")
+KINDS = tuple(TEST_KINDS) + METRIC_KINDS + ("not_testable",)
+RATE_MIN_SEEDS = stats.min_seeds(1, 1)   # a rate over fewer seeds than one test needs says nothing
+REQUIRED_COLUMNS = ("id", "env", "kind", "a", "b", "statement", "source")
+CLAIM_COLUMNS = ["id", "env", "budget", "kind", "statement", "source", "test", "a", "b", "n", "comparisons",
+                 "min_n", "p_holm", "p_claim", "a12", "a12_claim", "verdict", "reason"]
+COMPARISON_COLUMNS = ["id", "env", "a", "b", "alternative", "n_a", "n_b", "p_raw", "p_holm", "a12"]
+
+
+class ClaimsError(Exception):
+    """The claims file cannot be used (one-line message)."""
+
+
+@dataclass
+class Claim:
+    id: str
+    envs: list
+    kind: str
+    a: list
+    b: list
+    threshold: float
+    statement: str
+    source: str
+    note: str
+
+
+def load(path: str) -> list:
+    """Read and check the claims file: known kind, unique id, an optimizer in a, b where needed."""
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as e:
+        raise ClaimsError(f"cannot read claims file '{path}': {e.strerror or e}") from None
+    if rows and any(c not in rows[0] for c in REQUIRED_COLUMNS):
+        raise ClaimsError(f"claims file '{path}' needs the columns {', '.join(REQUIRED_COLUMNS)}")
+    claims, seen = [], set()
+    for line, r in enumerate(rows, start=2):
+        where = f"claims file '{path}' line {line}"
+        c = Claim(id=(r.get("id") or "").strip(), envs=(r.get("env") or "").split(),
+                  kind=(r.get("kind") or "").strip(), a=(r.get("a") or "").split(),
+                  b=(r.get("b") or "").split(), threshold=_number(r.get("threshold"), where),
+                  statement=(r.get("statement") or "").strip(),
+                  source=(r.get("source") or "").strip(), note=(r.get("note") or "").strip())
+        if not c.id or c.id in seen:
+            raise ClaimsError(f"{where}: empty or repeated id '{c.id}'")
+        if c.kind not in KINDS:
+            raise ClaimsError(f"{where}: kind '{c.kind}' is not one of {', '.join(KINDS)}")
+        if not c.envs or not c.a:
+            raise ClaimsError(f"{where}: env and a must name at least one env and optimizer")
+        if c.kind in ("a_below_b", "not_below", "not_significant") and not c.b:
+            raise ClaimsError(f"{where}: kind {c.kind} needs optimizers in b")
+        seen.add(c.id)
+        claims.append(c)
+    return claims
+
+
+def _number(text, where) -> float:
+    if text is None or not text.strip():
+        return float("nan")
+    try:
+        return float(text)
+    except ValueError:
+        raise ClaimsError(f"{where}: threshold '{text}' is not a number") from None
+
+
+def evaluate(claims: list, panels: list):
+    """Verdict table (CLAIM_COLUMNS, one row per claim and env) and the comparisons behind it
+    (COMPARISON_COLUMNS, one row per pair tested). panels: one per env (data.main_panels)."""
+    by_env = {p.env: p for p in panels}
+    rows, comps = [], []
+    for c in claims:
+        for env in c.envs:
+            panel = by_env.get(env)
+            row = dict(id=c.id, env=env, budget=panel.budget if panel else "", kind=c.kind,
+                       statement=c.statement, source=c.source,
+                       test=test_text(c), a=" ".join(c.a), b=" ".join(c.b), n="", comparisons=0,
+                       min_n="", p_holm="", p_claim=np.nan, a12="", a12_claim=np.nan)
+            row.update(_judge(c, env, panel, comps))
+            rows.append(row)
+    return (pd.DataFrame(rows, columns=CLAIM_COLUMNS),
+            pd.DataFrame(comps, columns=COMPARISON_COLUMNS))
+
+
+def test_text(c: Claim) -> str:
+    if c.kind in TEST_KINDS:
+        b = "every other optimizer" if c.kind == "a_best" else " ".join(c.b)
+        side = "two-sided" if c.kind == "not_significant" else "one-sided, a lower"
+        return f"Mann-Whitney U ({side}) of {' '.join(c.a)} vs {b}, Holm over the pairs"
+    if c.kind in METRIC_KINDS:
+        share = "more" if c.kind == "metric_most" else "fewer"
+        return f"share of seeds with metric >= {stats_fmt(c.threshold)}: {share} than half"
+    return "none"
+
+
+def stats_fmt(v: float) -> str:
+    return "?" if math.isnan(v) else f"{v:g}"
+
+
+def _judge(c: Claim, env: str, panel, comps: list) -> dict:
+    if panel is None:
+        return dict(verdict=MISSING, reason=f"no done run of {env}")
+    if c.kind == "not_testable":
+        return dict(verdict=UNTESTABLE, reason=c.note or "the database does not record it")
+    b = [o for o in panel.optimizers if o not in c.a] if c.kind == "a_best" else c.b
+    absent = [o for o in c.a + b if o not in panel.optimizers]
+    if absent:
+        return dict(verdict=MISSING, reason=f"no done run of {', '.join(absent)} on {panel.env}")
+    if c.kind == "a_best" and not b:
+        return dict(verdict=MISSING, reason=f"no other optimizer has a done run on {panel.env}")
+    if c.kind in METRIC_KINDS:
+        return _judge_rate(c, panel)
+    return _judge_tests(c, b, panel, comps)
+
+
+def _judge_tests(c: Claim, b: list, panel, comps: list) -> dict:
+    """Mann-Whitney U per pair (a_i, b_j), Holm over the claim's pairs, and the verdict."""
+    sides, want_significant = TEST_KINDS[c.kind]
+    alternative = "two-sided" if sides == 2 else "less"
+    pairs = [(x, y) for x in c.a for y in b if x != y]
+    vals = {o: stats.final_values(panel, o) for o in set(c.a) | set(b)}
+    m = len(pairs)
+    raw = [stats.mwu_p(vals[x], vals[y], alternative) for x, y in pairs]
+    adj = stats.holm(raw)
+    a12 = [stats.a12_lower(vals[x], vals[y]) for x, y in pairs]
+    for (x, y), p, q, e in zip(pairs, raw, adj, a12):
+        comps.append(dict(id=c.id, env=panel.env, a=x, b=y, alternative=alternative,
+                          n_a=len(vals[x]), n_b=len(vals[y]), p_raw=p, p_holm=q, a12=e))
+    out = dict(n="; ".join(f"{o} {len(vals[o])}" for o in dict.fromkeys(c.a + b)),
+               comparisons=m, min_n=stats.min_seeds(m, sides),
+               p_holm="; ".join(f"{x} vs {y} {q:.3g}" for (x, y), q in zip(pairs, adj)),
+               a12="; ".join(f"{x} vs {y} {e:.2f}" for (x, y), e in zip(pairs, a12)))
+    significant = [q < stats.ALPHA for q in adj]
+    if want_significant:
+        out.update(p_claim=max(adj), a12_claim=min(a12))
+    else:
+        out.update(p_claim=min(adj), a12_claim=max(a12) if sides == 1 else
+                   max(a12, key=lambda e: abs(e - 0.5)))
+    short = [(x, y) for x, y in pairs
+             if m * stats.min_exact_p(len(vals[x]), len(vals[y]), sides) >= stats.ALPHA]
+    if short:
+        x, y = short[0]
+        out.update(verdict=NO_DATA, reason=(
+            f"{x} {len(vals[x])} vs {y} {len(vals[y])} seeds: with {m} comparison(s) the smallest "
+            f"reachable Holm p is {m * stats.min_exact_p(len(vals[x]), len(vals[y]), sides):.3g} "
+            f">= {stats.ALPHA}; needs >= {out['min_n']} seeds per optimizer"))
+        return out
+    if want_significant:
+        bad = sorted(((x, y, q) for (x, y), q, s in zip(pairs, adj, significant) if not s),
+                     key=lambda t: -t[2])
+        out.update(verdict=FAILS if bad else HOLDS, reason=(
+            f"{bad[0][0]} vs {bad[0][1]}: Holm p {bad[0][2]:.3g} >= {stats.ALPHA}"
+            + (f" (and {len(bad) - 1} more)" if len(bad) > 1 else "") if bad else
+            f"all {m} Holm-corrected p < {stats.ALPHA}"))
+    else:
+        hit = sorted(((x, y, q) for (x, y), q, s in zip(pairs, adj, significant) if s),
+                     key=lambda t: t[2])
+        out.update(verdict=FAILS if hit else HOLDS, reason=(
+            f"{hit[0][0]} vs {hit[0][1]}: Holm p {hit[0][2]:.3g} < {stats.ALPHA}"
+            + (f" (and {len(hit) - 1} more)" if len(hit) > 1 else "") if hit else
+            f"no Holm-corrected p < {stats.ALPHA} ({m} comparison(s))"))
+    return out
+
+
+def _judge_rate(c: Claim, panel) -> dict:
+    """Share of seeds whose metric at the run's best episode is >= threshold, per optimizer of a."""
+    if not panel.has_metric:
+        return dict(verdict=UNTESTABLE, reason=c.note or f"{panel.env} stores no per-episode metric")
+    if math.isnan(c.threshold):
+        return dict(verdict=UNTESTABLE, reason="the claim gives no metric threshold")
+    shares, ns = {}, {}
+    for o in c.a:
+        m = panel.metric_at_best[panel.rows(o)]
+        ns[o] = m.size
+        shares[o] = float(np.mean(m >= c.threshold)) if m.size else float("nan")
+    out = dict(n="; ".join(f"{o} {ns[o]}" for o in c.a), min_n=RATE_MIN_SEEDS,
+               p_holm="", a12="")
+    if min(ns.values()) < RATE_MIN_SEEDS:
+        return dict(out, verdict=NO_DATA, reason=f"fewer than {RATE_MIN_SEEDS} seeds")
+    ok = [(s > 0.5) if c.kind == "metric_most" else (s < 0.5) for s in shares.values()]
+    text = "; ".join(f"{o} {shares[o]:.0%} of {ns[o]} seeds" for o in c.a)
+    return dict(out, verdict=HOLDS if all(ok) else FAILS,
+                reason=f"metric >= {c.threshold:g}: {text}")
