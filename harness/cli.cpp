@@ -291,6 +291,8 @@ int harness_main(int argc, char** argv) {
   gradcheck->add_option("--amplitude", gc.amplitude, "points uniform in [-a, a]^d (default 0.5)");
   gradcheck->add_option("--step", gc.check.step, "central-difference step (default 1e-6)");
   gradcheck->add_option("--tol", gc.check.tolerance, "largest accepted relative error (default 1e-4)");
+  gradcheck->add_option("--large-step", gc.large_step,
+                        "step along the gradient of the large-step direction check (default 0.05, 0 = off)");
   gradcheck->add_flag("--json", gc_json, "one JSON object (per-point worst errors and the summary)");
 
   std::string ls_env, ls_dims, ls_center, ls_out;
@@ -329,11 +331,13 @@ int harness_main(int argc, char** argv) {
   exporter->add_option("--out", export_out, "CSV file to write (csv), or a new or empty folder (ioh)")->required();
   exporter->add_option("--format", export_format, "csv (default: the baseline result table) or ioh (IOHanalyzer)");
 
-  std::string report_db = "results.sqlite", report_out = "report", report_landscapes;
+  std::string report_db = "results.sqlite", report_out = "report", report_landscapes, report_gradient_quality;
   auto* report = app.add_subcommand("report", "comparison report (index.html, figures, tables) from a database");
   report->add_option("--db", report_db, "results database (default ./results.sqlite)");
   report->add_option("--out", report_out, "output folder (default ./report)");
   report->add_option("--landscapes", report_landscapes, "folder of `harness landscape` CSVs to plot");
+  report->add_option("--gradient-quality", report_gradient_quality,
+                     "CSV of scripts/gradient-quality.sh (default data/gradient_quality.csv)");
 
   try {
     app.parse(argc, argv);
@@ -360,7 +364,8 @@ int harness_main(int argc, char** argv) {
     if (check->parsed()) return command_check(check_db, check_baseline);
     if (merge->parsed()) return command_merge(merge_into, merge_inputs);
     if (exporter->parsed()) return command_export(export_db, export_out, export_format);
-    if (report->parsed()) return command_report(report_db, report_out, report_landscapes);
+    if (report->parsed())
+      return command_report(report_db, report_out, report_landscapes, false, report_gradient_quality);
     if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
     if (gradcheck->parsed())
       return command_gradcheck(gc_env, gc, gc_json);

@@ -36,9 +36,11 @@ int command_check(const std::string& db_path, const std::string& baseline_path);
 // Exit 2 for a bad format, an unreadable database or an unusable --out.
 int command_export(const std::string& db_path, const std::string& out_path, const std::string& format = "csv");
 // Runs the Python report generator (reports/make_report.py) with Debian's system interpreter.
-// quiet: the generator's stdout is dropped (refreshes during a grid run)
+// quiet: the generator's stdout is dropped (refreshes during a grid run); gradient_quality: a CSV of
+// scripts/gradient-quality.sh for the "Gradient quality" section (empty: the generator's default,
+// data/gradient_quality.csv)
 int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
-                   bool quiet = false);
+                   bool quiet = false, const std::string& gradient_quality = "");
 
 // Parses a comma-separated list of finite numbers; UsageError naming the bad token.
 std::vector<double> parse_number_list(const std::string& option, const std::string& text);

@@ -1,5 +1,6 @@
 // `harness gradcheck`: the gradient survey of envs/core/gradient_check.hpp as a per-point table and
-// a summary, or as one JSON object.
+// a summary, or as one JSON object; with --large-step H (default 0.05, 0 = off) the summary also
+// says how often a central difference of step H along the gradient contradicts its direction.
 #include <cmath>
 #include <iostream>
 #include <string>
@@ -62,6 +63,14 @@ void print_table(const std::string& env_name, int dim, const GradientSurveyOptio
   std::cout << fmt::format("  {:<42} {:>6} of {}\n", "loss() != loss_and_grad() at x", s.value_mismatches, n);
   std::cout << fmt::format("  {:<42} {:>6} of {}\n", "gradient bit-equal to central differences",
                            s.bit_equal_to_differences, n);
+  if (!s.large_steps.empty()) {
+    const auto title = fmt::format("opposed to a step-{} difference along it", o.large_step);
+    std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", title, s.large_step_opposed, s.large_step_directed,
+                             s.large_step_directed > 0 ? percent(s.large_step_opposed, s.large_step_directed) : "  -");
+    const auto& r = s.large_step_ratio;
+    std::cout << fmt::format("  {:<42} min {:.4e}  q1 {:.4e}  median {:.4e}  q3 {:.4e}  max {:.4e}\n",
+                             "step-difference along it / |grad|", r.min, r.q1, r.median, r.q3, r.max);
+  }
   const auto& q = s.gradient_norm;
   std::cout << fmt::format("  {:<42} min {:.4e}  q1 {:.4e}  median {:.4e}  q3 {:.4e}  max {:.4e}\n", "|grad|",
                            q.min, q.q1, q.median, q.q3, q.max);
@@ -96,6 +105,12 @@ nlohmann::json to_json(const std::string& env_name, int dim, const GradientSurve
                       {"gradient_agrees", r.gradient_agrees},
                       {"direction_cosine", number(r.direction_cosine)},
                       {"passed", r.passed}});
+    if (!s.large_steps.empty()) {
+      const auto& l = s.large_steps[p];
+      points.back()["large_step"] = {{"directed", l.directed}, {"lo", l.lo},           {"hi", l.hi},
+                                     {"difference", number(l.difference)}, {"ratio", number(l.ratio)},
+                                     {"opposed", l.opposed}, {"flat", l.flat}};
+    }
   }
   const auto& q = s.gradient_norm;
   const int n = s.points;
@@ -120,12 +135,24 @@ nlohmann::json to_json(const std::string& env_name, int dim, const GradientSurve
       {"seconds_per_loss", s.seconds_per_loss},
       {"seconds_per_loss_and_grad", s.seconds_per_loss_and_grad},
       {"passed", s.passed}};
+  if (!s.large_steps.empty()) {
+    const auto& r = s.large_step_ratio;
+    summary["large_step_directed"] = s.large_step_directed;
+    summary["large_step_opposed"] = s.large_step_opposed;
+    summary["large_step_flat"] = s.large_step_flat;
+    summary["large_step_opposed_fraction"] =
+        s.large_step_directed > 0 ? nlohmann::json(static_cast<double>(s.large_step_opposed) / s.large_step_directed)
+                                  : nlohmann::json();
+    summary["large_step_ratio"] = {{"min", number(r.min)}, {"q1", number(r.q1)}, {"median", number(r.median)},
+                                   {"q3", number(r.q3)},   {"max", number(r.max)}};
+  }
   return {{"env", env_name},
           {"dim", dim},
           {"options",
            {{"points", o.points},
             {"seed", o.seed},
             {"amplitude", o.amplitude},
+            {"large_step", o.large_step},
             {"step", c.step},
             {"tolerance", c.tolerance},
             {"relative_floor", c.relative_floor},

@@ -3,7 +3,7 @@
 self-contained folder with index.html, summary.md, PNG figures and CSV tables.
 
 usage: /usr/bin/python3 reports/make_report.py --db FILE --out DIR [--landscapes DIR] [--build-type T]
-                                              [--claims FILE]
+                                              [--claims FILE] [--gradient-quality FILE]
 
 Needs pandas, matplotlib and scipy (Debian: python3-pandas python3-matplotlib python3-scipy, which
 only Debian's /usr/bin/python3 sees). Exit codes: 0 written, 2 bad input or missing modules.
@@ -20,7 +20,8 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REQUIRED = ("pandas", "matplotlib", "scipy", "scipy.stats")
-OWN_FILES = re.compile(r"^(curves_.+\.png|final_.+\.(png|csv)|landscape_.+\.png)$")
+OWN_FILES = re.compile(r"^(curves_.+\.png|final_.+\.(png|csv)|landscape_.+\.png|gradient_quality\.csv)$")
+DEFAULT_GRADIENT_QUALITY = os.path.join(os.path.dirname(HERE), "data", "gradient_quality.csv")
 
 
 def missing_modules() -> list:
@@ -55,6 +56,9 @@ def parse_args(argv):
     p.add_argument("--build-type", default="unknown", help="build type of the harness (provenance)")
     p.add_argument("--claims", default=os.path.join(HERE, "paper_claims.csv"),
                    help="the paper's claims to test (default: reports/paper_claims.csv)")
+    p.add_argument("--gradient-quality",
+                   help="CSV of scripts/gradient-quality.sh for the 'Gradient quality' section "
+                        "(default: data/gradient_quality.csv, the section says so when it is absent)")
     return p.parse_args(argv)
 
 
@@ -68,6 +72,7 @@ def main(argv=None) -> int:
     if HERE not in sys.path:
         sys.path.insert(0, HERE)
     from dsb_report import build, claims
+    from dsb_report import gradient_quality as gq
     from dsb_report.data import DataError, load
 
     t0 = time.monotonic()
@@ -79,6 +84,13 @@ def main(argv=None) -> int:
         claim_list = claims.load(args.claims)
     except claims.ClaimsError as e:
         return fail(str(e))
+    gq_path = args.gradient_quality or DEFAULT_GRADIENT_QUALITY
+    gq_table = None
+    if args.gradient_quality is not None or os.path.isfile(gq_path):
+        try:
+            gq_table = gq.load(gq_path)
+        except gq.GradientQualityError as e:
+            return fail(str(e))
     if args.landscapes is not None and not os.path.isdir(args.landscapes):
         return fail(f"--landscapes '{args.landscapes}' is not a directory")
     try:
@@ -90,7 +102,8 @@ def main(argv=None) -> int:
     except OSError as e:
         return fail(f"cannot write to --out '{args.out}': {e.strerror or e}")
     made = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-    written = build.build(data, args.out, args.landscapes, args.build_type, made, claim_list)
+    written = build.build(data, args.out, args.landscapes, args.build_type, made, claim_list,
+                          gq_table, gq_path)
     for name in sorted(os.listdir(args.out)):        # stale figures/tables of an older report
         if OWN_FILES.match(name) and name not in written:
             os.remove(os.path.join(args.out, name))

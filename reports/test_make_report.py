@@ -256,6 +256,17 @@ class TestReport(ReportCase):
         self.assertLess(top, self.html.index('id="provenance"'))
         self.assertIn("The paper&#x27;s claims", self.html)
 
+    def test_gradient_quality_from_the_default_file(self):
+        default = os.path.join(os.path.dirname(HERE), "data", "gradient_quality.csv")
+        sec = section(self.html, "gradient-quality")
+        if not os.path.isfile(default):
+            self.assertIn("No gradient survey", sec)
+            return
+        with open(default, newline="", encoding="utf-8") as f:
+            envs = [r["env"] for r in csv.DictReader(f)]
+        rows = [c for c in map(row_cells, html_rows(sec)) if c]
+        self.assertEqual([r[0].split(" (as ")[0] for r in rows], envs)
+
     def test_ranks_and_ecdf_tables(self):
         ranks = read_csv(self.file("ranks.csv"))
         opts = {o for per in self.cells.values() for o in per}
@@ -491,6 +502,78 @@ class TestPaperClaims(ReportCase):
         self.assertLess(self.html.index('id="claims"'), self.html.index('id="provenance"'))
 
 
+GRADIENT_QUALITY_COLUMNS = [
+    "env", "surveyed", "dim", "points", "seed", "amplitude", "step", "tolerance", "large_step",
+    "agreeing", "agree_fraction", "exactly_zero", "zero_fraction", "norm_min", "norm_median",
+    "norm_max", "small_step_opposed", "large_step_directed", "large_step_opposed",
+    "large_step_opposed_fraction", "large_step_flat", "large_step_ratio_median", "non_finite",
+    "value_mismatches"]
+# (env, surveyed, dim, points, agreeing, exactly_zero, norms, directed, opposed, ratio median)
+GRADIENT_QUALITY_ROWS = [
+    ("sphere-10", "sphere-10", 10, 100, 100, 0, (1.5, 7.25, 12.0), 100, 0, 1.0),
+    ("pinball-4x4", "pinball-4x4", 16, 100, 28, 61, (0.0, 0.0, 3.5), 39, 10, 0.125),
+    ("fluid", "fluid-h5", 10, 3, 1, 0, (0.01, 0.02, 0.04), 3, 2, -0.5),
+]
+
+
+def write_gradient_quality(path, drop=None):
+    """A small CSV in the format of scripts/gradient-quality.sh; `drop` leaves a column out."""
+    cols = [c for c in GRADIENT_QUALITY_COLUMNS if c != drop]
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, cols, lineterminator="\n", extrasaction="ignore")
+        w.writeheader()
+        for env, surveyed, dim, n, agree, zero, (lo, med, hi), directed, opposed, ratio in \
+                GRADIENT_QUALITY_ROWS:
+            w.writerow(dict(env=env, surveyed=surveyed, dim=dim, points=n, seed=0, amplitude=0.5,
+                            step=1e-06, tolerance=0.0001, large_step=0.05, agreeing=agree,
+                            agree_fraction=f"{agree / n:.4f}", exactly_zero=zero,
+                            zero_fraction=f"{zero / n:.4f}", norm_min=lo, norm_median=med,
+                            norm_max=hi, small_step_opposed=0, large_step_directed=directed,
+                            large_step_opposed=opposed,
+                            large_step_opposed_fraction=f"{opposed / directed:.4f}",
+                            large_step_flat=0, large_step_ratio_median=ratio, non_finite=0,
+                            value_mismatches=0))
+    return path
+
+
+def section(html, anchor):
+    """The HTML from <h2 id=anchor> to the next <h2>."""
+    start = html.index(f'<h2 id="{anchor}">')
+    end = html.find("<h2", start + 1)
+    return html[start:end if end >= 0 else len(html)]
+
+
+class TestGradientQuality(ReportCase):
+    """--gradient-quality FILE: the section's table shows the file's rows."""
+    extra = staticmethod(lambda tmp: ("--gradient-quality",
+                                      write_gradient_quality(os.path.join(tmp, "gq.csv"))))
+
+    def test_rows_of_the_file(self):
+        rows = [c for c in map(row_cells, html_rows(section(self.html, "gradient-quality"))) if c]
+        self.assertEqual(len(rows), 3)
+        self.assertEqual(rows[0], ["sphere-10", "10", "100", "100.0%", "0.0%", "1.5", "7.25", "12",
+                                   "0.0% of 100", "1"])
+        self.assertEqual(rows[1], ["pinball-4x4", "16", "100", "28.0%", "61.0%", "0", "0", "3.5",
+                                   "25.6% of 39", "0.125"])
+        self.assertEqual(rows[2][0], "fluid (as fluid-h5)")
+        self.assertEqual((rows[2][3], rows[2][8], rows[2][9]), ("33.3%", "66.7% of 3", "-0.5"))
+        sec = section(self.html, "gradient-quality")
+        self.assertIn("large step H = 0.05", sec)
+        self.assertIn('<tr class="best"><td>sphere-10', sec)
+        self.assertIn('<tr class="bad"><td>pinball-4x4', sec)
+        self.assertIn('href="#gradient-quality"', self.html)
+
+    def test_copy_and_summary(self):
+        with open(self.file("gradient_quality.csv"), encoding="utf-8") as f:
+            copied = f.read()
+        with open(os.path.join(self.tmp, "gq.csv"), encoding="utf-8") as f:
+            self.assertEqual(copied, f.read())
+        with open(self.file("summary.md"), encoding="utf-8") as f:
+            md = f.read()
+        self.assertIn("## Gradient quality", md)
+        self.assertIn("| fluid (as fluid-h5) | 10 | 3 | 33.3% |", md)
+
+
 class TestBadInput(unittest.TestCase):
     def setUp(self):
         self.tmp = tempfile.mkdtemp(prefix="dsb_report_bad_")
@@ -516,6 +599,16 @@ class TestBadInput(unittest.TestCase):
         line = self.assert_one_line_exit_2(run_report(db_path(), os.path.join(self.tmp, "out"),
                                                       "--claims", bad))
         self.assertIn("a_beats_b", line)
+
+    def test_bad_gradient_quality_file(self):
+        bad = write_gradient_quality(os.path.join(self.tmp, "gq.csv"), drop="large_step_opposed")
+        line = self.assert_one_line_exit_2(run_report(db_path(), os.path.join(self.tmp, "out"),
+                                                      "--gradient-quality", bad))
+        self.assertIn("large_step_opposed", line)
+        absent = os.path.join(self.tmp, "no_such.csv")
+        line = self.assert_one_line_exit_2(run_report(db_path(), os.path.join(self.tmp, "out"),
+                                                      "--gradient-quality", absent))
+        self.assertIn(absent, line)
 
     def test_not_a_database(self):
         bad = os.path.join(self.tmp, "text.sqlite")

@@ -2,7 +2,9 @@
 // errors, a gradient wrong in one coordinate fails naming it, loss() and loss_and_grad() must
 // agree on the value, the finite differences go only through loss() and stay inside the box, a
 // step function counts as exactly zero, the survey's statistics on sphere match closed forms,
-// options name the bad field, and `harness gradcheck --json` prints the fields.
+// the large-step check along the gradient (exact on a quadratic, opposed on every point of a
+// sawtooth whose every ramp rises, no direction where the gradient is zero, its window shifted
+// inside the box), options name the bad field, and `harness gradcheck --json` prints the fields.
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -350,6 +352,100 @@ TEST(GradientSurvey, SphereStatisticsMatchClosedForms) {
   EXPECT_LT(s.worst_relative_error, 1e-7);
 }
 
+// f = x - 0.2 floor(10 x): every ramp rises with slope 1, every 0.1 the loss drops by 0.2, so a
+// window of width 2H = 0.1 always holds exactly one drop: (2H - 0.2) / 2H = -1 along +g
+FunctionEnv sawtooth_env() {
+  auto f = [](std::span<const double> x) { return x[0] - 0.2 * std::floor(10.0 * x[0]); };
+  return FunctionEnv(1, f, [f](std::span<const double> x, std::span<double> g) {
+    g[0] = 1.0;
+    return f(x);
+  });
+}
+
+TEST(LargeStep, SawtoothGradientAgreesLocallyAndIsOpposedOverTheStep) {
+  GradientSurveyOptions o;
+  o.points = 20;
+  o.large_step = 0.05;
+  const auto s = survey_gradient(sawtooth_env(), o);
+  EXPECT_EQ(s.agreeing, 20);  // no drop within 1e-6 of these points
+  EXPECT_EQ(s.exactly_zero, 0);
+  ASSERT_EQ(s.large_steps.size(), 20u);
+  EXPECT_EQ(s.large_step_directed, 20);
+  EXPECT_EQ(s.large_step_opposed, 20);
+  EXPECT_EQ(s.large_step_flat, 0);
+  for (const auto& l : s.large_steps) {
+    EXPECT_EQ(l.lo, -0.05);
+    EXPECT_EQ(l.hi, 0.05);
+    EXPECT_NEAR(l.ratio, -1.0, 1e-12);
+  }
+  EXPECT_NEAR(s.large_step_ratio.median, -1.0, 1e-12);
+  EXPECT_TRUE(s.passed);  // the large-step check never fails a point
+}
+
+TEST(LargeStep, ExactOnAQuadraticAlongTheSphereGradient) {
+  // a quadratic's central difference over [-H, H] is exact: the slope along u is g . u = |g|
+  GradientSurveyOptions o;
+  o.points = 10;
+  o.seed = 3;
+  o.large_step = 0.05;
+  const auto s = survey_gradient(*make_env("sphere-4"), o);
+  EXPECT_EQ(s.agreeing, 10);
+  EXPECT_EQ(s.large_step_directed, 10);
+  EXPECT_EQ(s.large_step_opposed, 0);
+  for (const auto& l : s.large_steps) EXPECT_NEAR(l.ratio, 1.0, 1e-9);
+  EXPECT_NEAR(s.large_step_ratio.min, 1.0, 1e-9);
+  EXPECT_NEAR(s.large_step_ratio.max, 1.0, 1e-9);
+  // off: no large-step checks
+  o.large_step = 0.0;
+  const auto off = survey_gradient(*make_env("sphere-4"), o);
+  EXPECT_TRUE(off.large_steps.empty());
+  EXPECT_EQ(off.large_step_directed, 0);
+  EXPECT_EQ(off.agreeing, 10);
+}
+
+TEST(LargeStep, ZeroGradientHasNoDirection) {
+  auto f = [](std::span<const double> x) { return std::floor(4.0 * x[0]) + std::floor(4.0 * x[1]); };
+  FunctionEnv env(2, f, [f](std::span<const double> x, std::span<double> g) {
+    g[0] = g[1] = 0.0;
+    return f(x);
+  });
+  GradientSurveyOptions o;
+  o.points = 10;
+  const auto s = survey_gradient(env, o);
+  EXPECT_EQ(s.exactly_zero, 10);
+  ASSERT_EQ(s.large_steps.size(), 10u);
+  EXPECT_EQ(s.large_step_directed, 0);
+  EXPECT_EQ(s.large_step_opposed, 0);
+  EXPECT_TRUE(std::isnan(s.large_steps[0].ratio));
+  EXPECT_TRUE(std::isnan(s.large_step_ratio.median));
+}
+
+TEST(LargeStep, WindowShiftsInsideTheBox) {
+  // f = 3 x_0 - x_1: u = (3, -1) / sqrt(10); at x_0 = 0.99 the box allows t <= 0.01 sqrt(10) / 3
+  auto f = [](std::span<const double> x) { return 3.0 * x[0] - x[1]; };
+  FunctionEnv env(2, f, [f](std::span<const double> x, std::span<double> g) {
+    g[0] = 3.0;
+    g[1] = -1.0;
+    return f(x);
+  });
+  const auto ws = env.make_workspace();
+  const std::vector<double> grad{3.0, -1.0};
+  const auto l = check_large_step(env, *ws, std::vector<double>{0.99, 0.0}, grad, 0.05);
+  const double t_max = 0.01 * std::sqrt(10.0) / 3.0;
+  EXPECT_NEAR(l.hi, t_max, 1e-15);
+  EXPECT_NEAR(l.lo, t_max - 0.1, 1e-15);
+  EXPECT_NEAR(l.ratio, 1.0, 1e-12);  // linear: exact over any window
+  for (const auto& x : env.seen)
+    for (const double xi : x) EXPECT_TRUE(xi >= -1.0 && xi <= 1.0);
+  // a corner with the gradient pointing out of the box: only t <= 0, the window [-2H, 0]
+  const auto corner = check_large_step(env, *ws, std::vector<double>{1.0, -1.0}, grad, 0.05);
+  EXPECT_EQ(corner.hi, 0.0);
+  EXPECT_NEAR(corner.lo, -0.1, 1e-15);
+  EXPECT_TRUE(corner.directed);
+  EXPECT_THROW(check_large_step(env, *ws, std::vector<double>{0.0, 0.0}, grad, 0.6), std::invalid_argument);
+  EXPECT_THROW(check_large_step(env, *ws, std::vector<double>{0.0}, grad, 0.05), std::invalid_argument);
+}
+
 TEST(GradientCheck, OptionsNameTheBadField) {
   auto message = [](auto mutate) {
     GradientSurveyOptions o;
@@ -370,6 +466,8 @@ TEST(GradientCheck, OptionsNameTheBadField) {
             std::string::npos);
   EXPECT_NE(message([](auto& o) { o.points = 0; }).find("'points'"), std::string::npos);
   EXPECT_NE(message([](auto& o) { o.amplitude = 1.5; }).find("'amplitude'"), std::string::npos);
+  EXPECT_NE(message([](auto& o) { o.large_step = 0.6; }).find("'large_step'"), std::string::npos);
+  EXPECT_NE(message([](auto& o) { o.large_step = -0.1; }).find("'large_step'"), std::string::npos);
   EXPECT_EQ(message([](auto&) {}), "valid");
 
   const auto env = smooth_env();
@@ -451,6 +549,24 @@ TEST(HarnessGradcheck, JsonHasThePointsAndTheSummary) {
   EXPECT_TRUE(summary.contains("seconds_per_loss"));
   EXPECT_TRUE(summary.contains("seconds_per_loss_and_grad"));
   EXPECT_EQ(summary.at("passed"), true);
+  // the large-step check (default H 0.05): a quadratic's slope along g is |g| over any window
+  EXPECT_EQ(j.at("options").at("large_step"), 0.05);
+  EXPECT_EQ(summary.at("large_step_directed"), 4);
+  EXPECT_EQ(summary.at("large_step_opposed"), 0);
+  EXPECT_EQ(summary.at("large_step_flat"), 0);
+  EXPECT_EQ(summary.at("large_step_opposed_fraction"), 0.0);
+  EXPECT_EQ(summary.at("large_step_ratio").at("median").get<double>(), s.large_step_ratio.median);
+  EXPECT_NEAR(summary.at("large_step_ratio").at("min").get<double>(), 1.0, 1e-9);
+  for (int p = 0; p < 4; ++p) {
+    const auto& l = j.at("points")[p].at("large_step");
+    EXPECT_EQ(l.at("ratio").get<double>(), s.large_steps[p].ratio);
+    EXPECT_EQ(l.at("opposed"), false);
+    EXPECT_EQ(l.at("lo").get<double>(), -0.05);
+  }
+  // --large-step 0: no large-step fields
+  const auto off = nlohmann::json::parse(harness("gradcheck --env sphere-3 --points 2 --large-step 0 --json").out);
+  EXPECT_FALSE(off.at("summary").contains("large_step_opposed"));
+  EXPECT_FALSE(off.at("points")[0].contains("large_step"));
 }
 
 TEST(HarnessGradcheck, AnyFailingPointExitsOneAndTheTableHasTheSummary) {
@@ -465,11 +581,13 @@ TEST(HarnessGradcheck, AnyFailingPointExitsOneAndTheTableHasTheSummary) {
   EXPECT_EQ(table.code, 0);
   for (const char* text : {"gradient agrees with central differences", "gradient within 25 degrees of differences",
                            "gradient opposed to differences (cos < 0)", "gradient exactly zero", "|grad|",
-                           "loss() != loss_and_grad()", "PASS"})
+                           "loss() != loss_and_grad()", "opposed to a step-0.05 difference along it",
+                           "step-difference along it / |grad|", "PASS"})
     EXPECT_NE(table.out.find(text), std::string::npos) << text << "\n" << table.out;
 
   EXPECT_EQ(harness("gradcheck --env sphere-2 --points 0").code, 2);
   EXPECT_EQ(harness("gradcheck --env sphere-2 --step 0.5").code, 2);
+  EXPECT_EQ(harness("gradcheck --env sphere-2 --large-step 0.7").code, 2);
 }
 
 }  // namespace

@@ -66,6 +66,8 @@ void GradientSurveyOptions::validate() const {
   if (points < 1) throw ConfigError("gradcheck", "points", "must be >= 1, got " + std::to_string(points));
   if (!(std::isfinite(amplitude) && amplitude > 0.0 && amplitude <= 1.0))
     throw ConfigError("gradcheck", "amplitude", "must be in (0, 1], got " + str(amplitude));
+  if (!(std::isfinite(large_step) && large_step >= 0.0 && large_step <= 0.5))
+    throw ConfigError("gradcheck", "large_step", "must be in [0, 0.5] (0 = off), got " + str(large_step));
 }
 
 namespace {
@@ -218,11 +220,23 @@ GradientSurvey survey_gradient(const Env& env, const GradientSurveyOptions& opti
   GradientSurvey s;
   s.points = options.points;
   Rng rng(options.seed);
-  std::vector<double> norms;
+  std::vector<double> norms, ratios;
+  const auto ws = env.make_workspace();  // the large-step check's rollouts
+  std::vector<double> grad(n);
   for (int p = 0; p < options.points; ++p) {
     std::vector<double> x(n);
     for (auto& xi : x) xi = options.amplitude * rng.uniform(-1.0, 1.0);
     auto r = check_gradient(env, x, options.check);
+    if (options.large_step > 0.0) {
+      for (int i = 0; i < n; ++i) grad[i] = r.coordinates[i].analytic;
+      const auto& l = s.large_steps.emplace_back(check_large_step(env, *ws, x, grad, options.large_step));
+      if (l.directed) {
+        ++s.large_step_directed;
+        s.large_step_opposed += l.opposed;
+        s.large_step_flat += l.flat;
+        ratios.push_back(l.ratio);
+      }
+    }
     s.agreeing += r.gradient_agrees;
     if (!std::isnan(r.direction_cosine)) {
       ++s.directed;
@@ -247,6 +261,7 @@ GradientSurvey survey_gradient(const Env& env, const GradientSurveyOptions& opti
     s.checks.push_back(std::move(r));
   }
   s.gradient_norm = quartiles(std::move(norms));
+  s.large_step_ratio = quartiles(std::move(ratios));
   s.passed = std::all_of(s.checks.begin(), s.checks.end(), [](const auto& r) { return r.passed; });
   return s;
 }

@@ -3,7 +3,8 @@
 // Ceres' GradientChecker): an env's analytic gradient against finite differences of its loss at
 // a point, with per-coordinate errors, the worst error and its coordinate, and a verdict; and
 // gradient-quality statistics over seeded random points (how often the gradient agrees with
-// central differences, how often it is exactly zero, the distribution of its norm).
+// central differences, how often it is exactly zero, the distribution of its norm, and how often
+// its direction is contradicted by a large-step difference along it: envs/core/large_step_check.hpp).
 //
 // The guard that the finite differences are not the analytic code path:
 //  - finite differences are taken only through Env::loss() (the value-only path),
@@ -29,6 +30,7 @@
 #include <vector>
 
 #include "envs/core/env.hpp"
+#include "envs/core/large_step_check.hpp"
 
 namespace dsb {
 
@@ -112,7 +114,11 @@ struct GradientSurveyOptions {
   int points = 3;          // random points
   std::uint64_t seed = 0;  // of our own Rng (common/rng.hpp)
   double amplitude = 0.5;  // points uniform in [-amplitude, amplitude]^dim
-  // throws ConfigError naming the field (check's fields too): points < 1, amplitude outside (0, 1]
+  // H of the large-step check along the gradient at each point (normalized units; 2 more loss()
+  // calls per point); 0 = no large-step check
+  double large_step = 0.05;
+  // throws ConfigError naming the field (check's fields too): points < 1, amplitude outside (0, 1],
+  // large_step outside [0, 0.5]
   void validate() const;
 };
 
@@ -140,11 +146,17 @@ struct GradientSurvey {
   int worst_point = -1, worst_coordinate = -1;
   double seconds_per_loss_and_grad = 0.0;  // mean over the points
   double seconds_per_loss = 0.0;
-  bool passed = false;  // every point passed
+  bool passed = false;  // every point passed (the large-step check never fails a point)
+  // the large-step check at each point (empty when options.large_step is 0), and its counts
+  std::vector<LargeStepCheck> large_steps;
+  int large_step_directed = 0;  // points with a direction (nonzero finite gradient, finite difference)
+  int large_step_opposed = 0;   // of those, the loss falls along +g over the window
+  int large_step_flat = 0;      // of those, the loss is the same at both ends of the window
+  Quartiles large_step_ratio{};  // difference / |g| over the directed points
 };
 
 // The points: x_i = amplitude * rng.uniform(-1, 1), coordinate by coordinate, point by point,
-// from Rng(seed); then check_gradient at each.
+// from Rng(seed); then check_gradient at each, and check_large_step with the gradient it got.
 GradientSurvey survey_gradient(const Env& env, const GradientSurveyOptions& options);
 
 }  // namespace dsb

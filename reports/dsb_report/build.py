@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import os
 import platform
+import shutil
 
 import matplotlib
 
@@ -78,7 +79,8 @@ def _provenance(data, build_type, made, stored_episodes) -> list:
     ]
 
 
-def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=()) -> list:
+def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=(),
+          gradient_quality=None, gradient_quality_path: str = "") -> list:
     style.setup()
     pal = style.palette(data.optimizers)
     written = []
@@ -120,6 +122,9 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
     sig["best_optimizer"] = [best_of.get((r["env"], r["budget"]), "") for _, r in sig.iterrows()]
     write_csv(sig, path("significance.csv"),
               SIGNIFICANCE_COLUMNS + ["budget", "is_best", "best_optimizer", "n_seeds", "mark"])
+
+    if gradient_quality is not None:  # the survey's file as it is
+        shutil.copyfile(gradient_quality_path, path("gradient_quality.csv"))
 
     missing = grid.missing_runs(data.runs)
     write_csv(missing, path("missing.csv"))
@@ -165,7 +170,8 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
         notes=notes,
         provenance=_provenance(data, build_type, made, int(sum(p.best.size for p in data.panels))),
         claims=verdicts, panels=items, mean_ranks=mr, ranks_png="ranks.png", ecdf_png="ecdf.png",
-        targets=tinfo,
+        targets=tinfo, gradient_quality=gradient_quality,
+        gradient_quality_path=gradient_quality_path,
         overview=summary.overview(items, data.optimizers), significance=sig,
         minp_text=_minp_text(tables), landscapes=lands, landscape_errors=lerrors,
         landscape_dir=landscape_dir, missing=missing, failed=failed, running=running,

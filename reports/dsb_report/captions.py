@@ -47,6 +47,23 @@ SIGNIFICANCE = ("For each env, the best optimizer is the one with the lowest med
                 "Holm-corrected over its comparisons, and an optimizer is indistinguishable from the "
                 "best when the corrected p is ≥ 0.05. {minp}")
 
+GRADIENT_QUALITY = (
+    "Where the analytic gradients can be trusted: `harness gradcheck` at seeded random points of "
+    "each env ({settings}; scripts/gradient-quality.sh). 'agree': the fraction of points where "
+    "every coordinate of the analytic gradient g agrees with the central difference fd of the "
+    "loss at step h in normalized units (|g_i − fd_i| / (|fd_i| + 10^−3 max_j |fd_j|) ≤ the "
+    "tolerance). 'exactly zero': the fraction of points where every component of g is 0.0 (flat "
+    "regions, e.g. pinball paddles the ball never touches). |grad|: the Euclidean norm of g in "
+    "normalized units over the points (min, median, max). 'opposed at large step': among the "
+    "points with a nonzero finite gradient, the fraction where the loss falls along +g over a "
+    "step H: with u = g/|g|, (f(x + H u) − f(x − H u)) / 2H < 0 (the window shifted along u to "
+    "stay in the box), i.e. the gradient points the wrong way at the scale an optimizer steps; "
+    "the last column is the median of that large-step slope divided by |g| (1: the gradient "
+    "predicts the loss over the step; near 0: a plateau or a gradient that overstates the slope; "
+    "negative: opposed). The particle envs (fluid, plb-NAME) are surveyed at their 5-env-step "
+    "variants (named in the env column); all others at their full horizon. Green: every point "
+    "agrees and none is opposed; red: fewer than half agree or a quarter or more are opposed.")
+
 LANDSCAPE = ("Colors: the loss on a 2-D slice of the normalized box through dimensions i and j "
              "(the other coordinates as `harness landscape` fixed them). Arrows: the descent "
              "direction (minus the gradient) on at most 20 × 20 grid points, drawn with unit "

@@ -4,6 +4,7 @@ from __future__ import annotations
 from html import escape
 
 from . import captions
+from . import gradient_quality as gq
 from .tables import final_md_rows, fmt, mark, rank_md_rows
 
 CSS = """
@@ -113,6 +114,21 @@ def _significance(ctx) -> str:
             table(["env", "optimizer", "p raw", "p Holm", "vs best"], rows, numeric={2, 3}))
 
 
+def _gradient_quality(ctx) -> str:
+    df = ctx["gradient_quality"]
+    p = ['<h2 id="gradient-quality">Gradient quality</h2>']
+    if df is None:
+        p.append(f"<p>No gradient survey: <code>{escape(ctx['gradient_quality_path'])}</code> does "
+                 "not exist (make it with <code>scripts/gradient-quality.sh BUILD_DIR FILE</code>, "
+                 "or pass <code>--gradient-quality FILE</code>).</p>")
+        return "\n".join(p)
+    p.append("<p>" + escape(captions.GRADIENT_QUALITY.format(settings=gq.settings(df))) + "</p>")
+    p.append(f"<p>{len(df)} envs ({link('gradient_quality.csv')}, a copy of "
+             f"<code>{escape(ctx['gradient_quality_path'])}</code>):</p>")
+    p.append(table(gq.HEADERS, gq.rows(df), gq.row_classes(df), numeric=set(range(1, 10))))
+    return "\n".join(p)
+
+
 def _landscapes(ctx) -> str:
     ls = ctx["landscapes"]
     p = ['<h2 id="landscapes">Landscapes</h2>']
@@ -172,7 +188,8 @@ def render(ctx) -> str:
            ("across", "Across envs: ranks and data profile")]
     toc += [(f"env-{it['panel'].slug}", f"{it['panel'].env} (budget {it['panel'].budget})")
             for it in ctx["panels"]]
-    toc += [("significance", "Significance"), ("landscapes", "Landscapes"),
+    toc += [("significance", "Significance"), ("gradient-quality", "Gradient quality"),
+            ("landscapes", "Landscapes"),
             ("missing", f"Missing runs ({len(ctx['missing'])})"),
             ("failed", f"Failed runs ({len(ctx['failed'])})"),
             ("incomplete", f"Incomplete runs ({len(ctx['running'])})"), ("files", "Files")]
@@ -189,6 +206,7 @@ def render(ctx) -> str:
     parts.append('<h2 id="envs">Per env</h2>')
     parts += [_panel(ctx, it) for it in ctx["panels"]]
     parts.append(_significance(ctx))
+    parts.append(_gradient_quality(ctx))
     parts.append(_landscapes(ctx))
     parts.append(_problems(ctx))
     parts.append('<h2 id="files">Files</h2><ul>' +

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from . import captions
+from . import gradient_quality as gq
 from .tables import final_md_rows, fmt, mark, md_table, rank_md_rows
 
 
@@ -44,6 +45,11 @@ def render(ctx) -> str:
     for it in ctx["panels"]:
         pn = it["panel"]
         out += [f"### {pn.env} (budget {pn.budget})", "", md_table(*final_md_rows(it["table"])), ""]
+    g = ctx["gradient_quality"]
+    out += ["## Gradient quality", ""]
+    out += [f"No gradient survey: {ctx['gradient_quality_path']} does not exist.", ""] if g is None else [
+        captions.GRADIENT_QUALITY.format(settings=gq.settings(g)), "",
+        md_table(gq.HEADERS, gq.rows(g)), ""]
     m = ctx["missing"]
     out += [f"## Missing runs ({len(m)})", ""]
     out += ["None."] if m.empty else [md_table(
