@@ -63,6 +63,17 @@ TEST(Fluid, HandFoundScoopLiftsTheCubeAboveTheRim) {
   const auto still = env.trajectory(std::vector<double>(10, 0.0), serial_team());
   EXPECT_LT(still.back().cube.y() - floor, 0.05);
   EXPECT_GT(env.loss(std::vector<double>(10, 0.0)), env.loss(kScoop));
+  // the episode's second metric is that final height, the same from the forward and the gradient
+  // rollout, bit for bit
+  EXPECT_EQ(env.info().metric, "cube_height");
+  const auto ws = env.make_workspace();
+  env.loss(kScoop, *ws, serial_team());
+  EXPECT_EQ(env.episode_metric(*ws), end);
+  std::vector<double> grad(10);
+  env.loss(std::vector<double>(10, 0.0), *ws, serial_team());
+  EXPECT_EQ(env.episode_metric(*ws), still.back().cube.y() - floor);
+  env.loss_and_grad(kScoop, grad, *ws, serial_team());
+  EXPECT_EQ(env.episode_metric(*ws), end);
 }
 
 TEST(Fluid, GradientMatchesCentralDifferences) {
@@ -158,6 +169,11 @@ TEST_F(FluidHarness, ListEvalAndAGridOfCmaesAndGd) {
   EXPECT_EQ(sqlite3_column_int(q, 0), 6);
   EXPECT_EQ(sqlite3_column_int(q, 1), 6) << "every episode finite";
   EXPECT_EQ(sqlite3_column_int(q, 2), 3) << "gd's episodes carry gradients";
+  sqlite3_finalize(q);
+  // every episode stores the cube's final height (metres above the floor, inside the domain)
+  sqlite3_prepare_v2(h, "SELECT count(*) FROM evals WHERE metric > 0 AND metric < 0.4", -1, &q, nullptr);
+  ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(q, 0), 6);
   sqlite3_finalize(q);
   sqlite3_close(h);
 }

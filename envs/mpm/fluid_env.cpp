@@ -26,6 +26,7 @@ EnvInfo fluid_info(std::string name, const FluidConfig& cfg) {
   // `harness eval --grad` of the full task on one core: 2.7 s (a forward episode 0.6 s); scaled by
   // the horizon
   info.cost_hint_s = 2.7 * cfg.env_steps / 50.0;
+  info.metric = "cube_height";  // m above the tank floor after the last env step (above the rim: lifted out)
   return info;
 }
 
@@ -110,8 +111,12 @@ double FluidEnv::rollout(std::span<const double> x, Workspace& workspace, Thread
   auto& ws = static_cast<FluidWorkspace&>(workspace);
   actions(x, ws.actions);
   const FluidObjective objective(cfg_, model());
-  return run_episode(model(), ws.mpm, team, ws.actions, cfg_.env_steps, objective);
+  const double loss = run_episode(model(), ws.mpm, team, ws.actions, cfg_.env_steps, objective);
+  ws.cube_height = objective.final_cube_height();
+  return loss;
 }
+
+double FluidEnv::episode_metric(const Workspace& ws) const { return static_cast<const FluidWorkspace&>(ws).cube_height; }
 
 double FluidEnv::rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& workspace,
                                    ThreadTeam& team) const {
@@ -120,6 +125,7 @@ double FluidEnv::rollout_with_grad(std::span<const double> x, std::span<double> 
   const FluidObjective objective(cfg_, model());
   const double loss =
       run_episode_with_grad(model(), ws.mpm, team, ws.actions, cfg_.env_steps, objective, ws.actions_bar);
+  ws.cube_height = objective.final_cube_height();
   // each param drives both primitives over its segment's env steps
   std::fill(grad.begin(), grad.end(), 0.0);
   const int per = cfg_.steps_per_segment();

@@ -21,6 +21,7 @@ struct FluidWorkspace : Workspace {
   explicit FluidWorkspace(const MpmModel& model) : mpm(model) {}
   MpmWorkspace mpm;
   std::vector<double> actions, actions_bar;  // env_steps x 4
+  double cube_height = 0.0;                  // the last rollout's second metric (m above the floor)
 };
 
 class FluidEnv : public Env {
@@ -29,6 +30,8 @@ class FluidEnv : public Env {
   nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
+  // the cube's height above the tank floor after the last rollout in ws (NaN if it blew up)
+  double episode_metric(const Workspace& ws) const override;
 
   const FluidConfig& fluid_config() const { return cfg_; }
   const MpmModel& model() const { return model_.get(); }

@@ -119,7 +119,9 @@ double FluidObjective::final_loss(const std::vector<Particle>& particles, const 
 
 double FluidObjective::step_loss(int step, const std::vector<Particle>& particles, const std::vector<Pose>& poses,
                                  ThreadTeam&) const {
-  return step == cfg_.env_steps - 1 ? final_loss(particles, poses) : 0.0;
+  if (step != cfg_.env_steps - 1) return 0.0;
+  final_cube_height_ = cube_centre(model_, particles).y() - cfg_.floor_y();
+  return final_loss(particles, poses);
 }
 
 void FluidObjective::step_loss_adjoint(int step, const std::vector<Particle>& particles,

@@ -1,4 +1,5 @@
 #pragma once
+#include <limits>
 // The `fluid` scene (fluid_config.hpp) as an MPM model, and its loss.
 #include "envs/mpm/episode.hpp"
 #include "envs/mpm/fluid_config.hpp"
@@ -24,10 +25,14 @@ class FluidObjective : public EpisodeObjective {
                          std::vector<ParticleAdjoint>& adj, std::vector<PoseAdjoint>& pose_adj,
                          ThreadTeam& team) const override;
   double final_loss(const std::vector<Particle>& particles, const std::vector<Pose>& poses) const;
+  // the cube centre's height above the tank floor after the last env step (the episode's second
+  // metric: above cfg.rim_height the cube is out of the tank); NaN until that step was scored
+  double final_cube_height() const { return final_cube_height_; }
 
  private:
   const FluidConfig& cfg_;
   const MpmModel& model_;
+  mutable double final_cube_height_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace dsb::mpm

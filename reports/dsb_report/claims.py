@@ -202,7 +202,8 @@ def _judge_tests(c: Claim, b: list, panel, comps: list) -> dict:
 def _judge_rate(c: Claim, panel) -> dict:
     """Share of seeds whose metric at the run's best episode is >= threshold, per optimizer of a."""
     if not panel.has_metric:
-        return dict(verdict=UNTESTABLE, reason=c.note or f"{panel.env} stores no per-episode metric")
+        return dict(verdict=UNTESTABLE,
+                    reason=f"{panel.env} stores no per-episode metric in this database (evals.metric is NULL)")
     if math.isnan(c.threshold):
         return dict(verdict=UNTESTABLE, reason="the claim gives no metric threshold")
     shares, ns = {}, {}
