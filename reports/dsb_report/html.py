@@ -5,7 +5,7 @@ from html import escape
 
 from . import captions
 from . import gradient_quality as gq
-from .tables import final_md_rows, fmt, mark, rank_md_rows
+from .tables import final_md_rows, fmt, mark, overview_text, rank_md_rows
 
 CSS = """
 body { font-family: sans-serif; max-width: 1100px; margin: 1.5em auto; padding: 0 1em;
@@ -20,6 +20,10 @@ figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #ddd; 
 figcaption { font-size: 0.9em; color: #444; max-width: 900px; }
 .note { background: #fff8e1; border-left: 4px solid #f0c000; padding: 0.4em 0.8em; }
 code { background: #f4f4f4; padding: 0 3px; }
+table.overview td.cell { text-align: center; min-width: 5.5em; }
+table.overview td.win { font-weight: bold; outline: 2px solid #1a7f37; outline-offset: -2px; }
+table.overview td.tie { font-weight: bold; }
+table.overview small { display: block; font-weight: normal; color: #555; }
 """
 
 
@@ -70,6 +74,57 @@ def _claims(ctx) -> str:
                    "verdict", "why"], rows, cls, numeric={5, 6}))
 
 
+def heat(score: float) -> str:
+    """Background colour of an overview cell: green at 0 (the winner), white at 0.5, red at 1."""
+    s = min(max(score, 0.0), 1.0)
+    lo, mid, hi = (170, 222, 170), (255, 255, 255), (244, 170, 160)
+    a, b, f = (lo, mid, s * 2) if s <= 0.5 else (mid, hi, s * 2 - 1)
+    return "#" + "".join(f"{round(x + (y - x) * f):02x}" for x, y in zip(a, b))
+
+
+def _overview(ctx) -> str:
+    rows, opts = ctx["overview"], ctx["optimizers"]
+    p = ['<h2 id="overview">Overview: final results per env and optimizer</h2>',
+         "<p>" + escape(captions.OVERVIEW) + "</p>"]
+    if not rows:
+        p.append("<p>No done run yet.</p>")
+        return "\n".join(p)
+    out = ['<table class="overview">',
+           "<tr><th>env (budget)</th>" + "".join(f"<th>{escape(o)}</th>" for o in opts) + "</tr>"]
+    for r in rows:
+        tds = [f'<td><a href="#env-{escape(r["slug"])}">{escape(r["env"])}</a> ({r["budget"]})</td>']
+        for o in opts:
+            c = r["cells"][o]
+            if c is None:
+                tds.append('<td class="cell">—</td>')
+                continue
+            cls = {"best": "cell win", "≈ best": "cell tie"}.get(c["mark"], "cell")
+            mk = {"best": "★ best", "≈ best": "≈ best"}.get(c["mark"], c["mark"])
+            tds.append(f'<td class="{cls}" style="background:{heat(c["score"])}" '
+                       f'title="median {escape(fmt(c["median"]))}, {c["n"]} seeds">'
+                       f'{c["score"]:.2f}' + (f"<small>{escape(mk)}</small>" if mk else "") +
+                       "</td>")
+        out.append("<tr>" + "".join(tds) + "</tr>")
+    out.append("</table>")
+    p.append("\n".join(out))
+    return "\n".join(p)
+
+
+def _failures(ctx) -> str:
+    rows, opts = ctx["failures"], ctx["optimizers"]
+    tot_e = sum(c[0] for r in rows for c in r["cells"].values() if c)
+    tot_r = sum(c[1] for r in rows for c in r["cells"].values() if c)
+    p = ['<h2 id="failures">Failed episodes and failed runs</h2>',
+         "<p>" + escape(captions.FAILURES) + f" In all: {tot_e} failed episode(s), {tot_r} failed "
+         "run(s).</p>"]
+    body = [[f"{r['env']} ({r['budget']})"] +
+            ["—" if r["cells"][o] is None else f"{r['cells'][o][0]} / {r['cells'][o][1]}"
+             for o in opts] for r in rows]
+    cls = ["bad" if any(c and (c[0] or c[1]) for c in r["cells"].values()) else "" for r in rows]
+    p.append(table(["env (budget)"] + list(opts), body, cls, numeric=set(range(1, len(opts) + 1))))
+    return "\n".join(p)
+
+
 def _across(ctx) -> str:
     p = ['<h2 id="across">Across envs</h2>']
     p.append(figure(ctx["ranks_png"], "average ranks", captions.RANKS))
@@ -84,8 +139,6 @@ def _across(ctx) -> str:
              f"{link('ecdf_targets.csv')} these targets):</p>" +
              table(["env", "budget", "f*", "f0", "k=1", "k=2", "k=3", "k=4", "k=5"], trow,
                    numeric=set(range(1, 9))))
-    p.append("<p>Overview: median final best loss per env and optimizer (mark versus the env's "
-             "best; '—' = no done run).</p>" + table(*ctx["overview"]))
     return "\n".join(p)
 
 
@@ -97,7 +150,7 @@ def _panel(ctx, item) -> str:
     p.append(figure(item["final_png"], f"final {pn.env}",
                     captions.FINALS.format(scale=item["scale_text"])))
     h, rows = final_md_rows(t)
-    cls = ["best" if r["is_best"] else "tie" if r["indistinguishable_from_best"] else
+    cls = ["best" if r["is_best"] else "tie" if mark(r) == "≈ best" else
            ("bad" if r["n_seeds"] == 0 else "") for _, r in t.iterrows()]
     p.append(f"<p>Final best loss at {pn.budget} episodes over seeds ({link(item['final_csv'])}):"
              "</p>" + table(h, rows, cls, numeric=set(range(1, 10))))
@@ -184,7 +237,8 @@ def _problems(ctx) -> str:
 
 
 def render(ctx) -> str:
-    toc = [("claims", "The paper's claims"), ("provenance", "Provenance"),
+    toc = [("claims", "The paper's claims"), ("overview", "Overview: final results"),
+           ("failures", "Failed episodes and failed runs"),
            ("across", "Across envs: ranks and data profile")]
     toc += [(f"env-{it['panel'].slug}", f"{it['panel'].env} (budget {it['panel'].budget})")
             for it in ctx["panels"]]
@@ -192,16 +246,19 @@ def render(ctx) -> str:
             ("landscapes", "Landscapes"),
             ("missing", f"Missing runs ({len(ctx['missing'])})"),
             ("failed", f"Failed runs ({len(ctx['failed'])})"),
-            ("incomplete", f"Incomplete runs ({len(ctx['running'])})"), ("files", "Files")]
+            ("incomplete", f"Incomplete runs ({len(ctx['running'])})"),
+            ("provenance", "Provenance"), ("files", "Files")]
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
              "<title>diffsim-bench report</title>", f"<style>{CSS}</style></head><body>",
              "<h1>diffsim-bench comparison report</h1>", f"<p>{escape(ctx['headline'])}</p>"]
+    parts.append(_claims(ctx))
+    parts.append(_overview(ctx))
+    parts.append(_failures(ctx))
     for note in ctx["notes"]:
         parts.append(f'<p class="note">{escape(note)}</p>')
+    parts.append('<h2 id="contents">Contents</h2>')
     parts.append("<ul>" + "".join(f'<li><a href="#{escape(a)}">{escape(t)}</a></li>'
                                   for a, t in toc) + "</ul>")
-    parts.append(_claims(ctx))
-    parts.append(_provenance(ctx))
     parts.append(_across(ctx))
     parts.append('<h2 id="envs">Per env</h2>')
     parts += [_panel(ctx, it) for it in ctx["panels"]]
@@ -209,6 +266,7 @@ def render(ctx) -> str:
     parts.append(_gradient_quality(ctx))
     parts.append(_landscapes(ctx))
     parts.append(_problems(ctx))
+    parts.append(_provenance(ctx))
     parts.append('<h2 id="files">Files</h2><ul>' +
                  "".join(f"<li>{link(f)}</li>" for f in ctx["files"]) + "</ul>")
     parts.append("</body></html>")
