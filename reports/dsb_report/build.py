@@ -188,6 +188,9 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
 
     with open(path("summary.md"), "w", encoding="utf-8") as f:
         f.write(summary.render(ctx))
+    if landscape_dir is not None:
+        with open(path("gallery.html"), "w", encoding="utf-8") as f:
+            f.write(html.render_gallery(ctx))
     ctx["files"] = sorted(written)
     with open(path("index.html"), "w", encoding="utf-8") as f:
         f.write(html.render(ctx))

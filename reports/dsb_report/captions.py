@@ -96,3 +96,9 @@ MISSING = ("Expected grid: every (env, optimizer) pair with at least one run in 
            "seed indices 0..{max_seed}, times the budgets present for that env. Every expected run "
            "without a 'done' run is listed here; reason 'failed' or 'running' means such a run "
            "exists (see below), 'absent' means none was ever stored.")
+
+GALLERY = ("The loss on 2-D slices of every env given to the report (--landscapes DIR; "
+           "scripts/landscape-gallery.sh DIR makes one for every env of `harness list`, on the "
+           "seed's Figures 8-15 dims where it gives them, else the first two dims, the particle "
+           "envs at their 5-env-step variants), side by side per env under that env's row of the "
+           "gradient quality survey. " + LANDSCAPE)

@@ -1,6 +1,7 @@
 """index.html: a self-contained page (relative links, images as files, no JavaScript, no network)."""
 from __future__ import annotations
 
+import re
 from html import escape
 
 from . import captions
@@ -24,6 +25,8 @@ table.overview td.cell { text-align: center; min-width: 5.5em; }
 table.overview td.win { font-weight: bold; outline: 2px solid #1a7f37; outline-offset: -2px; }
 table.overview td.tie { font-weight: bold; }
 table.overview small { display: block; font-weight: normal; color: #555; }
+.gallery { display: flex; flex-wrap: wrap; gap: 0.6em; }
+.gallery figure { flex: 0 1 32%; margin: 0; } .gallery figcaption { font-size: 0.8em; }
 """
 
 
@@ -186,10 +189,14 @@ def _landscapes(ctx) -> str:
     ls = ctx["landscapes"]
     p = ['<h2 id="landscapes">Landscapes</h2>']
     if ctx["landscape_dir"] is None:
-        p.append("<p>No landscape directory given (<code>--landscapes DIR</code>).</p>")
+        p.append("<p>No landscape directory given (<code>--landscapes DIR</code>; "
+                 "<code>scripts/landscape-gallery.sh DIR</code> makes one for every env).</p>")
     elif not ls and not ctx["landscape_errors"]:
         p.append(f"<p>No <code>&lt;env&gt;_&lt;i&gt;_&lt;j&gt;.csv</code> files in "
                  f"<code>{escape(ctx['landscape_dir'])}</code>.</p>")
+    if ctx["landscape_dir"] is not None:
+        p.append(f"<p>All of them side by side, with the gradient quality of each env: "
+                 f"{link('gallery.html', 'the landscape gallery')}.</p>")
     for it in ls:
         p.append(f"<h3>{escape(it['env'])}, dims {it['i']} and {it['j']}</h3>")
         p.append(figure(it["png"], f"landscape {it['env']}",
@@ -197,6 +204,63 @@ def _landscapes(ctx) -> str:
     for e in ctx["landscape_errors"]:
         p.append(f'<p class="note">Skipped: {escape(e)}</p>')
     return "\n".join(p)
+
+
+def base_env(name: str) -> str:
+    """The env of `harness list` a landscape's variant belongs to: fluid-h5 -> fluid,
+    plb-table-h5 -> plb-table (scripts/landscape-gallery.sh slices the particle envs' short
+    variants); any other name is its own env."""
+    m = re.fullmatch(r"((?:fluid|plb-[a-z]+))-h[0-9]+", name)
+    return m.group(1) if m else name
+
+
+def gallery_groups(landscapes: list, gq_df) -> list:
+    """(env, [landscape items]) in the order of the gradient survey's rows (harness list's order),
+    then the other envs by name."""
+    groups = {}
+    for it in landscapes:
+        groups.setdefault(base_env(it["env"]), []).append(it)
+    order = [e for e in (list(gq_df["env"]) if gq_df is not None else []) if e in groups]
+    order += sorted(e for e in groups if e not in order)
+    return [(e, groups[e]) for e in order]
+
+
+def render_gallery(ctx) -> str:
+    """gallery.html: every landscape of --landscapes, grouped by env and side by side, under the
+    gradient quality table (each env's survey row repeated above its slices)."""
+    df = ctx["gradient_quality"]
+    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+             "<title>diffsim-bench landscape gallery</title>",
+             f"<style>{CSS}</style></head><body>",
+             "<h1>Landscape gallery</h1>",
+             f"<p>{escape(captions.GALLERY)} Back to the {link('index.html', 'report')}.</p>"]
+    if df is None:
+        parts.append(f"<p>No gradient survey: <code>{escape(ctx['gradient_quality_path'])}</code> "
+                     "does not exist.</p>")
+    else:
+        parts.append('<h2 id="gradient-quality">Gradient quality</h2>')
+        parts.append("<p>" + escape(captions.GRADIENT_QUALITY.format(settings=gq.settings(df))) +
+                     "</p>")
+        parts.append(table(gq.HEADERS, gq.rows(df), gq.row_classes(df), numeric=set(range(1, 10))))
+    by_env = {} if df is None else {e: k for k, e in enumerate(df["env"])}
+    if not ctx["landscapes"]:
+        parts.append("<p>No landscapes in <code>" + escape(str(ctx["landscape_dir"])) + "</code>.</p>")
+    for env, items in gallery_groups(ctx["landscapes"], df):
+        parts.append(f'<h2 id="gallery-{escape(env)}">{escape(env)}</h2>')
+        if env in by_env:
+            k = by_env[env]
+            parts.append(table(gq.HEADERS, [gq.rows(df)[k]], [gq.row_classes(df)[k]],
+                               numeric=set(range(1, 10))))
+        else:
+            parts.append("<p>Not in the gradient survey.</p>")
+        figs = [figure(it["png"], f"landscape {it['env']} dims {it['i']} and {it['j']}",
+                       f"{it['env']}, dims {it['i']} and {it['j']}: {it['desc']} "
+                       f"({it['source']}).") for it in items]
+        parts.append('<div class="gallery">' + "".join(figs) + "</div>")
+    for e in ctx["landscape_errors"]:
+        parts.append(f'<p class="note">Skipped: {escape(e)}</p>')
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"
 
 
 def _problems(ctx) -> str:
