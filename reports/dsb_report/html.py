@@ -9,7 +9,7 @@ from . import gradient_quality as gq
 from .tables import final_md_rows, fmt, mark, overview_text, rank_md_rows
 
 CSS = """
-body { font-family: sans-serif; max-width: 1100px; margin: 1.5em auto; padding: 0 1em;
+body { font-family: sans-serif; max-width: 1250px; margin: 1.5em auto; padding: 0 1em;
        color: #222; line-height: 1.4; }
 h1 { font-size: 1.6em; } h2 { border-bottom: 1px solid #ccc; margin-top: 2em; }
 table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.9em; }
@@ -25,6 +25,8 @@ table.overview td.cell { text-align: center; min-width: 5.5em; }
 table.overview td.win { font-weight: bold; outline: 2px solid #1a7f37; outline-offset: -2px; }
 table.overview td.tie { font-weight: bold; }
 table.overview small { display: block; font-weight: normal; color: #555; }
+.answer { display: flex; flex-wrap: wrap; gap: 0 2.5em; align-items: flex-start; }
+.answer > div { flex: 1 1 28em; min-width: 0; }
 .gallery { display: flex; flex-wrap: wrap; gap: 0.6em; }
 .gallery figure { flex: 0 1 32%; margin: 0; } .gallery figcaption { font-size: 0.8em; }
 """
@@ -62,6 +64,21 @@ def _provenance(ctx) -> str:
     return "<h2 id=\"provenance\">Provenance</h2>\n" + table(["item", "value"], rows)
 
 
+def _claims_compact(ctx) -> str:
+    """The verdicts, one line per claim and env, at the top of the page (the details further down)."""
+    c = ctx["claims"]
+    rows = [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"],
+             r["verdict"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2)] for _, r in c.iterrows()]
+    cls = ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
+    counts = ", ".join(f"{v} {n}" for v, n in c["verdict"].value_counts().sort_index().items())
+    return ('<h2 id="claims">The paper\'s claims</h2>\n'
+            f"<p>{escape(counts or 'No claims.')}: each qualitative claim of Antonova et al. "
+            "(CoRL 2022) tested on the final best losses over seeds (what the paper says, the test "
+            f"and why: {link('#claims-detail', 'the claims in detail')}; {link('claims.csv')}).</p>\n" +
+            table(["claim", "env (budget)", "verdict", "p (Holm)", "A12"], rows, cls,
+                  numeric={3, 4}))
+
+
 def _claims(ctx) -> str:
     c = ctx["claims"]
     rows = [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"],
@@ -70,7 +87,8 @@ def _claims(ctx) -> str:
             for _, r in c.iterrows()]
     cls = ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
     counts = ", ".join(f"{v} {n}" for v, n in c["verdict"].value_counts().sort_index().items())
-    return ('<h2 id="claims">The paper\'s claims</h2>\n<p>' + escape(captions.CLAIMS) + "</p>\n"
+    return ('<h2 id="claims-detail">The paper\'s claims in detail</h2>\n<p>' +
+            escape(captions.CLAIMS) + "</p>\n"
             f"<p>{escape(counts or 'No claims.')} ({link('claims.csv')}; every comparison: "
             f"{link('claims_comparisons.csv')})</p>\n" +
             table(["claim", "env (budget)", "the paper says", "tested as", "seeds", "p (Holm)", "A12",
@@ -303,6 +321,7 @@ def _problems(ctx) -> str:
 def render(ctx) -> str:
     toc = [("claims", "The paper's claims"), ("overview", "Overview: final results"),
            ("failures", "Failed episodes and failed runs"),
+           ("claims-detail", "The paper's claims in detail"),
            ("across", "Across envs: ranks and data profile")]
     toc += [(f"env-{it['panel'].slug}", f"{it['panel'].env} (budget {it['panel'].budget})")
             for it in ctx["panels"]]
@@ -315,14 +334,17 @@ def render(ctx) -> str:
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
              "<title>diffsim-bench report</title>", f"<style>{CSS}</style></head><body>",
              "<h1>diffsim-bench comparison report</h1>", f"<p>{escape(ctx['headline'])}</p>"]
-    parts.append(_claims(ctx))
-    parts.append(_overview(ctx))
+    # the answer: the claims' verdicts and the overview side by side where the window is wide
+    # enough for both (they wrap one under the other otherwise)
+    parts.append('<div class="answer"><div>' + _claims_compact(ctx) + "</div><div>" +
+                 _overview(ctx) + "</div></div>")
     parts.append(_failures(ctx))
     for note in ctx["notes"]:
         parts.append(f'<p class="note">{escape(note)}</p>')
     parts.append('<h2 id="contents">Contents</h2>')
     parts.append("<ul>" + "".join(f'<li><a href="#{escape(a)}">{escape(t)}</a></li>'
                                   for a, t in toc) + "</ul>")
+    parts.append(_claims(ctx))
     parts.append(_across(ctx))
     parts.append('<h2 id="envs">Per env</h2>')
     parts += [_panel(ctx, it) for it in ctx["panels"]]
