@@ -563,6 +563,7 @@ def _overview_runs(con):
         for seed, final in enumerate(finals):
             insert(env, opt, seed, final, "done")
     insert("branin", "random", 6, 1.0, "failed")
+    insert("hartmann6", "cmaes", 0, 1.0, "failed")     # an env whose only run failed
 
 
 def png_rgba(path):
@@ -669,6 +670,7 @@ class TestOverview(ReportCase):
             "SELECT env, optimizer, COUNT(*) FROM runs WHERE status = 'failed' GROUP BY env, optimizer"))
         con.close()
         self.assertEqual(nan, {("branin", "cmaes"): 3, ("bounce", "random"): 3})
+        self.assertEqual(failed, {("branin", "random"): 1, ("hartmann6", "cmaes"): 1})
         sec = section(self.html, "failures")
         head = re.findall(r"<th>(.*?)</th>", html_rows(sec)[0])
         seen = 0
@@ -682,17 +684,21 @@ class TestOverview(ReportCase):
                 self.assertEqual(cell, f"{nan.get((env, opt), 0)} / {failed.get((env, opt), 0)}",
                                  f"{env}/{opt}")
                 seen += 1
-        self.assertEqual(seen, len(OVERVIEW_CELLS))
-        self.assertIn("In all: 6 failed episode(s), 1 failed run(s).", sec)
+        self.assertEqual(seen, len(OVERVIEW_CELLS) + 1)   # + hartmann6's failed run: "0 / 1"
+        self.assertIn("In all: 6 failed episode(s), 2 failed run(s).", sec)
         final = {r["optimizer"]: r for r in read_csv(self.file("final_branin.csv"))}
         self.assertEqual((final["cmaes"]["failed_episodes"], final["random"]["failed_runs"]), ("3", "1"))
 
     def test_the_answer_comes_first_and_provenance_last(self):
         order = [self.html.index(f'<h2 id="{a}">') for a in
-                 ("claims", "overview", "failures", "contents", "across", "envs", "significance",
-                  "provenance")]
+                 ("claims", "overview", "failures", "contents", "claims-detail", "across", "envs",
+                  "significance", "provenance")]
         self.assertEqual(order, sorted(order))
         self.assertEqual(re.findall(r"<h2[^>]*>", self.html)[0], '<h2 id="claims">')
+        # the compact verdicts at the top: claim, env, verdict, p, A12; one row per claim and env
+        top = [c for c in map(row_cells, html_rows(section(self.html, "claims"))) if c]
+        self.assertEqual(len(top), len(read_csv(self.file("claims.csv"))))
+        self.assertTrue(all(len(c) == 5 and c[2] == "env missing" for c in top))
         with open(self.file("summary.md"), encoding="utf-8") as f:
             heads = [x for x in f.read().splitlines() if x.startswith("## ")]
         self.assertEqual(heads[:3], ["## The paper's claims",

@@ -126,18 +126,22 @@ def overview_text(cell) -> str:
 
 def failures(panels: list, all_runs: pd.DataFrame, optimizers: list) -> list:
     """Failed episodes (NaN loss) of the analysed done runs and failed runs, per env (budget) and
-    optimizer: rows dict(env, budget, cells {optimizer: (episodes, runs) or None})."""
+    optimizer, for every (env, budget) with a run of any status (an env whose runs all failed has
+    no panel but a row here): rows dict(env, budget, cells {optimizer: (episodes, runs) or None})."""
+    by_key = {(it["panel"].env, it["panel"].budget): it["panel"] for it in panels}
+    keys = sorted({(e, int(b)) for e, b in zip(all_runs["env"], all_runs["budget"])})
     rows = []
-    for it in panels:
-        pn = it["panel"]
-        cell = all_runs[(all_runs["env"] == pn.env) & (all_runs["budget"] == pn.budget)]
+    for env, budget in keys:
+        pn = by_key.get((env, budget))
+        cell = all_runs[(all_runs["env"] == env) & (all_runs["budget"] == budget)]
         cells = {}
         for o in optimizers:
             c = cell[cell["optimizer"] == o]
             if c.empty:
                 cells[o] = None
                 continue
-            sel = pn.runs[pn.runs["optimizer"] == o]
-            cells[o] = (int(sel["failed_episodes"].sum()), int((c["status"] == "failed").sum()))
-        rows.append(dict(env=pn.env, budget=pn.budget, cells=cells))
+            eps = 0 if pn is None else int(pn.runs.loc[pn.runs["optimizer"] == o,
+                                                      "failed_episodes"].sum())
+            cells[o] = (eps, int((c["status"] == "failed").sum()))
+        rows.append(dict(env=env, budget=budget, cells=cells))
     return rows
