@@ -11,7 +11,7 @@
 #
 # Which slices (dims as the seed's Figures 8-15 where it gives them, else the first two dims) and
 # at which resolution (the particle envs at their 5-env-step variants and a coarse grid, so that the
-# whole gallery takes about 15 minutes on one core; README "Landscape gallery"):
+# whole gallery takes 12 to 18 minutes on one core: 706 s of CPU measured; README "Landscape gallery"):
 #
 #   env                     variant            dims (i,j)          res   why
 #   pinball-1x2             pinball-1x2        0,1                 61    seed Fig. 9 left
