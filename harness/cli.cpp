@@ -27,6 +27,7 @@
 #include "harness/runner.hpp"
 #include "harness/slurm_command.hpp"
 #include "harness/store.hpp"
+#include "optimizers/core/registry.hpp"
 #include "reference/crosscheck.hpp"
 
 namespace dsb {
@@ -44,7 +45,21 @@ struct RunArgs {
   int threads = 1;  // inside one rollout
   std::string shard;
   bool quiet = false;
+  std::vector<std::string> knobs;  // --set OPT.KNOB=VALUE, repeatable
 };
+
+// --set's help: the knobs of every optimizer that has some
+std::string knob_help() {
+  std::string h = "set a knob of an optimizer's config (repeatable; the run key keeps variants apart):";
+  for (const auto& e : optimizer_entries()) {
+    if (e.knobs.empty()) continue;
+    h += " " + e.name + ":";
+    for (std::size_t i = 0; i < e.knobs.size(); ++i) h += (i ? "," : "") + e.knobs[i];
+    h += ";";
+  }
+  h.pop_back();
+  return h;
+}
 
 // the flags that define the grid (also those of `harness slurm`)
 void add_grid_options(CLI::App& app, RunArgs& a) {
@@ -53,6 +68,7 @@ void add_grid_options(CLI::App& app, RunArgs& a) {
   app.add_option("--optimizer", a.optimizers, "optimizer names, comma-separated")->delimiter(',');
   app.add_option("--seeds", a.seeds, "number of seeds per (env, optimizer), seed indices 0..N-1");
   app.add_option("--budget", a.budget, "episodes per run (default 1000)");
+  app.add_option("--set", a.knobs, knob_help())->type_name("OPT.KNOB=VALUE");
 }
 
 void add_run_options(CLI::App& app, RunArgs& a) {
@@ -84,6 +100,7 @@ CheckedRun check_run_args(const RunArgs& a) {
   req.envs = a.envs;
   req.optimizers = a.optimizers;
   req.seeds = a.seeds;
+  for (const auto& k : a.knobs) parse_knob_setting(k, req.knobs);
   {
     // parsed here, not by CLI11, which saturates 99999999999999999999 to INT64_MAX
     std::int64_t b = 0;
@@ -120,6 +137,7 @@ std::string grid_flags(const RunArgs& a) {
   if (!a.envs.empty()) f += (f.empty() ? "" : " ") + std::string("--env ") + join(a.envs);
   if (!a.optimizers.empty()) f += " --optimizer " + join(a.optimizers);
   f += fmt::format(" --seeds {} --budget {}", a.seeds, a.budget);
+  for (const auto& k : a.knobs) f += " --set " + k;
   return f;
 }
 
@@ -223,7 +241,7 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
     shard_runs.assign(options.shards, 0);
     for (const PlannedRun& p : plan_grid(run.grid, {}, kVersion).pending) ++shard_runs[shard_of(p.key, options.shards)];
   }
-  const SlurmGridFlags flags{a.all, a.envs, a.optimizers, a.seeds, a.budget};
+  const SlurmGridFlags flags{a.all, a.envs, a.optimizers, a.seeds, a.budget, a.knobs};
   return command_slurm(flags, run.grid.size(), shard_runs, options, running_binary_path(), std::cout);
 }
 
