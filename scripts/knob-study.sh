@@ -7,7 +7,8 @@
 #
 # Each (env, variant) runs into OUTDIR/parts/ENV__VARIANT.sqlite (one writer per file, J at once,
 # cheapest first), then `harness merge` joins them into OUTDIR/knob-study.sqlite (runs keep their
-# resolved configs: variants differ by opt_config_hash) and scripts/knob_study_table.py writes
+# resolved configs: variants differ by opt_config_hash; OUTDIR/variants.csv names each config hash
+# by its variant) and scripts/knob_study_table.py writes
 # OUTDIR/knob_study.csv (median, quartiles, wins against the default per env and variant).
 # Interrupted? Run the same command again: every part resumes.
 #
@@ -94,10 +95,23 @@ run_part() {
   "$harness" --env "$env" --optimizer "$opt" $flags --seeds "$seeds" --budget "$(budget_of "$env")" \
     --jobs 1 --quiet --db "$out/parts/${env}__${label}.sqlite" && echo "  done: $env $label"
 }
+# the variants' names by config hash, for the table
+label_parts() {
+  for v in "${variants[@]}"; do
+    IFS='|' read -r label opt _ <<<"$v"
+    [[ $label == reference ]] && continue
+    for f in "$out"/parts/*__"$label".sqlite; do
+      [[ -e $f ]] || continue
+      sqlite3 -readonly "$f" "SELECT DISTINCT opt_config_hash FROM runs" | sed "s/\$/,$label/"
+    done
+  done | sort -u
+}
 export -f run_part budget_of
 export harness seeds out
 printf '%s\n' "${parts[@]}" | xargs -d '\n' -P "$jobs" -I{} bash -c 'run_part "$@"' _ {}
 
 rm -f "$out/knob-study.sqlite"
 "$harness" merge --into "$out/knob-study.sqlite" "$out"/parts/*.sqlite
-/usr/bin/python3 "$root/scripts/knob_study_table.py" "$out/knob-study.sqlite" --out "$out/knob_study.csv"
+{ echo "opt_config_hash,variant"; label_parts; } >"$out/variants.csv"
+/usr/bin/python3 "$root/scripts/knob_study_table.py" "$out/knob-study.sqlite" --variants "$out/variants.csv" \
+  --out "$out/knob_study.csv"
