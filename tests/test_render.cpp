@@ -65,6 +65,7 @@ TEST(Render, FrameStepsSpreadFromStartToEnd) {
   EXPECT_EQ(frame_steps(5, 5), (std::vector<int>{0, 1, 3, 4, 5}));
   EXPECT_EQ(frame_steps(1920, 4), (std::vector<int>{0, 640, 1280, 1920}));
   EXPECT_EQ(frame_steps(10, 1), (std::vector<int>{10}));
+  EXPECT_EQ(frame_steps(2, 5), (std::vector<int>{0, 1, 2}));  // more frames than steps
 }
 
 TEST(Render, CartpoleFinalTipIsTheLossAwayFromTheTarget) {

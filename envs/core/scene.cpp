@@ -1,6 +1,6 @@
 #include "envs/core/scene.hpp"
 
-#include <cmath>
+#include <algorithm>
 
 #include "common/error.hpp"
 
@@ -13,6 +13,8 @@ std::vector<int> frame_steps(int steps, int n) {
   std::vector<int> out;
   for (int k = 0; k < n; ++k)
     out.push_back(static_cast<int>((2LL * k * steps + (n - 1)) / (2LL * (n - 1))));
+  // more frames than steps: each step once
+  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 

@@ -66,7 +66,8 @@ struct Frame {
   Scene scene;
 };
 
-// `n` steps evenly spread over 0..steps, the first 0 and the last `steps` (n = 1: only the last);
+// `n` steps evenly spread over 0..steps, round(k steps / (n - 1)) for k = 0..n-1: the first 0 and
+// the last `steps` (n = 1: only the last); each step once, so fewer than n when n > steps + 1.
 // n >= 1, steps >= 0
 std::vector<int> frame_steps(int steps, int n);
 
