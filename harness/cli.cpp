@@ -23,6 +23,7 @@
 #include "envs/core/lazy_model.hpp"
 #include "harness/plan.hpp"
 #include "harness/plan_report.hpp"
+#include "harness/render_command.hpp"
 #include "harness/report_refresher.hpp"
 #include "harness/runner.hpp"
 #include "harness/slurm_command.hpp"
@@ -299,6 +300,15 @@ int harness_main(int argc, char** argv) {
   eval->add_option("--x", eval_x, "comma-separated parameters in [-1, 1]")->required();
   eval->add_flag("--grad", eval_grad, "also print dLoss/dx (normalized units)");
 
+  RenderArgs render_args;
+  auto* render = app.add_subcommand("render", "pictures of a rollout at a few time points (PNG strip or animated GIF)");
+  render->add_option("--env", render_args.env, "env name (a simulated env)")->required();
+  render->add_option("--x", render_args.x, "comma-separated parameters in [-1, 1]");
+  render->add_option("--best-of", render_args.best_of, "harness database: render the best_x of the env's best done run");
+  render->add_option("--out", render_args.out, "FILE.png (frames side by side) or FILE.gif (animation)")->required();
+  render->add_option("--frames", render_args.frames, "time points from the start to the end (default 5)");
+  render->add_option("--width", render_args.width, "pixels per frame (default 320)");
+
   std::string gc_env;
   GradientSurveyOptions gc;
   bool gc_json = false;
@@ -349,13 +359,15 @@ int harness_main(int argc, char** argv) {
   exporter->add_option("--out", export_out, "CSV file to write (csv), or a new or empty folder (ioh)")->required();
   exporter->add_option("--format", export_format, "csv (default: the baseline result table) or ioh (IOHanalyzer)");
 
-  std::string report_db = "results.sqlite", report_out = "report", report_landscapes, report_gradient_quality;
+  std::string report_db = "results.sqlite", report_out = "report", report_landscapes, report_gradient_quality,
+              report_renders;
   auto* report = app.add_subcommand("report", "comparison report (index.html, figures, tables) from a database");
   report->add_option("--db", report_db, "results database (default ./results.sqlite)");
   report->add_option("--out", report_out, "output folder (default ./report)");
   report->add_option("--landscapes", report_landscapes, "folder of `harness landscape` CSVs to plot");
   report->add_option("--gradient-quality", report_gradient_quality,
                      "CSV of scripts/gradient-quality.sh (default data/gradient_quality.csv)");
+  report->add_option("--renders", report_renders, "folder of scripts/render-best.sh's render_<env>.png to show");
 
   try {
     app.parse(argc, argv);
@@ -383,8 +395,9 @@ int harness_main(int argc, char** argv) {
     if (merge->parsed()) return command_merge(merge_into, merge_inputs);
     if (exporter->parsed()) return command_export(export_db, export_out, export_format);
     if (report->parsed())
-      return command_report(report_db, report_out, report_landscapes, false, report_gradient_quality);
+      return command_report(report_db, report_out, report_landscapes, false, report_gradient_quality, report_renders);
     if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
+    if (render->parsed()) return command_render(render_args);
     if (gradcheck->parsed())
       return command_gradcheck(gc_env, gc, gc_json);
     return run->parsed() ? command_run(run_args, run_report) : command_run(main_args, main_report);
