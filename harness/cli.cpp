@@ -23,10 +23,12 @@
 #include "envs/core/lazy_model.hpp"
 #include "harness/plan.hpp"
 #include "harness/plan_report.hpp"
+#include "harness/render_command.hpp"
 #include "harness/report_refresher.hpp"
 #include "harness/runner.hpp"
 #include "harness/slurm_command.hpp"
 #include "harness/store.hpp"
+#include "optimizers/core/registry.hpp"
 #include "reference/crosscheck.hpp"
 
 namespace dsb {
@@ -44,7 +46,21 @@ struct RunArgs {
   int threads = 1;  // inside one rollout
   std::string shard;
   bool quiet = false;
+  std::vector<std::string> knobs;  // --set OPT.KNOB=VALUE, repeatable
 };
+
+// --set's help: the knobs of every optimizer that has some
+std::string knob_help() {
+  std::string h = "set a knob of an optimizer's config (repeatable; the run key keeps variants apart):";
+  for (const auto& e : optimizer_entries()) {
+    if (e.knobs.empty()) continue;
+    h += " " + e.name + ":";
+    for (std::size_t i = 0; i < e.knobs.size(); ++i) h += (i ? "," : "") + e.knobs[i];
+    h += ";";
+  }
+  h.pop_back();
+  return h;
+}
 
 // the flags that define the grid (also those of `harness slurm`)
 void add_grid_options(CLI::App& app, RunArgs& a) {
@@ -53,6 +69,7 @@ void add_grid_options(CLI::App& app, RunArgs& a) {
   app.add_option("--optimizer", a.optimizers, "optimizer names, comma-separated")->delimiter(',');
   app.add_option("--seeds", a.seeds, "number of seeds per (env, optimizer), seed indices 0..N-1");
   app.add_option("--budget", a.budget, "episodes per run (default 1000)");
+  app.add_option("--set", a.knobs, knob_help())->type_name("OPT.KNOB=VALUE");
 }
 
 void add_run_options(CLI::App& app, RunArgs& a) {
@@ -84,6 +101,7 @@ CheckedRun check_run_args(const RunArgs& a) {
   req.envs = a.envs;
   req.optimizers = a.optimizers;
   req.seeds = a.seeds;
+  for (const auto& k : a.knobs) parse_knob_setting(k, req.knobs);
   {
     // parsed here, not by CLI11, which saturates 99999999999999999999 to INT64_MAX
     std::int64_t b = 0;
@@ -120,6 +138,7 @@ std::string grid_flags(const RunArgs& a) {
   if (!a.envs.empty()) f += (f.empty() ? "" : " ") + std::string("--env ") + join(a.envs);
   if (!a.optimizers.empty()) f += " --optimizer " + join(a.optimizers);
   f += fmt::format(" --seeds {} --budget {}", a.seeds, a.budget);
+  for (const auto& k : a.knobs) f += " --set " + k;
   return f;
 }
 
@@ -223,7 +242,7 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
     shard_runs.assign(options.shards, 0);
     for (const PlannedRun& p : plan_grid(run.grid, {}, kVersion).pending) ++shard_runs[shard_of(p.key, options.shards)];
   }
-  const SlurmGridFlags flags{a.all, a.envs, a.optimizers, a.seeds, a.budget};
+  const SlurmGridFlags flags{a.all, a.envs, a.optimizers, a.seeds, a.budget, a.knobs};
   return command_slurm(flags, run.grid.size(), shard_runs, options, running_binary_path(), std::cout);
 }
 
@@ -281,6 +300,15 @@ int harness_main(int argc, char** argv) {
   eval->add_option("--x", eval_x, "comma-separated parameters in [-1, 1]")->required();
   eval->add_flag("--grad", eval_grad, "also print dLoss/dx (normalized units)");
 
+  RenderArgs render_args;
+  auto* render = app.add_subcommand("render", "pictures of a rollout at a few time points (PNG strip or animated GIF)");
+  render->add_option("--env", render_args.env, "env name (a simulated env)")->required();
+  render->add_option("--x", render_args.x, "comma-separated parameters in [-1, 1]");
+  render->add_option("--best-of", render_args.best_of, "harness database: render the best_x of the env's best done run");
+  render->add_option("--out", render_args.out, "FILE.png (frames side by side) or FILE.gif (animation)")->required();
+  render->add_option("--frames", render_args.frames, "time points from the start to the end (default 5)");
+  render->add_option("--width", render_args.width, "pixels per frame (default 320)");
+
   std::string gc_env;
   GradientSurveyOptions gc;
   bool gc_json = false;
@@ -331,13 +359,15 @@ int harness_main(int argc, char** argv) {
   exporter->add_option("--out", export_out, "CSV file to write (csv), or a new or empty folder (ioh)")->required();
   exporter->add_option("--format", export_format, "csv (default: the baseline result table) or ioh (IOHanalyzer)");
 
-  std::string report_db = "results.sqlite", report_out = "report", report_landscapes, report_gradient_quality;
+  std::string report_db = "results.sqlite", report_out = "report", report_landscapes, report_gradient_quality,
+              report_renders;
   auto* report = app.add_subcommand("report", "comparison report (index.html, figures, tables) from a database");
   report->add_option("--db", report_db, "results database (default ./results.sqlite)");
   report->add_option("--out", report_out, "output folder (default ./report)");
   report->add_option("--landscapes", report_landscapes, "folder of `harness landscape` CSVs to plot");
   report->add_option("--gradient-quality", report_gradient_quality,
                      "CSV of scripts/gradient-quality.sh (default data/gradient_quality.csv)");
+  report->add_option("--renders", report_renders, "folder of scripts/render-best.sh's render_<env>.png to show");
 
   try {
     app.parse(argc, argv);
@@ -365,8 +395,9 @@ int harness_main(int argc, char** argv) {
     if (merge->parsed()) return command_merge(merge_into, merge_inputs);
     if (exporter->parsed()) return command_export(export_db, export_out, export_format);
     if (report->parsed())
-      return command_report(report_db, report_out, report_landscapes, false, report_gradient_quality);
+      return command_report(report_db, report_out, report_landscapes, false, report_gradient_quality, report_renders);
     if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
+    if (render->parsed()) return command_render(render_args);
     if (gradcheck->parsed())
       return command_gradcheck(gc_env, gc, gc_json);
     return run->parsed() ? command_run(run_args, run_report) : command_run(main_args, main_report);

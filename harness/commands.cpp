@@ -60,10 +60,7 @@ int command_list() {
   return 0;
 }
 
-namespace {
-
-std::vector<double> checked_point(const Env& env, const std::string& x_text,
-                                  const std::string& option = "--x") {
+std::vector<double> checked_point(const Env& env, const std::string& x_text, const std::string& option) {
   const auto x = parse_number_list(option, x_text);
   if (static_cast<int>(x.size()) != env.dim())
     throw UsageError(fmt::format("{} has {} values, env '{}' needs {}", option, x.size(), env.name(), env.dim()));
@@ -72,6 +69,8 @@ std::vector<double> checked_point(const Env& env, const std::string& x_text,
       throw UsageError(fmt::format("{}: value {} at position {} is outside [-1, 1]", option, x[i], i));
   return x;
 }
+
+namespace {
 
 // JSON number, or null for NaN/Inf (JSON has neither)
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }

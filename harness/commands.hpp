@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "envs/core/env.hpp"
 #include "envs/core/gradient_check.hpp"
 
 namespace dsb {
@@ -38,11 +39,14 @@ int command_export(const std::string& db_path, const std::string& out_path, cons
 // Runs the Python report generator (reports/make_report.py) with Debian's system interpreter.
 // quiet: the generator's stdout is dropped (refreshes during a grid run); gradient_quality: a CSV of
 // scripts/gradient-quality.sh for the "Gradient quality" section (empty: the generator's default,
-// data/gradient_quality.csv)
+// data/gradient_quality.csv); renders: a folder of scripts/render-best.sh's render_<env>.png
 int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
-                   bool quiet = false, const std::string& gradient_quality = "");
+                   bool quiet = false, const std::string& gradient_quality = "", const std::string& renders = "");
 
 // Parses a comma-separated list of finite numbers; UsageError naming the bad token.
 std::vector<double> parse_number_list(const std::string& option, const std::string& text);
+// A point of env's box from text: UsageError for a malformed number, a wrong dimension or a value
+// outside [-1, 1], naming the option and the value.
+std::vector<double> checked_point(const Env& env, const std::string& x_text, const std::string& option = "--x");
 
 }  // namespace dsb

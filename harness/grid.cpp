@@ -48,6 +48,11 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
     if (!seen.insert("opt:" + name).second) throw UsageError("optimizer '" + name + "' given twice");
     optimizer_entry(name);
   }
+  for (const auto& [name, settings] : req.knobs) {
+    if (!seen.count("opt:" + name))
+      throw UsageError("--set names optimizer '" + name + "', which is not in the grid");
+    make_optimizer(name, settings);  // unknown knob, malformed or out-of-range value: UsageError
+  }
 
   std::vector<RunSpec> grid;
   for (std::size_t e = 0; e < envs.size(); ++e) {
@@ -65,11 +70,23 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
         continue;
       }
       for (int s = 0; s < req.seeds; ++s) {
-        grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s)});
+        const auto knobs = req.knobs.find(opt);
+        grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s),
+                        knobs == req.knobs.end() ? KnobSettings{} : knobs->second});
       }
     }
   }
   return grid;
+}
+
+void parse_knob_setting(const std::string& text, std::map<std::string, KnobSettings>& knobs) {
+  const auto dot = text.find('.');
+  const auto eq = text.find('=');
+  if (dot == std::string::npos || eq == std::string::npos || dot == 0 || eq < dot + 2 || eq + 1 == text.size())
+    throw UsageError("--set wants OPTIMIZER.KNOB=VALUE (e.g. boleap.sigma0=0.3), got '" + text + "'");
+  const std::string opt = text.substr(0, dot), key = text.substr(dot + 1, eq - dot - 1);
+  if (!knobs[opt].emplace(key, text.substr(eq + 1)).second)
+    throw UsageError("--set " + opt + "." + key + " given twice");
 }
 
 }  // namespace dsb

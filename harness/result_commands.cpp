@@ -90,7 +90,7 @@ int command_export(const std::string& db_path, const std::string& out_path, cons
 }
 
 int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
-                   bool quiet, const std::string& gradient_quality) {
+                   bool quiet, const std::string& gradient_quality, const std::string& renders) {
   if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
   // Debian's pandas/matplotlib/scipy import only in Debian's interpreter; DSB_PYTHON overrides
   const char* python_env = std::getenv("DSB_PYTHON");
@@ -107,6 +107,10 @@ int command_report(const std::string& db_path, const std::string& out_dir, const
   if (!gradient_quality.empty()) {
     args.push_back("--gradient-quality");
     args.push_back(gradient_quality);
+  }
+  if (!renders.empty()) {
+    args.push_back("--renders");
+    args.push_back(renders);
   }
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());

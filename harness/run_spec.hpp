@@ -2,6 +2,7 @@
 // One cell of the grid and what a finished run produced.
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,7 @@ struct RunSpec {
   int seed = 0;              // seed index 0..seeds-1
   std::int64_t budget = 0;   // episodes
   std::uint64_t rng_seed = 0;  // per-run seed = hash(seed index, env, optimizer)
+  std::map<std::string, std::string> knobs;  // optimizer knobs set on the command line (--set)
 };
 
 // per-run seed: FNV-1a over "env\0optimizer\0seed", mixed once more by splitmix64

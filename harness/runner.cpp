@@ -126,7 +126,7 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
         RunResult r;
         for (int attempt = 0;; ++attempt) {
           // a resumed run replays its journal; one that diverged from it starts over without
-          const auto opt = make_optimizer(p.spec.optimizer);
+          const auto opt = make_optimizer(p.spec.optimizer, p.spec.knobs);
           CommitListener listener(store, start.run_id, start.committed_episodes);
           RunControl control{&listener, &stop, std::move(start.journal), start.committed_episodes};
           r = execute_run(p.spec, *env, *opt, &progress.episodes_of(w), &team, &control);

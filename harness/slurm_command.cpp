@@ -173,6 +173,7 @@ std::string grid_flags_text(const SlurmGridFlags& g) {
   if (!g.envs.empty()) words.insert(words.end(), {"--env", shell_quote(join(g.envs, ","))});
   if (!g.optimizers.empty()) words.insert(words.end(), {"--optimizer", shell_quote(join(g.optimizers, ","))});
   words.insert(words.end(), {"--seeds", std::to_string(g.seeds), "--budget", shell_quote(g.budget)});
+  for (const auto& k : g.knobs) words.insert(words.end(), {"--set", shell_quote(k)});
   return join(words, " ");
 }
 

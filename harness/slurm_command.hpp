@@ -18,6 +18,7 @@ struct SlurmGridFlags {
   std::vector<std::string> envs, optimizers;
   int seeds = 1;
   std::string budget = "1000";
+  std::vector<std::string> knobs;  // --set OPT.KNOB=VALUE
 };
 
 // Slurm's default MaxArraySize is 1001: array indices 0..1000

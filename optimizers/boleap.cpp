@@ -19,6 +19,8 @@ void BoLeapConfig::validate() const {
   if (max_descent_steps < 1) throw ConfigError("boleap", "max_descent_steps", "must be >= 1");
   if (patience < 1) throw ConfigError("boleap", "patience", "must be >= 1");
   if (episodes_per_leap < 1) throw ConfigError("boleap", "episodes_per_leap", "must be >= 1");
+  if (elite < 0 || elite > population)
+    throw ConfigError("boleap", "elite", "must be in [0, population] (0 = population / 2), got " + std::to_string(elite));
   adam.validate("boleap");
   bo.validate();
 }
@@ -29,7 +31,7 @@ nlohmann::json BoLeapConfig::to_json() const {
           {"max_descent_steps", max_descent_steps},
           {"patience", patience},
           {"episodes_per_leap", episodes_per_leap},
-          {"elite", "best half of the population"},
+          {"elite", elite_count()},
           {"adam", adam.to_json()},
           {"bo", bo.to_json()}};
 }
@@ -110,7 +112,7 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
       std::iota(order.begin(), order.end(), 0);
       std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return fs[a] < fs[b]; });
       Eigen::VectorXd s = Eigen::VectorXd::Zero(d);
-      const int elite = K / 2;
+      const int elite = cfg_.elite_count();
       for (int i = 0; i < elite; ++i) s += xs[order[i]];
       s /= elite;
       // Adam steps, each one episode with a gradient; stop after `patience` non-improving steps
@@ -191,6 +193,20 @@ nlohmann::json BoLeap::diagnostics() const {
 
 std::unique_ptr<Optimizer> make_boleap(const BoLeapConfig& cfg) {
   return std::make_unique<BoLeap>(cfg);
+}
+
+KnobTable boleap_knobs(BoLeapConfig& cfg) {
+  KnobTable t("boleap");
+  t.add("population", &cfg.population).add("sigma0", &cfg.sigma0);
+  t.add("max_descent_steps", &cfg.max_descent_steps).add("patience", &cfg.patience);
+  t.add("episodes_per_leap", &cfg.episodes_per_leap).add("elite", &cfg.elite).add("lr", &cfg.adam.lr);
+  return t;
+}
+
+std::unique_ptr<Optimizer> make_boleap_with(const KnobSettings& settings) {
+  BoLeapConfig cfg;
+  boleap_knobs(cfg).apply(settings);
+  return make_boleap(cfg);
 }
 
 }  // namespace dsb

@@ -14,6 +14,7 @@
 #include "optimizers/bo/bo.hpp"
 #include "optimizers/cmaes.hpp"
 #include "optimizers/core/adam.hpp"
+#include "optimizers/core/knobs.hpp"
 #include "optimizers/core/optimizer.hpp"
 
 namespace dsb {
@@ -24,8 +25,10 @@ struct BoLeapConfig {
   int max_descent_steps = 10;   // J (chosen here; paper: not given)
   int patience = 3;             // stop a descent after 3 non-improving steps (paper)
   int episodes_per_leap = 100;  // semi-local episodes before BO proposes again (paper: ~100)
+  int elite = 0;                // candidates averaged into the descent's start; 0 = K / 2 (best half)
   AdamConfig adam;              // lr 0.1 (design)
   BoConfig bo;                  // GP, LCB (beta 1), initial design
+  int elite_count() const { return elite > 0 ? elite : population / 2; }
   void validate() const;
   nlohmann::json to_json() const;
 };
@@ -69,5 +72,9 @@ class BoLeap : public Optimizer {
 };
 
 std::unique_ptr<Optimizer> make_boleap(const BoLeapConfig& cfg = {});
+// the fields `--set boleap.KEY=VALUE` may set: population, sigma0, max_descent_steps, patience,
+// episodes_per_leap, elite, lr (Adam's)
+KnobTable boleap_knobs(BoLeapConfig& cfg);
+std::unique_ptr<Optimizer> make_boleap_with(const KnobSettings& settings);
 
 }  // namespace dsb

@@ -402,4 +402,17 @@ nlohmann::json Cmaes::diagnostics() const {
 
 std::unique_ptr<Optimizer> make_cmaes(const CmaesConfig& cfg) { return std::make_unique<Cmaes>(cfg); }
 
+KnobTable cmaes_knobs(CmaesConfig& cfg) {
+  KnobTable t("cmaes");
+  t.add("sigma0", &cfg.sigma0).add("population", &cfg.population);
+  t.add("ipop", &cfg.ipop).add("ipop_factor", &cfg.ipop_factor);
+  return t;
+}
+
+std::unique_ptr<Optimizer> make_cmaes_with(const KnobSettings& settings) {
+  CmaesConfig cfg;
+  cmaes_knobs(cfg).apply(settings);
+  return make_cmaes(cfg);
+}
+
 }  // namespace dsb

@@ -41,6 +41,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/rng.hpp"
+#include "optimizers/core/knobs.hpp"
 #include "optimizers/core/optimizer.hpp"
 
 namespace dsb {
@@ -161,5 +162,8 @@ class Cmaes : public Optimizer {
 };
 
 std::unique_ptr<Optimizer> make_cmaes(const CmaesConfig& cfg = {});
+// the fields `--set cmaes.KEY=VALUE` may set: sigma0, population, ipop (true/false), ipop_factor
+KnobTable cmaes_knobs(CmaesConfig& cfg);
+std::unique_ptr<Optimizer> make_cmaes_with(const KnobSettings& settings);
 
 }  // namespace dsb

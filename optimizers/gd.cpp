@@ -14,12 +14,13 @@ void DescentConfig::validate(const std::string& owner) const {
   if (max_steps < 0) throw ConfigError(owner, "max_steps", "must be >= 0");
   if (patience < 0) throw ConfigError(owner, "patience", "must be >= 0");
   if (!(min_improvement >= 0.0)) throw ConfigError(owner, "min_improvement", "must be >= 0");
+  if (!(start_scale > 0.0 && start_scale <= 1.0)) throw ConfigError(owner, "start_scale", "must be in (0, 1]");
 }
 
 nlohmann::json DescentConfig::to_json() const {
   return {{"adam", adam.to_json()},       {"random_starts", random_starts},
           {"max_steps", max_steps},       {"patience", patience},
-          {"min_improvement", min_improvement}};
+          {"min_improvement", min_improvement}, {"start_scale", start_scale}};
 }
 
 DescentConfig gd_defaults() { return DescentConfig{}; }
@@ -68,8 +69,8 @@ class Descents : public Optimizer {
     const int n = f.dim();
     std::vector<double> x(n), grad(n), best_x(n), best_grad(n);
     for (;;) {
-      // start: box centre for gd, uniform random for rand-descents
-      for (auto& xi : x) xi = cfg_.random_starts ? rng.uniform(-1.0, 1.0) : 0.0;
+      // start: box centre for gd, uniform in [-start_scale, start_scale]^d for rand-descents
+      for (auto& xi : x) xi = cfg_.random_starts ? rng.uniform(-cfg_.start_scale, cfg_.start_scale) : 0.0;
       descend(f, x, grad, best_x, best_grad);
       if (!cfg_.random_starts) return;  // only reached when the descent stops by itself
     }
@@ -152,6 +153,26 @@ std::unique_ptr<Optimizer> make_gd(const DescentConfig& cfg) {
 
 std::unique_ptr<Optimizer> make_rand_descents(const DescentConfig& cfg) {
   return std::make_unique<Descents>("rand-descents", cfg);
+}
+
+KnobTable descent_knobs(const std::string& owner, DescentConfig& cfg) {
+  KnobTable t(owner);
+  t.add("lr", &cfg.adam.lr).add("max_steps", &cfg.max_steps).add("patience", &cfg.patience);
+  t.add("min_improvement", &cfg.min_improvement);
+  if (cfg.random_starts) t.add("start_scale", &cfg.start_scale);
+  return t;
+}
+
+std::unique_ptr<Optimizer> make_gd_with(const KnobSettings& settings) {
+  DescentConfig cfg = gd_defaults();
+  descent_knobs("gd", cfg).apply(settings);
+  return make_gd(cfg);
+}
+
+std::unique_ptr<Optimizer> make_rand_descents_with(const KnobSettings& settings) {
+  DescentConfig cfg = rand_descents_defaults();
+  descent_knobs("rand-descents", cfg).apply(settings);
+  return make_rand_descents(cfg);
 }
 
 }  // namespace dsb

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "optimizers/core/adam.hpp"
+#include "optimizers/core/knobs.hpp"
 #include "optimizers/core/optimizer.hpp"
 
 namespace dsb {
@@ -20,6 +21,7 @@ struct DescentConfig {
   int max_steps = 0;      // episodes per descent; 0 = until the budget ends
   int patience = 0;       // stop a descent after this many non-improving steps; 0 = never
   double min_improvement = 0.0;  // relative improvement that counts as progress
+  double start_scale = 1.0;      // random starts uniform in [-start_scale, start_scale]^d (1 = the box)
   void validate(const std::string& owner) const;
   nlohmann::json to_json() const;
 };
@@ -29,5 +31,10 @@ DescentConfig rand_descents_defaults();  // random starts, 100 steps, patience 1
 
 std::unique_ptr<Optimizer> make_gd(const DescentConfig& cfg = gd_defaults());
 std::unique_ptr<Optimizer> make_rand_descents(const DescentConfig& cfg = rand_descents_defaults());
+// the fields `--set gd.KEY=VALUE` / `--set rand-descents.KEY=VALUE` may set: lr (Adam's),
+// max_steps, patience, min_improvement, start_scale (rand-descents only)
+KnobTable descent_knobs(const std::string& owner, DescentConfig& cfg);
+std::unique_ptr<Optimizer> make_gd_with(const KnobSettings& settings);
+std::unique_ptr<Optimizer> make_rand_descents_with(const KnobSettings& settings);
 
 }  // namespace dsb

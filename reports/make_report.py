@@ -3,7 +3,7 @@
 self-contained folder with index.html, summary.md, PNG figures and CSV tables.
 
 usage: /usr/bin/python3 reports/make_report.py --db FILE --out DIR [--landscapes DIR] [--build-type T]
-                                              [--claims FILE] [--gradient-quality FILE]
+                                              [--claims FILE] [--gradient-quality FILE] [--renders DIR]
 
 Needs pandas, matplotlib and scipy (Debian: python3-pandas python3-matplotlib python3-scipy, which
 only Debian's /usr/bin/python3 sees). Exit codes: 0 written, 2 bad input or missing modules.
@@ -20,7 +20,8 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REQUIRED = ("pandas", "matplotlib", "scipy", "scipy.stats")
-OWN_FILES = re.compile(r"^(curves_.+\.png|final_.+\.(png|csv)|landscape_.+\.png|gradient_quality\.csv|gallery\.html)$")
+OWN_FILES = re.compile(r"^(curves_.+\.png|final_.+\.(png|csv)|landscape_.+\.png|render_.+\.png|"
+                       r"gradient_quality\.csv|gallery\.html)$")
 DEFAULT_GRADIENT_QUALITY = os.path.join(os.path.dirname(HERE), "data", "gradient_quality.csv")
 
 
@@ -59,6 +60,8 @@ def parse_args(argv):
     p.add_argument("--gradient-quality",
                    help="CSV of scripts/gradient-quality.sh for the 'Gradient quality' section "
                         "(default: data/gradient_quality.csv, the section says so when it is absent)")
+    p.add_argument("--renders", help="folder of render_<env>.png from scripts/render-best.sh, shown "
+                                     "in each env's section")
     return p.parse_args(argv)
 
 
@@ -93,6 +96,8 @@ def main(argv=None) -> int:
             return fail(str(e))
     if args.landscapes is not None and not os.path.isdir(args.landscapes):
         return fail(f"--landscapes '{args.landscapes}' is not a directory")
+    if args.renders is not None and not os.path.isdir(args.renders):
+        return fail(f"--renders '{args.renders}' is not a directory")
     try:
         os.makedirs(args.out, exist_ok=True)
         probe = os.path.join(args.out, ".make_report_probe")
@@ -103,7 +108,7 @@ def main(argv=None) -> int:
         return fail(f"cannot write to --out '{args.out}': {e.strerror or e}")
     made = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     written = build.build(data, args.out, args.landscapes, args.build_type, made, claim_list,
-                          gq_table, gq_path)
+                          gq_table, gq_path, args.renders)
     for name in sorted(os.listdir(args.out)):        # stale figures/tables of an older report
         if OWN_FILES.match(name) and name not in written:
             os.remove(os.path.join(args.out, name))

@@ -826,6 +826,42 @@ class TestGradientQuality(ReportCase):
         self.assertIn("| fluid (as fluid-h5) | 10 | 3 | 33.3% |", md)
 
 
+def write_renders(tmp):
+    """A --renders folder: a picture for sphere-2 (any PNG will do) and one of an env without runs."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.image
+    d = os.path.join(tmp, "renders")
+    os.makedirs(d)
+    for env in ("sphere-2", "nosuchenv"):
+        matplotlib.image.imsave(os.path.join(d, f"render_{env}.png"), [[0.0, 1.0], [1.0, 0.0]])
+    return ("--renders", d)
+
+
+class TestRenders(ReportCase):
+    """--renders DIR: render_<env>.png of the envs in the database are copied and shown in their
+    section with the best run (smallest best_loss, ties to the smallest run_id) in the caption."""
+    extra = staticmethod(write_renders)
+
+    def test_copied_and_captioned(self):
+        with open(os.path.join(self.tmp, "renders", "render_sphere-2.png"), "rb") as f:
+            src = f.read()
+        with open(self.file("render_sphere-2.png"), "rb") as f:
+            self.assertEqual(f.read(), src)
+        self.assertFalse(os.path.exists(self.file("render_nosuchenv.png")))
+        con = sqlite3.connect(self.db)
+        opt, seed, best = con.execute(
+            "SELECT optimizer, seed, best_loss FROM runs WHERE env='sphere-2' AND status='done' AND "
+            "best_loss IS NOT NULL ORDER BY best_loss, run_id LIMIT 1").fetchone()
+        con.close()
+        self.assertIn('src="render_sphere-2.png"', self.html)
+        self.assertIn(f"sphere-2: best run ({opt}, seed {seed}, loss {best:.4g}) at 4 time points", self.html)
+        # inside sphere-2's own section
+        start = self.html.index('id="env-sphere-2"')
+        self.assertGreater(self.html.index('src="render_sphere-2.png"'), start)
+        self.assertEqual(self.html.count("<img src=\"render_"), 1)
+
+
 class TestBadInput(unittest.TestCase):
     def setUp(self):
         self.tmp = tempfile.mkdtemp(prefix="dsb_report_bad_")

@@ -7,7 +7,7 @@ packages=(
   build-essential cmake pkg-config git
   libeigen3-dev libsqlite3-dev sqlite3
   libnlopt-cxx-dev libgtest-dev libgmock-dev libbenchmark-dev
-  libcli11-dev nlohmann-json3-dev libfmt-dev libsleef-dev zlib1g-dev
+  libcli11-dev nlohmann-json3-dev libfmt-dev libsleef-dev zlib1g-dev libgd-dev
   libmujoco-dev libqhull-dev libbullet-dev
   python3 python3-pandas python3-matplotlib python3-scipy
   slurmctld slurmd slurm-client munge

@@ -315,6 +315,12 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
       {"--env sphere-2 --optimizer random --budget 99999999999999999999", "99999999999999999999"},
       {"--env sphere-2 --optimizer random --budget 1000001", "1000001"},
       {"--all --bogus-flag", "--bogus-flag"},
+      {"--env sphere-2 --optimizer boleap --set boleap.sigma0", "boleap.sigma0"},
+      {"--env sphere-2 --optimizer boleap --set boleap.nosuchknob=1", "nosuchknob"},
+      {"--env sphere-2 --optimizer boleap --set boleap.sigma0=-0.5", "sigma0"},
+      {"--env sphere-2 --optimizer boleap --set boleap.patience=2.5", "2.5"},
+      {"--env sphere-2 --optimizer boleap --set cmaes.sigma0=0.3", "cmaes"},
+      {"--env sphere-2 --optimizer random --set random.x=1", "random"},
   };
   for (const auto& [args, bad] : cases) {
     const auto r = harness(args + " --db " + db("keep.sqlite"));
@@ -364,6 +370,29 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_NE(r.err.find(path), std::string::npos) << r.err;
   }
+}
+
+TEST_F(HarnessCli, KnobVariantsAreSeparateRunsWithTheirOwnConfigs) {
+  // a knob left at its default is the default run (same config hash, nothing to do); another
+  // value is another run, stored with its resolved config, with different evals
+  const std::string base = "--env sphere-10 --optimizer rand-descents --seeds 1 --budget 50 --quiet --db " + db("k.sqlite");
+  ASSERT_EQ(harness(base).code, 0);
+  const auto r = harness(base + " --set rand-descents.start_scale=1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT COUNT(*) FROM runs"), "1");
+  ASSERT_EQ(harness(base + " --set rand-descents.start_scale=0.1 --set rand-descents.max_steps=7").code, 0);
+  EXPECT_EQ(scalar(db("k.sqlite"), "SELECT COUNT(*) FROM runs WHERE status='done'"), "2");
+  const auto cfg = nlohmann::json::parse(scalar(
+      db("k.sqlite"), "SELECT c.json FROM runs r JOIN configs c ON c.hash = r.opt_config_hash ORDER BY r.run_id DESC"));
+  EXPECT_EQ(cfg["start_scale"].get<double>(), 0.1);
+  EXPECT_EQ(cfg["max_steps"].get<int>(), 7);
+  EXPECT_NE(scalar(db("k.sqlite"), "SELECT loss FROM evals WHERE run_id=1 AND episode=0"),
+            scalar(db("k.sqlite"), "SELECT loss FROM evals WHERE run_id=2 AND episode=0"));
+  // a Slurm array runs the same variant
+  const auto slurm = harness("slurm --env sphere-10 --optimizer rand-descents --seeds 2 --budget 50 --set "
+                             "rand-descents.max_steps=7 --shards 2 --dir " + db("slurm"));
+  ASSERT_EQ(slurm.code, 0) << slurm.err;
+  EXPECT_NE(read(dir_ / "slurm" / "array.sbatch").find("--set rand-descents.max_steps=7 --shard"), std::string::npos);
 }
 
 TEST_F(HarnessCli, EvalPrintsTheLossAndGradientAsJson) {

@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/thread_team.hpp"
+#include "envs/core/scene.hpp"
 
 namespace dsb {
 
@@ -95,6 +96,14 @@ class Env {
 
   // nullptr when the env has no per-step interface
   virtual std::unique_ptr<RlEnv> make_rl() const { return nullptr; }
+
+  // Pictures of the rollout at x (`harness render`): the state after each of frame_steps(steps, n)
+  // with the target drawn into every frame, recorded from the env's own rollout. Envs that are not
+  // simulated (synthetic functions) are not renderable and return no frames.
+  virtual bool renderable() const { return false; }
+  virtual std::vector<Frame> frames(std::span<const double> /*x*/, int /*n*/, ThreadTeam& /*team*/) const {
+    return {};
+  }
 
  protected:
   virtual double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const = 0;

@@ -39,11 +39,13 @@ double run_episode(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, st
                    int env_steps, const EpisodeObjective& objective) {
   const int adim = model.action_dim();
   ws.reset_state(model);
+  if (ws.observer) ws.observer->at_step(0, ws.particles, ws.poses);
   double loss = 0.0;
   for (int k = 0; k < env_steps; ++k) {
     env_step(model, ws, team, actions.data() + static_cast<std::size_t>(k) * adim, nullptr);
     if (!state_is_finite(ws.particles, team)) return kNaN;
     loss += objective.step_loss(k, ws.particles, ws.poses, team);
+    if (ws.observer) ws.observer->at_step(k + 1, ws.particles, ws.poses);
   }
   return loss;
 }

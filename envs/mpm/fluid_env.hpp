@@ -30,6 +30,8 @@ class FluidEnv : public Env {
   nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
+  bool renderable() const override { return true; }
+  std::vector<dsb::Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // render_mpm.cpp
   // the cube's height above the tank floor after the last rollout in ws (NaN if it blew up)
   double episode_metric(const Workspace& ws) const override;
 

@@ -52,6 +52,14 @@ struct PhaseTimes {
   double other = 0.0;              // tapes, checkpoints, losses
 };
 
+// Sees the state at the env-step boundaries of run_episode (`harness render`): step 0 is the
+// initial state, step k the state after env step k.
+class EpisodeObserver {
+ public:
+  virtual ~EpisodeObserver() = default;
+  virtual void at_step(int step, const std::vector<Particle>& particles, const std::vector<Pose>& poses) = 0;
+};
+
 struct MpmWorkspace {
   explicit MpmWorkspace(const MpmModel& model);
 
@@ -72,6 +80,7 @@ struct MpmWorkspace {
   std::vector<PoseAdjoint> pose_adj;
   GridAdjoint grid_adj;
   PhaseTimes* phase_times = nullptr;  // not owned
+  EpisodeObserver* observer = nullptr;  // not owned; run_episode calls it when set (render only)
 
   void reset_state(const MpmModel& model);  // particles and poses to the model's initial state
   void reserve_reverse(const MpmModel& model, int env_steps);  // checkpoints and tapes

@@ -33,6 +33,8 @@ class PlbEnv : public Env {
   nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
+  bool renderable() const override { return true; }
+  std::vector<dsb::Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // render_mpm.cpp
   double episode_metric(const Workspace& ws) const override;
 
   const PlbConfig& plb_config() const { return cfg_; }

@@ -98,6 +98,8 @@ class PinballEnv : public Env {
   PinballEnv(std::string name, PinballConfig cfg);
   nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
+  bool renderable() const override { return true; }
+  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // render_rigid.cpp
 
   const PinballConfig& pinball_config() const { return cfg_; }
   const PinballModel& model() const { return model_.get(); }

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "optimizers/core/knobs.hpp"
 #include "optimizers/core/optimizer.hpp"
 
 namespace dsb {
@@ -15,12 +16,16 @@ struct OptimizerEntry {
   bool needs_gradient;
   std::function<std::unique_ptr<Optimizer>()> make;
   bool needs_rl = false;  // drives the env's per-step view (Objective::rl_*): paired only with RL envs
+  // made with knobs set (`--set NAME.KEY=VALUE`); empty for an optimizer without knobs
+  std::function<std::unique_ptr<Optimizer>(const KnobSettings&)> make_with = {};
+  std::vector<std::string> knobs = {};  // the keys make_with accepts
 };
 
 const std::vector<OptimizerEntry>& optimizer_entries();
 
-// Throws UsageError "unknown optimizer 'NAME'".
-std::unique_ptr<Optimizer> make_optimizer(const std::string& name);
+// Throws UsageError "unknown optimizer 'NAME'"; with settings, also for an unknown knob, a
+// malformed value, or an optimizer without knobs; ConfigError for a value out of range.
+std::unique_ptr<Optimizer> make_optimizer(const std::string& name, const KnobSettings& settings = {});
 const OptimizerEntry& optimizer_entry(const std::string& name);
 
 }  // namespace dsb

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import scipy
 
-from . import captions, claims, grid, html, landscape, optima, plots, stats, style, summary
+from . import captions, claims, grid, html, landscape, optima, plots, renders, stats, style, summary
 from .data import main_panels, slugify
 from .tables import FINAL_COLUMNS, SIGNIFICANCE_COLUMNS, failures, mark, overview, write_csv
 
@@ -82,7 +82,7 @@ def _provenance(data, build_type, made, stored_episodes) -> list:
 
 
 def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=(),
-          gradient_quality=None, gradient_quality_path: str = "") -> list:
+          gradient_quality=None, gradient_quality_path: str = "", render_dir=None) -> list:
     style.setup()
     pal = style.palette(data.optimizers)
     marks = style.markers(data.optimizers)
@@ -150,6 +150,8 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
             written.append(name)
             lands.append(dict(env=env, i=i, j=j, png=name, source=os.path.basename(src), desc=desc))
 
+    rends = renders.collect(data.runs, render_dir, out, written)
+
     notes = []
     if not data.panels:
         notes.append("No run is done: there is nothing to compare yet.")
@@ -184,7 +186,7 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
         significance=sig,
         minp_text=_minp_text(tables), landscapes=lands, landscape_errors=lerrors,
         landscape_dir=landscape_dir, missing=missing, failed=failed, running=running,
-        ignored=data.ignored, max_seed=int(r["seed"].max()) if len(r) else 0)
+        ignored=data.ignored, max_seed=int(r["seed"].max()) if len(r) else 0, renders=rends)
 
     with open(path("summary.md"), "w", encoding="utf-8") as f:
         f.write(summary.render(ctx))

@@ -4,7 +4,7 @@ from __future__ import annotations
 import re
 from html import escape
 
-from . import captions
+from . import captions, renders
 from . import gradient_quality as gq
 from .tables import final_md_rows, fmt, mark, overview_text, rank_md_rows
 
@@ -170,6 +170,7 @@ def _panel(ctx, item) -> str:
                     captions.CURVES.format(scale=item["scale_text"])))
     p.append(figure(item["final_png"], f"final {pn.env}",
                     captions.FINALS.format(scale=item["scale_text"])))
+    p.append(renders.figure(ctx, pn.env))
     h, rows = final_md_rows(t)
     cls = ["best" if r["is_best"] else "tie" if mark(r) == "≈ best" else
            ("bad" if r["n_seeds"] == 0 else "") for _, r in t.iterrows()]

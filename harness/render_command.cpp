@@ -1,0 +1,88 @@
+#include "harness/render_command.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "common/error.hpp"
+#include "common/parallel.hpp"
+#include "envs/core/registry.hpp"
+#include "harness/commands.hpp"
+#include "harness/schema.hpp"
+#include "harness/sqlite_db.hpp"
+#include "render/encode.hpp"
+
+namespace dsb {
+
+namespace {
+
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+
+}  // namespace
+
+BestRun best_run_of(const std::string& db_path, const std::string& env) {
+  try {
+    Database db(db_path, Database::Mode::read_only);
+    check_schema(db);
+    Statement q(db.handle(),
+                "SELECT optimizer, seed, best_loss, best_x FROM runs WHERE env=? AND status='done' AND "
+                "best_loss IS NOT NULL AND best_x IS NOT NULL ORDER BY best_loss ASC, run_id ASC LIMIT 1");
+    q.bind(1, env);
+    if (!q.step()) throw UsageError(fmt::format("--best-of: '{}' holds no done run of env '{}'", db_path, env));
+    BestRun r{q.column_text(0), q.column_int(1), q.column_double(2), ""};
+    // best_x is a JSON array of numbers
+    const auto x = nlohmann::json::parse(q.column_text(3));
+    for (const auto& v : x) r.best_x += (r.best_x.empty() ? "" : ",") + fmt::format("{}", v.get<double>());
+    return r;
+  } catch (const UsageError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw UsageError(fmt::format("--best-of: cannot read '{}': {}", db_path, e.what()));
+  }
+}
+
+int command_render(const RenderArgs& a) {
+  // arguments that need no env: output format, counts, the source of x
+  render::RenderOptions options;
+  options.width = a.width;
+  if (!render::format_of_path(a.out, options.format))
+    throw UsageError(fmt::format("--out: '{}' must end in .png or .gif", a.out));
+  if (a.frames < 1 || a.frames > 20) throw UsageError(fmt::format("--frames must be from 1 to 20, got {}", a.frames));
+  if (a.width < 64 || a.width > 2000) throw UsageError(fmt::format("--width must be from 64 to 2000, got {}", a.width));
+  if (a.x.empty() == a.best_of.empty()) throw UsageError("render needs exactly one of --x and --best-of");
+  // the env, which must be simulated, and the point
+  const auto env = make_env(a.env);
+  if (!env->renderable()) throw UsageError(fmt::format("env '{}' is not simulated: nothing to render", a.env));
+  std::string source = "--x";
+  std::string x_text = a.x;
+  if (!a.best_of.empty()) {
+    const BestRun best = best_run_of(a.best_of, a.env);
+    x_text = best.best_x;
+    source = fmt::format("best run of {} ({}, seed {}, loss {:.6g})", a.best_of, best.optimizer, best.seed,
+                         best.best_loss);
+  }
+  const auto x = checked_point(*env, x_text, a.best_of.empty() ? "--x" : "--best-of best_x");
+  // open the output before the rollout, so an unwritable path fails at once
+  std::unique_ptr<std::FILE, FileCloser> file(std::fopen(a.out.c_str(), "wb"));
+  if (!file) throw UsageError(fmt::format("--out: cannot write '{}'", a.out));
+  const std::vector<Frame> frames = env->frames(x, a.frames, serial_team());
+  if (frames.empty()) {
+    file.reset();
+    std::remove(a.out.c_str());
+    throw std::runtime_error(fmt::format("env '{}' blew up before its first frame", a.env));
+  }
+  const std::vector<unsigned char> bytes = render::encode_frames(frames, options);
+  if (std::fwrite(bytes.data(), 1, bytes.size(), file.get()) != bytes.size() || std::fflush(file.get()) != 0)
+    throw UsageError(fmt::format("--out: cannot write '{}'", a.out));
+  std::cout << fmt::format("render: {} at {}: {} frames (t = {:.3f} .. {:.3f} s) -> {} ({} bytes)\n", a.env, source,
+                           frames.size(), frames.front().time, frames.back().time, a.out, bytes.size());
+  return 0;
+}
+
+}  // namespace dsb

@@ -1,0 +1,33 @@
+#pragma once
+// `harness render`: pictures of one rollout (Env::frames) as a PNG strip or an animated GIF.
+#include <cstdint>
+#include <string>
+
+namespace dsb {
+
+struct RenderArgs {
+  std::string env;
+  std::string x;        // comma-separated point in [-1, 1]^dim, or
+  std::string best_of;  // a harness database: the best_x of --env's best done run
+  std::string out;      // FILE.png (strip) or FILE.gif (animation)
+  int frames = 5;       // 1 to 20 time points, from the start to the end of the episode
+  int width = 320;      // pixels per frame, 64 to 2000
+};
+
+// The best done run of an env in a harness database (read-only): the smallest best_loss, ties to
+// the smallest run_id (reports/dsb_report/renders.py picks the same run). UsageError naming the
+// file when it cannot be read or holds no done run of the env with a best_x.
+struct BestRun {
+  std::string optimizer;
+  std::int64_t seed = 0;
+  double best_loss = 0.0;
+  std::string best_x;  // comma-separated
+};
+BestRun best_run_of(const std::string& db_path, const std::string& env);
+
+// Checks every argument before any rollout (one-line UsageError naming the bad value: unknown or
+// synthetic env, --x of the wrong dimension or outside the box, an extension other than .png or
+// .gif, an unwritable --out, --frames or --width out of range), renders and writes --out.
+int command_render(const RenderArgs& args);
+
+}  // namespace dsb

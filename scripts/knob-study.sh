@@ -1,0 +1,117 @@
+#!/usr/bin/env bash
+# BO-Leap's and RandDescents' unstated knobs (issue 14 item 2): one knob at a time around the
+# defaults, every variant over the same seeds (the per-run seed depends on env, optimizer and seed
+# index only, so variants see the same random numbers), with random, gd and cmaes beside them.
+#
+#   scripts/knob-study.sh OUTDIR [--envs E1,E2] [--seeds N] [--only REGEX] [--jobs J] [BUILD_DIR]
+#
+# Each (env, variant) runs into OUTDIR/parts/ENV__VARIANT.sqlite (one writer per file, J at once,
+# cheapest first), then `harness merge` joins them into OUTDIR/knob-study.sqlite (runs keep their
+# resolved configs: variants differ by opt_config_hash; OUTDIR/variants.csv names each config hash
+# by its variant) and scripts/knob_study_table.py writes
+# OUTDIR/knob_study.csv (median, quartiles, wins against the default per env and variant).
+# Interrupted? Run the same command again: every part resumes.
+#
+# Envs and budgets (chosen here): cartpole1, cartpole3, rastrigin-10 at 1,000 episodes; the
+# particle task is fluid-h10 (fluid at 10 env steps, 80 substeps, all 10 parameters active) at
+# 200 episodes, because a 1,000-episode fluid run costs 45 min of a core.
+#
+# Variants (one knob moved from the default; the default first):
+#   boleap         sigma0 1 (sigma_1 relative to the normalized box, half-width 1), J
+#                  (max_descent_steps) 10, Adam lr 0.1, elite K/2 = 5 of K = 10, 100 episodes per
+#                  leap, patience 3
+#   rand-descents  max_steps 100 episodes per descent, Adam lr 0.1, starts uniform in the box
+#                  (start_scale 1), patience 10
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+out=${1:?usage: knob-study.sh OUTDIR [--envs E1,E2] [--seeds N] [--only REGEX] [--jobs J] [BUILD_DIR]}
+shift
+envs="rastrigin-10,cartpole1,cartpole3,fluid-h10"
+seeds=5
+only='.'
+jobs=2
+build=$root/build
+while (($#)); do
+  case $1 in
+    --envs) envs=$2; shift 2 ;;
+    --seeds) seeds=$2; shift 2 ;;
+    --only) only=$2; shift 2 ;;
+    --jobs) jobs=$2; shift 2 ;;
+    *) build=$1; shift ;;
+  esac
+done
+harness=$build/bin/harness
+[[ -x $harness ]] || { echo "knob-study: no harness at $harness" >&2; exit 2; }
+mkdir -p "$out/parts"
+
+budget_of() { case $1 in fluid-h*) echo 200 ;; *) echo 1000 ;; esac; }
+
+# label|optimizer|--set flags (empty: the default)
+variants=(
+  "reference|random,gd,cmaes|"
+  "rand-descents|rand-descents|"
+  "rand-descents.max_steps=30|rand-descents|--set rand-descents.max_steps=30"
+  "rand-descents.max_steps=300|rand-descents|--set rand-descents.max_steps=300"
+  "rand-descents.lr=0.03|rand-descents|--set rand-descents.lr=0.03"
+  "rand-descents.lr=0.3|rand-descents|--set rand-descents.lr=0.3"
+  "rand-descents.start_scale=0.5|rand-descents|--set rand-descents.start_scale=0.5"
+  "rand-descents.start_scale=0.1|rand-descents|--set rand-descents.start_scale=0.1"
+  "boleap|boleap|"
+  "boleap.sigma0=0.3|boleap|--set boleap.sigma0=0.3"
+  "boleap.sigma0=0.1|boleap|--set boleap.sigma0=0.1"
+  "boleap.max_descent_steps=30|boleap|--set boleap.max_descent_steps=30"
+  "boleap.max_descent_steps=3|boleap|--set boleap.max_descent_steps=3"
+  "boleap.lr=0.03|boleap|--set boleap.lr=0.03"
+  "boleap.lr=0.3|boleap|--set boleap.lr=0.3"
+  "boleap.elite=2|boleap|--set boleap.elite=2"
+  "boleap.episodes_per_leap=300|boleap|--set boleap.episodes_per_leap=300"
+)
+
+# one line per part, cheapest first: the cheap envs, then the particle task, then the 400-D and
+# 200-D cartpoles' BO-Leap variants (their GP refits are most of the study's time)
+cost_rank() {
+  case $1:$2 in
+    rastrigin-10:*) echo 0 ;;
+    cartpole*:boleap*) echo 3 ;;
+    cartpole*:*) echo 1 ;;
+    *) echo 2 ;;
+  esac
+}
+parts=()
+IFS=, read -ra env_list <<<"$envs"
+for env in "${env_list[@]}"; do
+  for v in "${variants[@]}"; do
+    IFS='|' read -r label opt flags <<<"$v"
+    [[ $label =~ $only ]] || continue
+    parts+=("$(cost_rank "$env" "$label")|$env|$label|$opt|$flags")
+  done
+done
+mapfile -t parts < <(printf '%s\n' "${parts[@]}" | sort -t'|' -k1,1n -s)
+echo "knob-study: ${#parts[@]} parts (env x variant), $seeds seeds, $jobs at once, into $out"
+
+run_part() {
+  IFS='|' read -r _ env label opt flags <<<"$1"
+  # shellcheck disable=SC2086
+  "$harness" --env "$env" --optimizer "$opt" $flags --seeds "$seeds" --budget "$(budget_of "$env")" \
+    --jobs 1 --quiet --db "$out/parts/${env}__${label}.sqlite" && echo "  done: $env $label"
+}
+# the variants' names by config hash, for the table
+label_parts() {
+  for v in "${variants[@]}"; do
+    IFS='|' read -r label opt _ <<<"$v"
+    [[ $label == reference ]] && continue
+    for f in "$out"/parts/*__"$label".sqlite; do
+      [[ -e $f ]] || continue
+      sqlite3 -readonly "$f" "SELECT DISTINCT opt_config_hash FROM runs" | sed "s/\$/,$label/"
+    done
+  done | sort -u
+}
+export -f run_part budget_of
+export harness seeds out
+printf '%s\n' "${parts[@]}" | xargs -d '\n' -P "$jobs" -I{} bash -c 'run_part "$@"' _ {}
+
+rm -f "$out/knob-study.sqlite"
+"$harness" merge --into "$out/knob-study.sqlite" "$out"/parts/*.sqlite
+{ echo "opt_config_hash,variant"; label_parts; } >"$out/variants.csv"
+/usr/bin/python3 "$root/scripts/knob_study_table.py" "$out/knob-study.sqlite" --variants "$out/variants.csv" \
+  --out "$out/knob_study.csv"

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# scripts/knob-study.sh end to end on a cheap env: two rand-descents variants x 3 seeds, merged,
+# tabled; the table's medians are recomputed from SQLite and the variants' configs checked.
+set -euo pipefail
+build=${1:?usage: check_knob_study.sh BUILD_DIR SOURCE_DIR}
+src=${2:?usage: check_knob_study.sh BUILD_DIR SOURCE_DIR}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+"$src/scripts/knob-study.sh" "$work" --envs sphere-10 --seeds 3 --only '^(reference|rand-descents(\.start_scale=0\.1)?)$' "$build" >/dev/null
+/usr/bin/python3 - "$work" <<'PY'
+import csv, json, sqlite3, statistics, sys
+work = sys.argv[1]
+rows = {(r["optimizer"], r["variant"]): r for r in csv.DictReader(open(f"{work}/knob_study.csv"))}
+assert set(rows) == {("random", "default"), ("gd", "default"), ("cmaes", "default"),
+                     ("rand-descents", "default"), ("rand-descents", "start_scale=0.1")}, sorted(rows)
+con = sqlite3.connect(f"file:{work}/knob-study.sqlite?mode=ro", uri=True)
+for (opt, variant), r in rows.items():
+    want_scale = 0.1 if variant == "start_scale=0.1" else 1.0
+    losses = []
+    for best, cfg in con.execute("SELECT r.best_loss, c.json FROM runs r JOIN configs c ON c.hash = r.opt_config_hash "
+                                 "WHERE r.optimizer = ? AND r.status = 'done'", (opt,)):
+        if opt == "rand-descents" and json.loads(cfg)["start_scale"] != want_scale:
+            continue
+        losses.append(best)
+    assert int(r["seeds"]) == len(losses) == 3, (opt, variant, r["seeds"], losses)
+    assert float(r["median"]) == statistics.median(losses), (opt, variant, r["median"], losses)
+v = rows[("rand-descents", "start_scale=0.1")]
+base = rows[("rand-descents", "default")]
+assert abs(float(v["ratio"]) - float(v["median"]) / float(base["median"])) < 1e-12
+assert v["wins"].endswith("/3") and 0.0 <= float(v["p"]) <= 1.0
+print("knob study table: 5 rows, medians equal SQLite's, ratio", v["ratio"])
+PY
