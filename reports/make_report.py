@@ -21,7 +21,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 REQUIRED = ("pandas", "matplotlib", "scipy", "scipy.stats")
 OWN_FILES = re.compile(r"^(curves_.+\.png|final_.+\.(png|csv)|landscape_.+\.png|render_.+\.png|"
-                       r"gradient_quality\.csv)$")
+                       r"gradient_quality\.csv|gallery\.html)$")
 DEFAULT_GRADIENT_QUALITY = os.path.join(os.path.dirname(HERE), "data", "gradient_quality.csv")
 
 

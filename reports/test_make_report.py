@@ -11,6 +11,7 @@ exits non-zero on any failure. DSB_REPORT_KEEP=1 keeps the temporary folders.
 """
 import atexit
 import csv
+import html
 import math
 import os
 import re
@@ -500,6 +501,257 @@ class TestPaperClaims(ReportCase):
         verdicts = {c[7] for c in rows if len(c) == 9}
         self.assertTrue({"holds", "does not hold", "not enough data", "env missing"} <= verdicts)
         self.assertLess(self.html.index('id="claims"'), self.html.index('id="provenance"'))
+
+
+# The overview, failures, regret and 'too few seeds' on a synthetic database: per (env, optimizer)
+# the final best losses over seeds (see _overview_runs for the episodes).
+FS_BRANIN = 0.3978873577297384
+FS_STYB2 = -39.16616570377142 * 2
+OVERVIEW_CELLS = {
+    ("branin", "cmaes"): [FS_BRANIN + 0.001 * k for k in range(1, 7)],          # the winner
+    ("branin", "gd"): [FS_BRANIN + 0.001 * k + 0.0005 for k in range(1, 7)],    # interleaved: a tie
+    ("branin", "nlopt-bobyqa"): [FS_BRANIN + 0.1 * k for k in range(1, 7)],
+    ("branin", "nlopt-direct-l"): [FS_BRANIN + 0.2 * k for k in range(1, 7)],
+    ("branin", "nlopt-lbfgs"): [FS_BRANIN + 0.3 * k for k in range(1, 7)],
+    ("branin", "rand-descents"): [FS_BRANIN + 0.4 * k for k in range(1, 7)],
+    ("branin", "random"): [FS_BRANIN + k for k in range(1, 7)],                 # the worst
+    ("styblinski-2", "cmaes"): [FS_STYB2 + 0.1 * k for k in range(1, 4)],      # 3 seeds only
+    ("styblinski-2", "random"): [FS_STYB2 + k for k in range(1, 4)],
+    ("sphere-2", "cmaes"): [2.0 + k for k in range(6)],
+    ("sphere-2", "gd"): [0.5] * 6,                 # gd and nlopt-lbfgs: the very same curves
+    ("sphere-2", "nlopt-lbfgs"): [0.5] * 6,
+    ("bounce", "cmaes"): [1.0, 2.0, 3.0, 4.0],     # no known optimum
+    ("bounce", "random"): [2.5, 3.5, 4.5, 5.5],
+}
+OVERVIEW_BUDGET = 40
+# (env, optimizer, seed) -> episodes stored with a NaN loss (NULL); runs.failed_episodes stays 0
+OVERVIEW_NAN = {("branin", "cmaes", 0): [0, 5], ("branin", "cmaes", 1): [3],
+                ("bounce", "random", 2): [7, 8, 9]}
+TAB10 = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
+         "#bcbd22", "#17becf"]
+
+
+def _overview_runs(con):
+    """Every run replaced by the OVERVIEW_CELLS runs: OVERVIEW_BUDGET episodes whose loss falls as
+    final + 10 / (episode + 1) - 10 / budget to the cell's final best loss at the last episode
+    (the same curve for every seed with the same final loss), the OVERVIEW_NAN episodes NaN; plus
+    one failed run of (branin, random) with two NaN episodes stored."""
+    env_h, opt_h, ver = con.execute(
+        "SELECT env_config_hash, opt_config_hash, harness_version FROM runs LIMIT 1").fetchone()
+    for table in ("replay", "evals", "runs"):
+        con.execute(f"DELETE FROM {table}")
+    b = OVERVIEW_BUDGET
+
+    def insert(env, opt, seed, final, status):
+        cur = con.execute(
+            "INSERT INTO runs(env, optimizer, seed, budget, env_config_hash, opt_config_hash, "
+            "rng_seed, status, episodes, best_loss, wall_s, harness_version, git_sha, host, error) "
+            "VALUES (?, ?, ?, ?, ?, ?, '0', ?, ?, ?, 0.1, ?, 'test', 'test', ?)",
+            (env, opt, seed, b, env_h, opt_h, status, b, final, ver,
+             "blew up" if status == "failed" else None))
+        nan = OVERVIEW_NAN.get((env, opt, seed), [0, 1] if status == "failed" else [])
+        best = None
+        for ep in range(b):
+            loss = None if ep in nan else final + 10.0 / (ep + 1) - 10.0 / b
+            if loss is not None:
+                best = loss if best is None else min(best, loss)
+            con.execute("INSERT INTO evals(run_id, episode, loss, best_loss, used_grad, wall_s, "
+                        "failed) VALUES (?, ?, ?, ?, 0, 0.01, ?)",
+                        (cur.lastrowid, ep, loss, best, int(loss is None)))
+
+    for (env, opt), finals in OVERVIEW_CELLS.items():
+        for seed, final in enumerate(finals):
+            insert(env, opt, seed, final, "done")
+    insert("branin", "random", 6, 1.0, "failed")
+    insert("hartmann6", "cmaes", 0, 1.0, "failed")     # an env whose only run failed
+
+
+def png_rgba(path):
+    """(width, height, rows) of an 8-bit RGB or RGBA, non-interlaced PNG; rows[y] is a list of
+    (r, g, b) tuples. Standard library only (zlib and the five PNG filters)."""
+    import struct
+    import zlib
+    with open(path, "rb") as f:
+        data = f.read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", f"{path} is not a PNG"
+    pos, idat, w = 8, b"", 0
+    while pos < len(data):
+        n, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + n]
+        if kind == b"IHDR":
+            w, h, depth, ctype, _, _, interlace = struct.unpack(">IIBBBBB", body)
+            assert depth == 8 and ctype in (2, 6) and interlace == 0, (depth, ctype, interlace)
+            ch = 3 if ctype == 2 else 4
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + n
+    raw = zlib.decompress(idat)
+    stride = w * ch
+    prev = bytearray(stride)
+    rows = []
+    for y in range(h):
+        ftype = raw[y * (stride + 1)]
+        line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - ch] if i >= ch else 0
+            c = prev[i - ch] if i >= ch else 0
+            bb = prev[i]
+            if ftype == 1:
+                line[i] = (line[i] + a) & 255
+            elif ftype == 2:
+                line[i] = (line[i] + bb) & 255
+            elif ftype == 3:
+                line[i] = (line[i] + (a + bb) // 2) & 255
+            elif ftype == 4:
+                pa, pb, pc = abs(bb - c), abs(a - c), abs(a + bb - 2 * c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else bb if pb <= pc else c)) & 255
+        rows.append([tuple(line[x * ch:x * ch + 3]) for x in range(w)])
+        prev = line
+    return w, h, rows
+
+
+def count_color(rows, hexcolor, x_max=None, tol=3):
+    want = tuple(int(hexcolor[i:i + 2], 16) for i in (1, 3, 5))
+    n = 0
+    for row in rows:
+        for px in row[:x_max]:
+            if all(abs(p - q) <= tol for p, q in zip(px, want)):
+                n += 1
+    return n
+
+
+class TestOverview(ReportCase):
+    """The page opens with the answer: the overview of normalised medians (winner, ties, too few
+    seeds), the failed episodes and runs, regret for known optima, curves that stay visible."""
+    modify = staticmethod(_overview_runs)
+
+    def overview_rows(self):
+        sec = section(self.html, "overview")
+        head = re.findall(r"<th>(.*?)</th>", html_rows(sec)[0])
+        out = {}
+        for row in html_rows(sec)[1:]:
+            c = row_cells(row)
+            out[c[0].split(" (")[0]] = dict(zip(head[1:], c[1:]))
+        return sec, out
+
+    def test_winner_ties_and_scores(self):
+        sec, rows = self.overview_rows()
+        b = rows["branin"]
+        self.assertEqual(b["cmaes"], "0.00★ best")
+        self.assertEqual(b["gd"], f"{0.0005 / (3.5 - 0.0035):.2f}≈ best")
+        self.assertEqual(b["random"], "1.00")
+        # (median - best) / (worst - best) with medians 0.35 (bobyqa), 0.0035 and 3.5
+        self.assertEqual(b["nlopt-bobyqa"], f"{(0.35 - 0.0035) / (3.5 - 0.0035):.2f}")
+        self.assertEqual(rows["sphere-2"]["random"], "—")
+        self.assertIn('class="cell win"', sec)
+        self.assertEqual(sec.count('class="cell win"'), 4)   # one winner per env
+
+    def test_too_few_seeds_instead_of_a_tie(self):
+        _, rows = self.overview_rows()
+        self.assertEqual(rows["styblinski-2"]["random"], "1.00too few seeds")
+        # 4 seeds a side, one comparison: 2/C(8,4) = 0.029 < 0.05, so a tie is a tie there
+        self.assertEqual(rows["bounce"]["random"], "1.00≈ best")
+        sig = {(r["env"], r["optimizer"]): r for r in read_csv(self.file("significance.csv"))}
+        self.assertEqual(sig[("styblinski-2", "random")]["too_few_seeds"], "True")
+        self.assertEqual(sig[("styblinski-2", "random")]["mark"], "too few seeds")
+        self.assertEqual(sig[("branin", "gd")]["too_few_seeds"], "False")
+        self.assertEqual(sig[("branin", "gd")]["mark"], "≈ best")
+        panel = self.html.split('id="env-styblinski-2"')[1].split("<h3")[0].split("<table>")[1]
+        self.assertNotIn("≈ best", panel)
+        self.assertIn("<td>random</td>", panel)
+        self.assertIn("<td>too few seeds</td>", panel)
+
+    def test_failed_episodes_and_runs_equal_the_database(self):
+        con = sqlite3.connect(self.db)
+        nan = dict(((e, o), n) for e, o, n in con.execute(
+            "SELECT r.env, r.optimizer, COUNT(*) FROM evals v JOIN runs r ON r.run_id = v.run_id "
+            "WHERE v.loss IS NULL AND r.status = 'done' GROUP BY r.env, r.optimizer"))
+        failed = dict(((e, o), n) for e, o, n in con.execute(
+            "SELECT env, optimizer, COUNT(*) FROM runs WHERE status = 'failed' GROUP BY env, optimizer"))
+        con.close()
+        self.assertEqual(nan, {("branin", "cmaes"): 3, ("bounce", "random"): 3})
+        self.assertEqual(failed, {("branin", "random"): 1, ("hartmann6", "cmaes"): 1})
+        sec = section(self.html, "failures")
+        head = re.findall(r"<th>(.*?)</th>", html_rows(sec)[0])
+        seen = 0
+        for row in html_rows(sec)[1:]:
+            c = row_cells(row)
+            env = c[0].split(" (")[0]
+            for opt, cell in zip(head[1:], c[1:]):
+                if (env, opt) not in OVERVIEW_CELLS and (env, opt) not in failed:
+                    self.assertEqual(cell, "—")
+                    continue
+                self.assertEqual(cell, f"{nan.get((env, opt), 0)} / {failed.get((env, opt), 0)}",
+                                 f"{env}/{opt}")
+                seen += 1
+        self.assertEqual(seen, len(OVERVIEW_CELLS) + 1)   # + hartmann6's failed run: "0 / 1"
+        self.assertIn("In all: 6 failed episode(s), 2 failed run(s).", sec)
+        final = {r["optimizer"]: r for r in read_csv(self.file("final_branin.csv"))}
+        self.assertEqual((final["cmaes"]["failed_episodes"], final["random"]["failed_runs"]), ("3", "1"))
+
+    def test_the_answer_comes_first_and_provenance_last(self):
+        order = [self.html.index(f'<h2 id="{a}">') for a in
+                 ("claims", "overview", "failures", "contents", "claims-detail", "across", "envs",
+                  "significance", "provenance")]
+        self.assertEqual(order, sorted(order))
+        self.assertEqual(re.findall(r"<h2[^>]*>", self.html)[0], '<h2 id="claims">')
+        # the compact verdicts at the top: claim, env, verdict, p, A12; one row per claim and env
+        top = [c for c in map(row_cells, html_rows(section(self.html, "claims"))) if c]
+        self.assertEqual(len(top), len(read_csv(self.file("claims.csv"))))
+        self.assertTrue(all(len(c) == 5 and c[2] == "env missing" for c in top))
+        with open(self.file("summary.md"), encoding="utf-8") as f:
+            heads = [x for x in f.read().splitlines() if x.startswith("## ")]
+        self.assertEqual(heads[:3], ["## The paper's claims",
+                                     "## Overview: final results per env and optimizer",
+                                     "## Failed episodes and failed runs"])
+        self.assertEqual(heads[-1], "## Provenance")
+
+    def test_regret_against_the_known_optimum(self):
+        con = sqlite3.connect(self.db)
+        for env, fs in (("branin", FS_BRANIN), ("styblinski-2", FS_STYB2)):
+            rows = {r["optimizer"]: r for r in read_csv(self.file(f"final_{env}.csv"))}
+            for opt, r in rows.items():
+                vals = [v for (v,) in con.execute(
+                    "SELECT best_loss FROM runs WHERE env = ? AND optimizer = ? AND status = 'done'",
+                    (env, opt))]
+                self.assertEqual(float(r["f_star"]), fs)
+                self.assertAlmostEqual(float(r["regret_median"]), statistics.median(vals) - fs,
+                                       delta=1e-12)
+            sec = html.unescape(self.html.split(f'id="env-{env}"')[1].split("<h3")[0])
+            self.assertIn(f"regret f − f*: the loss minus the env's known optimum f* = {fs:.10g}", sec)
+            self.assertEqual(sec.count("Log y axis of the regret"), 2)   # curves and bars
+        con.close()
+        bounce = read_csv(self.file("final_bounce.csv"))
+        self.assertEqual({r["f_star"] for r in bounce}, {""})
+        self.assertNotIn("known optimum", self.html.split('id="env-bounce"')[1].split("<h3")[0])
+
+    def test_a_curve_under_another_stays_visible(self):
+        # gd and nlopt-lbfgs have the very same curves on sphere-2; lbfgs is drawn last, on top.
+        opts = sorted({o for _, o in OVERVIEW_CELLS})
+        w, h, rows = png_rgba(self.file("curves_sphere-2.png"))
+        plot_area = int(w * 0.6)   # left of the legend (outside the axes, on the right)
+        for o in ("gd", "nlopt-lbfgs"):
+            n = count_color(rows, TAB10[opts.index(o)], plot_area)
+            self.assertGreater(n, 60, f"{o}: {n} pixels of its colour in the plot area")
+
+    def test_mean_labels_do_not_overlap_tick_labels(self):
+        sys.path.insert(0, HERE)
+        from dsb_report import data, plots, stats, style
+        d = data.load(self.db)
+        pn = next(p for p in d.panels if p.env == "branin")
+        t = stats.final_table(pn, d.runs)
+        style.setup()
+        boxes = plots.finals(pn, t, style.palette(d.optimizers), style.yscale_for(pn.best, FS_BRANIN),
+                             os.path.join(self.tmp, "bars.png"))
+        self.assertEqual((len(boxes["means"]), len(boxes["ticks"])), (7, 7))
+
+        def overlap(a, b):
+            return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+        for m in boxes["means"]:
+            for tk in boxes["ticks"]:
+                self.assertFalse(overlap(m, tk), f"mean label {m} overlaps tick label {tk}")
+            # and above the tick labels' top
+            self.assertGreater(m[1], max(tk[3] for tk in boxes["ticks"]))
 
 
 GRADIENT_QUALITY_COLUMNS = [

@@ -11,7 +11,10 @@ packages=(
   libmujoco-dev libqhull-dev libbullet-dev
   python3 python3-pandas python3-matplotlib python3-scipy
   slurmctld slurmd slurm-client munge
+  firefox-esr
 )
+# firefox-esr (about 350 MB with its libraries, --no-install-recommends) only for the report's
+# headless screenshot test (ctest -L long, tests/report_screenshot_test.py; skipped without it)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -6,16 +6,18 @@ import platform
 import shutil
 
 import matplotlib
-
+import numpy as np
 import pandas as pd
 import scipy
 
-from . import captions, claims, grid, html, landscape, plots, renders, stats, style, summary
+from . import captions, claims, grid, html, landscape, optima, plots, renders, stats, style, summary
 from .data import main_panels, slugify
-from .tables import FINAL_COLUMNS, SIGNIFICANCE_COLUMNS, mark, write_csv
+from .tables import FINAL_COLUMNS, SIGNIFICANCE_COLUMNS, failures, mark, overview, write_csv
 
 
 def _scale_text(ys) -> str:
+    if ys.regret:
+        return captions.SCALE_REGRET.format(fstar=f"{ys.fstar:.10g}", floor=f"{ys.floor:.1g}")
     if ys.shifted:
         return captions.SCALE_SHIFTED.format(fstar=f"{ys.fstar:.8g}", delta=f"{ys.delta:.1g}")
     return captions.SCALE_LOG if ys.log else captions.SCALE_LINEAR
@@ -83,6 +85,8 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
           gradient_quality=None, gradient_quality_path: str = "", render_dir=None) -> list:
     style.setup()
     pal = style.palette(data.optimizers)
+    marks = style.markers(data.optimizers)
+    known = optima.load()
     written = []
 
     def path(name):
@@ -91,12 +95,15 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
 
     items, tables = [], []
     for pn in data.panels:
-        ys = style.yscale_for(pn.best)
+        fs = optima.f_star(pn.env, known)
+        ys = style.yscale_for(pn.best, fs)
         t = stats.final_table(pn, data.runs)
-        it = dict(panel=pn, table=t, scale_text=_scale_text(ys),
+        t["f_star"] = np.nan if fs is None else fs
+        t["regret_median"] = t["median"] - fs if fs is not None else np.nan
+        it = dict(panel=pn, table=t, scale_text=_scale_text(ys), f_star=fs,
                   curves_png=f"curves_{pn.slug}.png", final_png=f"final_{pn.slug}.png",
                   final_csv=f"final_{pn.slug}.csv")
-        plots.curves(pn, pal, ys, path(it["curves_png"]))
+        plots.curves(pn, pal, ys, path(it["curves_png"]), marks)
         plots.finals(pn, t, pal, ys, path(it["final_png"]))
         write_csv(t, path(it["final_csv"]), FINAL_COLUMNS)
         items.append(it)
@@ -174,13 +181,18 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
         claims=verdicts, panels=items, mean_ranks=mr, ranks_png="ranks.png", ecdf_png="ecdf.png",
         targets=tinfo, gradient_quality=gradient_quality,
         gradient_quality_path=gradient_quality_path,
-        overview=summary.overview(items, data.optimizers), significance=sig,
+        overview=overview(items, data.optimizers),
+        failures=failures(items, data.runs, data.optimizers), optimizers=data.optimizers,
+        significance=sig,
         minp_text=_minp_text(tables), landscapes=lands, landscape_errors=lerrors,
         landscape_dir=landscape_dir, missing=missing, failed=failed, running=running,
         ignored=data.ignored, max_seed=int(r["seed"].max()) if len(r) else 0, renders=rends)
 
     with open(path("summary.md"), "w", encoding="utf-8") as f:
         f.write(summary.render(ctx))
+    if landscape_dir is not None:
+        with open(path("gallery.html"), "w", encoding="utf-8") as f:
+            f.write(html.render_gallery(ctx))
     ctx["files"] = sorted(written)
     with open(path("index.html"), "w", encoding="utf-8") as f:
         f.write(html.render(ctx))

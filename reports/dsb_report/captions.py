@@ -10,11 +10,32 @@ SCALE_SHIFTED = ("Log y axis of the loss minus f* (= {fstar}, the best loss any 
                  "this env) plus a tiny offset δ = {delta} so that the best run stays visible: some "
                  "losses are zero or negative, which a log axis cannot show directly.")
 
+SCALE_REGRET = ("Log y axis of the regret f − f*: the loss minus the env's known optimum f* = {fstar} "
+                "(data/known_optima.csv, from envs/synthetic), not the best loss found, so 1e-6 means "
+                "within 1e-6 of the true minimum; a regret at or below {floor} (a loss at f* to "
+                "rounding) is drawn at {floor}.")
+
 FINALS = ("Bars: mean over seeds of the final best loss at the budget; whiskers: 95% confidence "
           "interval of the mean (Student t with n−1 degrees of freedom, no bootstrap); dots: the "
           "individual seeds. '(best)' marks the optimizer with the lowest median final loss; '≈ best' "
           "marks those that a two-sided Mann-Whitney U test against it, Holm-corrected over this "
-          "env's comparisons, cannot tell apart at α = 0.05. {scale}")
+          "env's comparisons, cannot tell apart at α = 0.05; '(too few seeds)' where the seeds are "
+          "too few for any test to tell them apart (even perfectly separated samples would not "
+          "reach α). The number on each bar is its mean (the mean regret on a regret axis). {scale}")
+
+OVERVIEW = ("Each cell: the optimizer's median final best loss over seeds, normalised per env as "
+            "(median − lowest median) / (highest median − lowest median): 0 = the env's winner, "
+            "1 = the worst optimizer there (a median of +∞, no finite loss, counts 1). ★ best: the "
+            "lowest median; ≈ best: a two-sided Mann-Whitney U test against the winner, "
+            "Holm-corrected over the env's comparisons, cannot tell it apart at α = 0.05 (a tie); "
+            "too few seeds: even perfectly separated samples of these seed counts could not reach "
+            "α, so the test says nothing; no mark: worse than the winner. Colour: green (0) to "
+            "red (1). The raw medians are in each env's section and in summary.md.")
+
+FAILURES = ("Failed episodes: the episodes of the analysed 'done' runs whose simulation blew up "
+            "(loss NaN, stored as NULL; such an episode never becomes the best); failed runs: runs "
+            "with status 'failed' (excluded from every statistic, listed under Failed runs). "
+            "Cells: failed episodes / failed runs; — = no run of that pair.")
 
 RANKS = ("For each env and episode count, the optimizers are ranked by the median over seeds of "
          "their best loss so far (1 = best; ties share the average rank). Each line is the mean rank "
@@ -75,3 +96,9 @@ MISSING = ("Expected grid: every (env, optimizer) pair with at least one run in 
            "seed indices 0..{max_seed}, times the budgets present for that env. Every expected run "
            "without a 'done' run is listed here; reason 'failed' or 'running' means such a run "
            "exists (see below), 'absent' means none was ever stored.")
+
+GALLERY = ("The loss on 2-D slices of every env given to the report (--landscapes DIR; "
+           "scripts/landscape-gallery.sh DIR makes one for every env of `harness list`, on the "
+           "seed's Figures 8-15 dims where it gives them, else the first two dims, the particle "
+           "envs at their 5-env-step variants), side by side per env under that env's row of the "
+           "gradient quality survey. " + LANDSCAPE)

@@ -164,6 +164,13 @@ def load(path: str) -> Data:
     if "metric" in ev.columns:
         ev["metric"] = pd.to_numeric(ev["metric"], errors="coerce").astype(float)
     runs = runs.sort_values(["env", "optimizer", "seed", "budget", "run_id"]).reset_index(drop=True)
+    # failed episodes of a done run: its stored episodes whose loss is NaN (evals.loss NULL), counted
+    # from the episodes themselves rather than trusting runs.failed_episodes
+    nan_eps = ev.loc[ev["loss"].isna(), "run_id"].value_counts()
+    done = runs["status"] == "done"
+    runs["failed_episodes"] = pd.to_numeric(runs["failed_episodes"], errors="coerce").fillna(0)
+    runs.loc[done, "failed_episodes"] = runs.loc[done, "run_id"].map(nan_eps).fillna(0)
+    runs["failed_episodes"] = runs["failed_episodes"].astype(int)
 
     selected, ignored = _choose_variants(runs[runs["status"] == "done"])
     panels = []

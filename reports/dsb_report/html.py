@@ -1,14 +1,15 @@
 """index.html: a self-contained page (relative links, images as files, no JavaScript, no network)."""
 from __future__ import annotations
 
+import re
 from html import escape
 
 from . import captions, renders
 from . import gradient_quality as gq
-from .tables import final_md_rows, fmt, mark, rank_md_rows
+from .tables import final_md_rows, fmt, mark, overview_text, rank_md_rows
 
 CSS = """
-body { font-family: sans-serif; max-width: 1100px; margin: 1.5em auto; padding: 0 1em;
+body { font-family: sans-serif; max-width: 1250px; margin: 1.5em auto; padding: 0 1em;
        color: #222; line-height: 1.4; }
 h1 { font-size: 1.6em; } h2 { border-bottom: 1px solid #ccc; margin-top: 2em; }
 table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.9em; }
@@ -20,6 +21,14 @@ figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #ddd; 
 figcaption { font-size: 0.9em; color: #444; max-width: 900px; }
 .note { background: #fff8e1; border-left: 4px solid #f0c000; padding: 0.4em 0.8em; }
 code { background: #f4f4f4; padding: 0 3px; }
+table.overview td.cell { text-align: center; min-width: 5.5em; }
+table.overview td.win { font-weight: bold; outline: 2px solid #1a7f37; outline-offset: -2px; }
+table.overview td.tie { font-weight: bold; }
+table.overview small { display: block; font-weight: normal; color: #555; }
+.answer { display: flex; flex-wrap: wrap; gap: 0 2.5em; align-items: flex-start; }
+.answer > div { flex: 1 1 28em; min-width: 0; }
+.gallery { display: flex; flex-wrap: wrap; gap: 0.6em; }
+.gallery figure { flex: 0 1 32%; margin: 0; } .gallery figcaption { font-size: 0.8em; }
 """
 
 
@@ -55,6 +64,21 @@ def _provenance(ctx) -> str:
     return "<h2 id=\"provenance\">Provenance</h2>\n" + table(["item", "value"], rows)
 
 
+def _claims_compact(ctx) -> str:
+    """The verdicts, one line per claim and env, at the top of the page (the details further down)."""
+    c = ctx["claims"]
+    rows = [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"],
+             r["verdict"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2)] for _, r in c.iterrows()]
+    cls = ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
+    counts = ", ".join(f"{v} {n}" for v, n in c["verdict"].value_counts().sort_index().items())
+    return ('<h2 id="claims">The paper\'s claims</h2>\n'
+            f"<p>{escape(counts or 'No claims.')}: each qualitative claim of Antonova et al. "
+            "(CoRL 2022) tested on the final best losses over seeds (what the paper says, the test "
+            f"and why: {link('#claims-detail', 'the claims in detail')}; {link('claims.csv')}).</p>\n" +
+            table(["claim", "env (budget)", "verdict", "p (Holm)", "A12"], rows, cls,
+                  numeric={3, 4}))
+
+
 def _claims(ctx) -> str:
     c = ctx["claims"]
     rows = [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"],
@@ -63,11 +87,63 @@ def _claims(ctx) -> str:
             for _, r in c.iterrows()]
     cls = ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
     counts = ", ".join(f"{v} {n}" for v, n in c["verdict"].value_counts().sort_index().items())
-    return ('<h2 id="claims">The paper\'s claims</h2>\n<p>' + escape(captions.CLAIMS) + "</p>\n"
+    return ('<h2 id="claims-detail">The paper\'s claims in detail</h2>\n<p>' +
+            escape(captions.CLAIMS) + "</p>\n"
             f"<p>{escape(counts or 'No claims.')} ({link('claims.csv')}; every comparison: "
             f"{link('claims_comparisons.csv')})</p>\n" +
             table(["claim", "env (budget)", "the paper says", "tested as", "seeds", "p (Holm)", "A12",
                    "verdict", "why"], rows, cls, numeric={5, 6}))
+
+
+def heat(score: float) -> str:
+    """Background colour of an overview cell: green at 0 (the winner), white at 0.5, red at 1."""
+    s = min(max(score, 0.0), 1.0)
+    lo, mid, hi = (170, 222, 170), (255, 255, 255), (244, 170, 160)
+    a, b, f = (lo, mid, s * 2) if s <= 0.5 else (mid, hi, s * 2 - 1)
+    return "#" + "".join(f"{round(x + (y - x) * f):02x}" for x, y in zip(a, b))
+
+
+def _overview(ctx) -> str:
+    rows, opts = ctx["overview"], ctx["optimizers"]
+    p = ['<h2 id="overview">Overview: final results per env and optimizer</h2>',
+         "<p>" + escape(captions.OVERVIEW) + "</p>"]
+    if not rows:
+        p.append("<p>No done run yet.</p>")
+        return "\n".join(p)
+    out = ['<table class="overview">',
+           "<tr><th>env (budget)</th>" + "".join(f"<th>{escape(o)}</th>" for o in opts) + "</tr>"]
+    for r in rows:
+        tds = [f'<td><a href="#env-{escape(r["slug"])}">{escape(r["env"])}</a> ({r["budget"]})</td>']
+        for o in opts:
+            c = r["cells"][o]
+            if c is None:
+                tds.append('<td class="cell">—</td>')
+                continue
+            cls = {"best": "cell win", "≈ best": "cell tie"}.get(c["mark"], "cell")
+            mk = {"best": "★ best", "≈ best": "≈ best"}.get(c["mark"], c["mark"])
+            tds.append(f'<td class="{cls}" style="background:{heat(c["score"])}" '
+                       f'title="median {escape(fmt(c["median"]))}, {c["n"]} seeds">'
+                       f'{c["score"]:.2f}' + (f"<small>{escape(mk)}</small>" if mk else "") +
+                       "</td>")
+        out.append("<tr>" + "".join(tds) + "</tr>")
+    out.append("</table>")
+    p.append("\n".join(out))
+    return "\n".join(p)
+
+
+def _failures(ctx) -> str:
+    rows, opts = ctx["failures"], ctx["optimizers"]
+    tot_e = sum(c[0] for r in rows for c in r["cells"].values() if c)
+    tot_r = sum(c[1] for r in rows for c in r["cells"].values() if c)
+    p = ['<h2 id="failures">Failed episodes and failed runs</h2>',
+         "<p>" + escape(captions.FAILURES) + f" In all: {tot_e} failed episode(s), {tot_r} failed "
+         "run(s).</p>"]
+    body = [[f"{r['env']} ({r['budget']})"] +
+            ["—" if r["cells"][o] is None else f"{r['cells'][o][0]} / {r['cells'][o][1]}"
+             for o in opts] for r in rows]
+    cls = ["bad" if any(c and (c[0] or c[1]) for c in r["cells"].values()) else "" for r in rows]
+    p.append(table(["env (budget)"] + list(opts), body, cls, numeric=set(range(1, len(opts) + 1))))
+    return "\n".join(p)
 
 
 def _across(ctx) -> str:
@@ -84,8 +160,6 @@ def _across(ctx) -> str:
              f"{link('ecdf_targets.csv')} these targets):</p>" +
              table(["env", "budget", "f*", "f0", "k=1", "k=2", "k=3", "k=4", "k=5"], trow,
                    numeric=set(range(1, 9))))
-    p.append("<p>Overview: median final best loss per env and optimizer (mark versus the env's "
-             "best; '—' = no done run).</p>" + table(*ctx["overview"]))
     return "\n".join(p)
 
 
@@ -98,7 +172,7 @@ def _panel(ctx, item) -> str:
                     captions.FINALS.format(scale=item["scale_text"])))
     p.append(renders.figure(ctx, pn.env))
     h, rows = final_md_rows(t)
-    cls = ["best" if r["is_best"] else "tie" if r["indistinguishable_from_best"] else
+    cls = ["best" if r["is_best"] else "tie" if mark(r) == "≈ best" else
            ("bad" if r["n_seeds"] == 0 else "") for _, r in t.iterrows()]
     p.append(f"<p>Final best loss at {pn.budget} episodes over seeds ({link(item['final_csv'])}):"
              "</p>" + table(h, rows, cls, numeric=set(range(1, 10))))
@@ -134,10 +208,14 @@ def _landscapes(ctx) -> str:
     ls = ctx["landscapes"]
     p = ['<h2 id="landscapes">Landscapes</h2>']
     if ctx["landscape_dir"] is None:
-        p.append("<p>No landscape directory given (<code>--landscapes DIR</code>).</p>")
+        p.append("<p>No landscape directory given (<code>--landscapes DIR</code>; "
+                 "<code>scripts/landscape-gallery.sh DIR</code> makes one for every env).</p>")
     elif not ls and not ctx["landscape_errors"]:
         p.append(f"<p>No <code>&lt;env&gt;_&lt;i&gt;_&lt;j&gt;.csv</code> files in "
                  f"<code>{escape(ctx['landscape_dir'])}</code>.</p>")
+    if ctx["landscape_dir"] is not None:
+        p.append(f"<p>All of them side by side, with the gradient quality of each env: "
+                 f"{link('gallery.html', 'the landscape gallery')}.</p>")
     for it in ls:
         p.append(f"<h3>{escape(it['env'])}, dims {it['i']} and {it['j']}</h3>")
         p.append(figure(it["png"], f"landscape {it['env']}",
@@ -145,6 +223,63 @@ def _landscapes(ctx) -> str:
     for e in ctx["landscape_errors"]:
         p.append(f'<p class="note">Skipped: {escape(e)}</p>')
     return "\n".join(p)
+
+
+def base_env(name: str) -> str:
+    """The env of `harness list` a landscape's variant belongs to: fluid-h5 -> fluid,
+    plb-table-h5 -> plb-table (scripts/landscape-gallery.sh slices the particle envs' short
+    variants); any other name is its own env."""
+    m = re.fullmatch(r"((?:fluid|plb-[a-z]+))-h[0-9]+", name)
+    return m.group(1) if m else name
+
+
+def gallery_groups(landscapes: list, gq_df) -> list:
+    """(env, [landscape items]) in the order of the gradient survey's rows (harness list's order),
+    then the other envs by name."""
+    groups = {}
+    for it in landscapes:
+        groups.setdefault(base_env(it["env"]), []).append(it)
+    order = [e for e in (list(gq_df["env"]) if gq_df is not None else []) if e in groups]
+    order += sorted(e for e in groups if e not in order)
+    return [(e, groups[e]) for e in order]
+
+
+def render_gallery(ctx) -> str:
+    """gallery.html: every landscape of --landscapes, grouped by env and side by side, under the
+    gradient quality table (each env's survey row repeated above its slices)."""
+    df = ctx["gradient_quality"]
+    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+             "<title>diffsim-bench landscape gallery</title>",
+             f"<style>{CSS}</style></head><body>",
+             "<h1>Landscape gallery</h1>",
+             f"<p>{escape(captions.GALLERY)} Back to the {link('index.html', 'report')}.</p>"]
+    if df is None:
+        parts.append(f"<p>No gradient survey: <code>{escape(ctx['gradient_quality_path'])}</code> "
+                     "does not exist.</p>")
+    else:
+        parts.append('<h2 id="gradient-quality">Gradient quality</h2>')
+        parts.append("<p>" + escape(captions.GRADIENT_QUALITY.format(settings=gq.settings(df))) +
+                     "</p>")
+        parts.append(table(gq.HEADERS, gq.rows(df), gq.row_classes(df), numeric=set(range(1, 10))))
+    by_env = {} if df is None else {e: k for k, e in enumerate(df["env"])}
+    if not ctx["landscapes"]:
+        parts.append("<p>No landscapes in <code>" + escape(str(ctx["landscape_dir"])) + "</code>.</p>")
+    for env, items in gallery_groups(ctx["landscapes"], df):
+        parts.append(f'<h2 id="gallery-{escape(env)}">{escape(env)}</h2>')
+        if env in by_env:
+            k = by_env[env]
+            parts.append(table(gq.HEADERS, [gq.rows(df)[k]], [gq.row_classes(df)[k]],
+                               numeric=set(range(1, 10))))
+        else:
+            parts.append("<p>Not in the gradient survey.</p>")
+        figs = [figure(it["png"], f"landscape {it['env']} dims {it['i']} and {it['j']}",
+                       f"{it['env']}, dims {it['i']} and {it['j']}: {it['desc']} "
+                       f"({it['source']}).") for it in items]
+        parts.append('<div class="gallery">' + "".join(figs) + "</div>")
+    for e in ctx["landscape_errors"]:
+        parts.append(f'<p class="note">Skipped: {escape(e)}</p>')
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"
 
 
 def _problems(ctx) -> str:
@@ -185,7 +320,9 @@ def _problems(ctx) -> str:
 
 
 def render(ctx) -> str:
-    toc = [("claims", "The paper's claims"), ("provenance", "Provenance"),
+    toc = [("claims", "The paper's claims"), ("overview", "Overview: final results"),
+           ("failures", "Failed episodes and failed runs"),
+           ("claims-detail", "The paper's claims in detail"),
            ("across", "Across envs: ranks and data profile")]
     toc += [(f"env-{it['panel'].slug}", f"{it['panel'].env} (budget {it['panel'].budget})")
             for it in ctx["panels"]]
@@ -193,16 +330,22 @@ def render(ctx) -> str:
             ("landscapes", "Landscapes"),
             ("missing", f"Missing runs ({len(ctx['missing'])})"),
             ("failed", f"Failed runs ({len(ctx['failed'])})"),
-            ("incomplete", f"Incomplete runs ({len(ctx['running'])})"), ("files", "Files")]
+            ("incomplete", f"Incomplete runs ({len(ctx['running'])})"),
+            ("provenance", "Provenance"), ("files", "Files")]
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
              "<title>diffsim-bench report</title>", f"<style>{CSS}</style></head><body>",
              "<h1>diffsim-bench comparison report</h1>", f"<p>{escape(ctx['headline'])}</p>"]
+    # the answer: the claims' verdicts and the overview side by side where the window is wide
+    # enough for both (they wrap one under the other otherwise)
+    parts.append('<div class="answer"><div>' + _claims_compact(ctx) + "</div><div>" +
+                 _overview(ctx) + "</div></div>")
+    parts.append(_failures(ctx))
     for note in ctx["notes"]:
         parts.append(f'<p class="note">{escape(note)}</p>')
+    parts.append('<h2 id="contents">Contents</h2>')
     parts.append("<ul>" + "".join(f'<li><a href="#{escape(a)}">{escape(t)}</a></li>'
                                   for a, t in toc) + "</ul>")
     parts.append(_claims(ctx))
-    parts.append(_provenance(ctx))
     parts.append(_across(ctx))
     parts.append('<h2 id="envs">Per env</h2>')
     parts += [_panel(ctx, it) for it in ctx["panels"]]
@@ -210,6 +353,7 @@ def render(ctx) -> str:
     parts.append(_gradient_quality(ctx))
     parts.append(_landscapes(ctx))
     parts.append(_problems(ctx))
+    parts.append(_provenance(ctx))
     parts.append('<h2 id="files">Files</h2><ul>' +
                  "".join(f"<li>{link(f)}</li>" for f in ctx["files"]) + "</ul>")
     parts.append("</body></html>")

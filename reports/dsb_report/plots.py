@@ -32,16 +32,41 @@ def _legend(ax):
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
 
 
-def curves(panel, pal: dict, ys, path: str):
+MARKS_PER_CURVE = 4
+
+
+def marker_episodes(budget: int, k: int, n: int, per_curve: int = MARKS_PER_CURVE) -> list:
+    """Episodes (1-based) of the markers of the k-th of n curves: per_curve points spread evenly on
+    a log scale over 1..budget, shifted by k/n of a step, so no two optimizers share a marker
+    position (where the budget has room) and a curve lying under another still shows its marks."""
+    if budget < 2:
+        return [1]
+    span = np.log(budget)
+    out = []
+    for m in range(per_curve):
+        e = int(round(np.exp(span * (m + (k + 0.5) / max(n, 1)) / per_curve)))
+        out.append(min(max(e, 1), budget))
+    return sorted(set(out))
+
+
+def curves(panel, pal: dict, ys, path: str, marks: dict | None = None):
     fig, ax = plt.subplots(figsize=WIDE)
     x = np.arange(1, panel.budget + 1)
-    for o in panel.optimizers:
+    marks = marks or {}
+    n = len(panel.optimizers)
+    for k, o in enumerate(panel.optimizers):
         med, q25, q75 = stats.quantile_curves(panel, o)
         color, ls = pal[o]
         ax.fill_between(x, _finite_or_nan(ys(q25)), _finite_or_nan(ys(q75)), color=color,
                         alpha=0.18, lw=0, step="post")
-        ax.plot(x, _finite_or_nan(ys(med)), color=color, ls=ls, lw=1.8, drawstyle="steps-post",
-                label=f"{o} (n={panel.rows(o).size})")
+        y = _finite_or_nan(ys(med))
+        at = [e - 1 for e in marker_episodes(panel.budget, k, n)]
+        mk = marks.get(o, "o")
+        ax.plot(x, y, color=color, ls=ls, lw=1.8, drawstyle="steps-post", marker=mk, ms=6,
+                markevery=at, mec="black", mew=0.6, label=f"{o} (n={panel.rows(o).size})")
+        # the markers again above every line, so a curve hidden under another keeps its marks
+        ax.plot(x[at], y[at], ls="none", marker=mk, ms=6, color=color, mec="black", mew=0.6,
+                zorder=5)
     ys.apply(ax)
     ax.set_xlim(1, panel.budget)
     ax.set_xlabel("episodes")
@@ -51,7 +76,10 @@ def curves(panel, pal: dict, ys, path: str):
     save(fig, path)
 
 
-def finals(panel, table: pd.DataFrame, pal: dict, ys, path: str):
+def finals(panel, table: pd.DataFrame, pal: dict, ys, path: str) -> dict:
+    """The bar plot of the final best loss. Returns the pixel boxes (x0, y0, x1, y1) of the mean
+    labels and of the tick labels as drawn, {'means': [...], 'ticks': [...]} (the test checks that
+    they do not overlap)."""
     t = table[table["n_seeds"] > 0].reset_index(drop=True)
     fig, ax = plt.subplots(figsize=(max(4.8, 1.1 * len(t) + 2.5), 4.4))
     xs = np.arange(len(t))
@@ -75,16 +103,53 @@ def finals(panel, table: pd.DataFrame, pal: dict, ys, path: str):
         ax.plot(i + off, v, "o", ms=3.5, color="black", alpha=0.75, zorder=3)
     labels = []
     for _, r in t.iterrows():
-        mark = "\n(best)" if r["is_best"] else ("\n≈ best" if r["indistinguishable_from_best"] else "")
+        mark = ("\n(best)" if r["is_best"] else "\n(too few seeds)" if r.get("too_few_seeds", False)
+                else "\n≈ best" if r["indistinguishable_from_best"] else "")
         labels.append(f"{r['optimizer']}{mark}")
     ax.set_xticks(xs, labels, rotation=0 if len(t) <= 5 else 30,
                   ha="center" if len(t) <= 5 else "right")
     ys.apply(ax)
     ax.set_ylabel(ys.label("final best loss"))
     ax.set_title(f"{panel.env}: final best loss at {panel.budget} episodes\n"
-                 f"bars = mean, whiskers = 95% CI (Student t), dots = seeds")
+                 f"bars = mean (value on the bar), whiskers = 95% CI (Student t), dots = seeds")
     ax.grid(axis="x", visible=False)
+    lo, hi = ax.get_ylim()     # headroom above the tallest whisker for the mean labels
+    if ys.log and lo > 0:
+        ax.set_ylim(lo, hi * (hi / lo) ** 0.18)
+    elif hi > lo:
+        ax.set_ylim(lo, hi + 0.18 * (hi - lo))
+    means = _mean_labels(ax, t, ys)
+    fig.canvas.draw()
+    boxes = {"means": [tuple(m.get_window_extent().extents) for m in means],
+             "ticks": [tuple(lb.get_window_extent().extents) for lb in ax.get_xticklabels()
+                       if lb.get_text()]}
     save(fig, path)
+    return boxes
+
+
+def _mean_labels(ax, t: pd.DataFrame, ys) -> list:
+    """The mean of each bar (as plotted: the regret mean - f* on a regret axis, else the loss)
+    written inside the axes, just above the bar's top and clamped to the axes' height band
+    [0.04, 0.86] (axes fraction), so it never reaches the tick labels below the axis nor the
+    title above; a mean that is not finite is already written at the top."""
+    out = []
+    lo, hi = ax.get_ylim()
+    log = ax.get_yscale() == "log"
+    for i, r in t.iterrows():
+        m = float(ys(r["mean"])) if ys.regret else float(r["mean"])
+        h, ci = float(ys(r["mean"])), float(ys(r["ci95_high"]))
+        if not np.isfinite(m) or not np.isfinite(h):
+            continue
+        y = max(h, ci) if np.isfinite(ci) else h
+        if log:
+            frac = (np.log10(y) - np.log10(lo)) / (np.log10(hi) - np.log10(lo)) if y > 0 else 0.0
+        else:
+            frac = (y - lo) / (hi - lo) if hi > lo else 0.5
+        frac = float(np.clip(frac + 0.02, 0.04, 0.86)) if np.isfinite(frac) else 0.04
+        out.append(ax.text(i, frac, f"{m:.3g}", ha="center", va="bottom", fontsize=8,
+                           transform=ax.get_xaxis_transform(), clip_on=True,
+                           bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8)))
+    return out
 
 
 def ranks(mean_ranks: pd.DataFrame, pal: dict, n_envs: int, path: str):

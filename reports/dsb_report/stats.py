@@ -95,6 +95,15 @@ def min_seeds(comparisons: int, sides: int, alpha: float = ALPHA, limit: int = 1
     return limit
 
 
+def too_few_seeds(comparisons: int, n1: int, n2: int, sides: int = 2, alpha: float = ALPHA) -> bool:
+    """True when a Holm-corrected test among `comparisons` cannot reach alpha even with perfectly
+    separated samples of sizes n1 and n2: comparisons * min_exact_p(n1, n2, sides) >= alpha (the
+    rule of the claims' 'not enough data'). 'Cannot tell from the best' then says nothing."""
+    if comparisons < 1 or n1 < 1 or n2 < 1:
+        return False
+    return comparisons * min_exact_p(n1, n2, sides) >= alpha
+
+
 def a12_lower(a: np.ndarray, b: np.ndarray) -> float:
     """Vargha-Delaney A12 oriented to 'lower is better': the probability that a run of a ends
     with a lower final loss than a run of b, ties counting half (0.5 = no effect, 1 = a always
@@ -148,6 +157,7 @@ def _add_significance(panel, df: pd.DataFrame) -> pd.DataFrame:
     df["p_raw"] = np.nan
     df["p_holm"] = np.nan
     df["indistinguishable_from_best"] = False
+    df["too_few_seeds"] = False
     have = df[df["n_seeds"] > 0]
     if have.empty:
         return df
@@ -160,6 +170,7 @@ def _add_significance(panel, df: pd.DataFrame) -> pd.DataFrame:
         i = df.index[df["optimizer"] == o][0]
         df.loc[i, ["p_raw", "p_holm"]] = [p, q]
         df.loc[i, "indistinguishable_from_best"] = bool(not math.isnan(q) and q >= ALPHA)
+        df.loc[i, "too_few_seeds"] = too_few_seeds(len(others), int(df.loc[i, "n_seeds"]), ref.size)
     i = df.index[df["optimizer"] == best][0]
     df.loc[i, "is_best"] = True
     df.loc[i, "indistinguishable_from_best"] = True

@@ -3,40 +3,28 @@ from __future__ import annotations
 
 from . import captions
 from . import gradient_quality as gq
-from .tables import final_md_rows, fmt, mark, md_table, rank_md_rows
-
-
-def overview(panels: list, optimizers: list) -> tuple:
-    """Rows env (budget), columns optimizers: median final best loss and the significance mark."""
-    headers = ["env", "budget"] + list(optimizers)
-    rows = []
-    for it in panels:
-        t = it["table"].set_index("optimizer")
-        row = [it["panel"].env, str(it["panel"].budget)]
-        for o in optimizers:
-            if o not in t.index or t.loc[o, "n_seeds"] == 0:
-                row.append("—")
-                continue
-            r = t.loc[o]
-            m = mark(r)
-            row.append(fmt(r["median"]) + ("" if m == "worse" else f" ({m})"))
-        rows.append(row)
-    return headers, rows
+from .tables import final_md_rows, fmt, md_table, overview_text, rank_md_rows
 
 
 def render(ctx) -> str:
     out = ["# diffsim-bench comparison report", "", ctx["headline"], ""]
-    out += [f"> {n}" for n in ctx["notes"]] + ([""] if ctx["notes"] else [])
     c = ctx["claims"]
     out += ["## The paper's claims", "", captions.CLAIMS, "", md_table(
         ["claim", "env (budget)", "tested as", "seeds", "p (Holm)", "A12", "verdict", "why"],
         [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"], r["test"], r["n"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2),
           r["verdict"], r["reason"]] for _, r in c.iterrows()]), ""]
-    out += ["## Provenance", "", md_table(["item", "value"], ctx["provenance"]), ""]
-    out += ["## Overview: median final best loss", "",
-            "Marks: (best) = lowest median on the env; (≈ best) = not distinguishable from it "
-            "(Mann-Whitney U, Holm, α = 0.05); no mark = worse; — = no done run.", "",
-            md_table(*ctx["overview"]), ""]
+    opts = ctx["optimizers"]
+    out += ["## Overview: final results per env and optimizer", "", captions.OVERVIEW, "",
+            md_table(["env (budget)"] + list(opts),
+                     [[f"{r['env']} ({r['budget']})"] + [overview_text(r["cells"][o]) for o in opts]
+                      for r in ctx["overview"]]), ""]
+    fl = ctx["failures"]
+    out += ["## Failed episodes and failed runs", "", captions.FAILURES, "",
+            md_table(["env (budget)"] + list(opts),
+                     [[f"{r['env']} ({r['budget']})"] +
+                      ["—" if r["cells"][o] is None else f"{r['cells'][o][0]} / {r['cells'][o][1]}"
+                       for o in opts] for r in fl]), ""]
+    out += [f"> {n}" for n in ctx["notes"]] + ([""] if ctx["notes"] else [])
     h, rows = rank_md_rows(ctx["mean_ranks"])
     out += ["## Average ranks", "", captions.RANKS, "", md_table(h, rows), ""]
     out += ["## Final best loss per env", "",
@@ -68,4 +56,5 @@ def render(ctx) -> str:
         ["env", "optimizer", "seed", "budget", "started"],
         [[str(v) for v in x] for x in r[["env", "optimizer", "seed", "budget", "started_at"]]
          .itertuples(index=False, name=None)])]
+    out += ["", "## Provenance", "", md_table(["item", "value"], ctx["provenance"])]
     return "\n".join(out) + "\n"

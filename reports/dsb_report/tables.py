@@ -3,13 +3,17 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pandas as pd
 
 FINAL_COLUMNS = ["env", "budget", "optimizer", "n_seeds", "failed_runs", "running_runs",
                  "failed_episodes", "median", "q25", "q75", "mean", "std", "ci95_low", "ci95_high",
                  "min", "max", "median_wall_s", "is_best", "p_raw", "p_holm",
-                 "indistinguishable_from_best", "metric_median"]
-SIGNIFICANCE_COLUMNS = ["env", "optimizer", "p_raw", "p_holm", "indistinguishable_from_best"]
+                 "indistinguishable_from_best", "too_few_seeds", "metric_median", "f_star",
+                 "regret_median"]
+SIGNIFICANCE_COLUMNS = ["env", "optimizer", "p_raw", "p_holm", "indistinguishable_from_best",
+                        "too_few_seeds"]
+TOO_FEW = "too few seeds"
 
 
 def fmt(v, digits: int = 6) -> str:
@@ -35,6 +39,8 @@ def mark(row) -> str:
         return "no done runs"
     if row["is_best"]:
         return "best"
+    if bool(row.get("too_few_seeds", False)):
+        return TOO_FEW
     if row["indistinguishable_from_best"]:
         return "≈ best"
     if isinstance(row["p_holm"], float) and math.isnan(row["p_holm"]):
@@ -74,3 +80,68 @@ def rank_md_rows(mean_ranks: pd.DataFrame) -> tuple:
     headers = ["optimizer", "envs"] + [f"@{c}" for c in wide.columns]
     rows = [[o, str(int(n[o]))] + [fmt(v, 3) for v in wide.loc[o]] for o in wide.index]
     return headers, rows
+
+
+def overview(panels: list, optimizers: list) -> list:
+    """The answer table: one row per env (budget) with one cell per optimizer, dict(score, median,
+    mark, n) or None (no done run). score = (median - best) / (worst - best) over the env's
+    optimizers with a done run (0 = the lowest median, 1 = the highest; 0 for all when they are
+    equal; a median of +inf, no finite loss, scores 1). mark: 'best', '≈ best' (the Holm-corrected
+    Mann-Whitney U test cannot tell it from the best), 'too few seeds' (no test could: see
+    stats.too_few_seeds) or '' (worse)."""
+    rows = []
+    for it in panels:
+        t = it["table"]
+        t = t[t["n_seeds"] > 0].set_index("optimizer")
+        med = t["median"].astype(float)
+        fin = med[np.isfinite(med)]
+        lo, hi = (float(fin.min()), float(fin.max())) if len(fin) else (math.nan, math.nan)
+        cells = {}
+        for o in optimizers:
+            if o not in t.index:
+                cells[o] = None
+                continue
+            m = float(t.loc[o, "median"])
+            if not math.isfinite(m):
+                score = 1.0
+            elif hi > lo:
+                score = (m - lo) / (hi - lo)
+            else:
+                score = 0.0
+            mk = mark(t.loc[o])
+            cells[o] = dict(score=score, median=m, mark="" if mk == "worse" else mk,
+                            n=int(t.loc[o, "n_seeds"]))
+        rows.append(dict(env=it["panel"].env, budget=it["panel"].budget, slug=it["panel"].slug,
+                         cells=cells))
+    return rows
+
+
+def overview_text(cell) -> str:
+    """A cell of the overview as text: the score with 2 decimals and the mark."""
+    if cell is None:
+        return "—"
+    mk = {"best": "★ best", "≈ best": "≈ best"}.get(cell["mark"], cell["mark"])
+    return f"{cell['score']:.2f}" + (f" {mk}" if mk else "")
+
+
+def failures(panels: list, all_runs: pd.DataFrame, optimizers: list) -> list:
+    """Failed episodes (NaN loss) of the analysed done runs and failed runs, per env (budget) and
+    optimizer, for every (env, budget) with a run of any status (an env whose runs all failed has
+    no panel but a row here): rows dict(env, budget, cells {optimizer: (episodes, runs) or None})."""
+    by_key = {(it["panel"].env, it["panel"].budget): it["panel"] for it in panels}
+    keys = sorted({(e, int(b)) for e, b in zip(all_runs["env"], all_runs["budget"])})
+    rows = []
+    for env, budget in keys:
+        pn = by_key.get((env, budget))
+        cell = all_runs[(all_runs["env"] == env) & (all_runs["budget"] == budget)]
+        cells = {}
+        for o in optimizers:
+            c = cell[cell["optimizer"] == o]
+            if c.empty:
+                cells[o] = None
+                continue
+            eps = 0 if pn is None else int(pn.runs.loc[pn.runs["optimizer"] == o,
+                                                      "failed_episodes"].sum())
+            cells[o] = (eps, int((c["status"] == "failed").sum()))
+        rows.append(dict(env=env, budget=budget, cells=cells))
+    return rows
