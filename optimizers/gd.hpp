@@ -27,7 +27,7 @@ struct DescentConfig {
 };
 
 DescentConfig gd_defaults();             // centre start, whole budget
-DescentConfig rand_descents_defaults();  // random starts, 100 steps, patience 10 (chosen here)
+DescentConfig rand_descents_defaults();  // random starts, 100 steps, patience 10, lr 0.03 (chosen here)
 
 std::unique_ptr<Optimizer> make_gd(const DescentConfig& cfg = gd_defaults());
 std::unique_ptr<Optimizer> make_rand_descents(const DescentConfig& cfg = rand_descents_defaults());

@@ -67,7 +67,7 @@ TEST(KnobTable, ErrorsNameTheKnobAndTheValue) {
 
 TEST(Knobs, ReachTheResolvedConfigAndItsHash) {
   const auto def = make_optimizer("boleap")->config();
-  const auto same = make_optimizer("boleap", {{"sigma0", "1.0"}, {"elite", "5"}})->config();
+  const auto same = make_optimizer("boleap", {{"sigma0", "0.3"}, {"elite", "5"}})->config();
   const auto other = make_optimizer("boleap", {{"sigma0", "0.3"}, {"max_descent_steps", "30"}, {"lr", "0.03"}})->config();
   EXPECT_EQ(config_hash(def), config_hash(same));  // elite 5 is K / 2 = the default
   EXPECT_NE(config_hash(def), config_hash(other));
