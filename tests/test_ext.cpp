@@ -81,8 +81,9 @@ TEST(ExtProtocol, TheProbeLearnsNameAndVersionAndRefusesABrokenProgram) {
   EXPECT_THROW(probed("quiet", "cat > /dev/null", 0.5), UsageError);  // never says hello: timeout
 }
 
-TEST(ExtProtocol, NumbersCrossThePipesBitForBit) {
+TEST(ExtProtocol, NumbersCrossThePipesBitForBitAsJsonTextAndAsBase64) {
   // the program sends each loss and gradient component back as the next point's x[0], x[1]
+  for (const std::string mode : {"roundtrip", "roundtrip-binary"}) {
   auto f = [](std::span<const double> x) { return std::sin(1000.0 * x[0] + 7.0 * x[1]); };
   auto g = [&](std::span<const double> x, std::span<double> grad) {
     std::fill(grad.begin(), grad.end(), 0.0);
@@ -90,17 +91,18 @@ TEST(ExtProtocol, NumbersCrossThePipesBitForBit) {
     return f(x);
   };
   testing::FunctionObjective obj(3, 40, f, g);
-  auto opt = make_ext_optimizer(probed("rt", test_optimizer("roundtrip")), "rt", 1);
-  EXPECT_EQ(run_error(*opt, obj), "");
-  ASSERT_EQ(obj.points().size(), 40u);
+  auto opt = make_ext_optimizer(probed("rt", test_optimizer(mode)), "rt", 1);
+  EXPECT_EQ(run_error(*opt, obj), "") << mode;
+  ASSERT_EQ(obj.points().size(), 40u) << mode;
   for (std::size_t k = 1; k < 40; ++k) {
     const auto& prev = obj.points()[k - 1];
     const double loss = obj.losses()[k - 1], grad1 = 0.999 * std::cos(1000.0 * prev[0] + 7.0 * prev[1]);
-    EXPECT_EQ(std::memcmp(&obj.points()[k][0], &loss, sizeof loss), 0) << k;
-    EXPECT_EQ(std::memcmp(&obj.points()[k][1], &grad1, sizeof grad1), 0) << k;
+    EXPECT_EQ(std::memcmp(&obj.points()[k][0], &loss, sizeof loss), 0) << mode << " " << k;
+    EXPECT_EQ(std::memcmp(&obj.points()[k][1], &grad1, sizeof grad1), 0) << mode << " " << k;
   }
   EXPECT_EQ(opt->diagnostics()["end"], "budget");
   EXPECT_EQ(opt->diagnostics()["grad_asks"], 40);
+  }
 }
 
 TEST(ExtProtocol, BatchesStopAtTheBudgetAndAnEarlyStopEndsTheRun) {
@@ -127,6 +129,7 @@ TEST(ExtProtocol, EachBreachFailsWithOneLineNamingTheOptimizerAndTheReason) {
       {"hang", "ext:hang: no reply within the timeout of 1.0 s (waiting for an ask)"},
       {"after-end", "ext:after-end: asked for points after the budget end"},
       {"grad", "ext:grad: asked for gradients, but env 'plain' has none (the hello said gradient: false)"},
+      {"bad-base64", "ext:bad-base64: malformed ask (the base64 string does not decode to doubles)"},
   };
   for (const auto& [mode, message] : want) {
     testing::FunctionObjective f(3, 8, sphere);  // no gradient

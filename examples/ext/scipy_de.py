@@ -5,7 +5,8 @@
             --ext de='/usr/bin/python3 examples/ext/scipy_de.py' --seeds 2 --budget 60
 
 scipy.optimize.differential_evolution, vectorized: each generation's population is one batch ask
-(the harness may evaluate it on several threads, --threads). Population: 15 x dim (scipy's
+in the protocol's binary form (Session.ask_array; the harness may evaluate it on several threads,
+--threads). Population: 15 x dim (scipy's
 default) but at most max(5, budget / 20), so that a run sees about 20 generations; the first
 population uniform in the box; no polishing (scipy's L-BFGS-B polish would spend episodes on
 finite differences). When DE converges it starts again with a new population, until the budget
@@ -29,8 +30,8 @@ def optimize(s):
     bounds = list(zip(s.lower, s.upper))
     population = int(min(15 * s.dim, max(5, s.budget // 20)))
 
-    def losses(xs):  # xs: dim x population (vectorized)
-        return np.array(s.evaluate_batch(xs.T.tolist()))
+    def losses(xs):  # xs: dim x population (vectorized); sent as binary doubles (exact, cheap)
+        return s.evaluate_array(xs.T)
 
     while True:  # restarts until BudgetEnd
         init = rng.uniform(lower, upper, size=(population, s.dim))

@@ -1,6 +1,10 @@
 #include "optimizers/ext/ext_optimizer.hpp"
 
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -21,6 +25,68 @@ std::string quote_line(const std::string& line) {
 }
 
 std::string seconds_text(double s) { return Json(s).dump() + " s"; }
+
+// a coordinate as an error shows it: the shortest round-trip decimal, or NaN, inf, -inf
+std::string number_text(double v) {
+  if (std::isnan(v)) return "NaN";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  return Json(v).dump();
+}
+
+constexpr char kBase64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+
+// the doubles' little-endian bytes (x86-64's own order) in standard base64 with padding
+std::string base64_of_doubles(const std::vector<double>& v) {
+  static_assert(std::endian::native == std::endian::little, "the base64 encoding sends little-endian doubles");
+  const auto* b = reinterpret_cast<const unsigned char*>(v.data());
+  const std::size_t n = v.size() * sizeof(double);
+  std::string out;
+  out.reserve((n + 2) / 3 * 4);
+  for (std::size_t i = 0; i < n; i += 3) {
+    const unsigned w = (b[i] << 16) | ((i + 1 < n ? b[i + 1] : 0) << 8) | (i + 2 < n ? b[i + 2] : 0);
+    out += kBase64[(w >> 18) & 63];
+    out += kBase64[(w >> 12) & 63];
+    out += i + 1 < n ? kBase64[(w >> 6) & 63] : '=';
+    out += i + 2 < n ? kBase64[w & 63] : '=';
+  }
+  return out;
+}
+
+// false unless text is padded base64 of a whole number of doubles
+bool doubles_of_base64(const std::string& text, std::vector<double>& out) {
+  static const auto table = [] {
+    std::array<int, 256> t;
+    t.fill(-1);
+    for (int i = 0; i < 64; ++i) t[static_cast<unsigned char>(kBase64[i])] = i;
+    return t;
+  }();
+  if (text.size() % 4 != 0) return false;
+  std::string bytes;
+  bytes.reserve(text.size() / 4 * 3);
+  for (std::size_t i = 0; i < text.size(); i += 4) {
+    int q[4];
+    int pad = 0;
+    for (int j = 0; j < 4; ++j) {
+      const char ch = text[i + j];
+      if (ch == '=' && i + 4 == text.size() && j >= 2) {
+        q[j] = 0;
+        ++pad;
+        continue;
+      }
+      if (pad > 0) return false;
+      q[j] = table[static_cast<unsigned char>(ch)];
+      if (q[j] < 0) return false;
+    }
+    const unsigned w = (q[0] << 18) | (q[1] << 12) | (q[2] << 6) | q[3];
+    bytes += static_cast<char>((w >> 16) & 255);
+    if (pad < 2) bytes += static_cast<char>((w >> 8) & 255);
+    if (pad < 1) bytes += static_cast<char>(w & 255);
+  }
+  if (bytes.size() % sizeof(double) != 0) return false;
+  out.resize(bytes.size() / sizeof(double));
+  std::memcpy(out.data(), bytes.data(), bytes.size());
+  return true;
+}
 
 // The program's side of one conversation: every wait has the per-reply deadline, every error
 // is one line that ends with the program's stderr tail.
@@ -152,7 +218,7 @@ class ExtOptimizer : public Optimizer {
       c.fail("reports itself as " + name + " " + version + ", but the plan's probe saw " + spec_.reported_name +
              " " + spec_.version + " (results of two versions would mix)");
 
-    std::vector<double> xs, losses, grad(static_cast<std::size_t>(d));
+    std::vector<double> xs, losses, grads;
     for (;;) {
       const auto line = c.receive_line("an ask");
       if (!line) {
@@ -165,6 +231,7 @@ class ExtOptimizer : public Optimizer {
       const Json m = Json::parse(*line, nullptr, false);
       if (m.is_discarded() || !m.is_object()) c.fail("malformed line " + quote_line(*line) + " (not a JSON object)");
       if (!m.contains("ask")) c.fail("unexpected message " + quote_line(*line) + " (expected an ask)");
+      const bool binary = m.contains("ask") && m["ask"].is_string();
       const bool want_grad = read_ask(c, m, d, xs);
       const std::size_t asked = xs.size() / static_cast<std::size_t>(d);
       if (want_grad && !f.has_gradient())
@@ -175,21 +242,38 @@ class ExtOptimizer : public Optimizer {
 
       // the points that fit in the budget, in order; the reply says how many were evaluated
       const std::size_t n = std::min<std::size_t>(asked, static_cast<std::size_t>(f.remaining()));
-      Json reply_losses = Json::array(), reply_grads = Json::array();
+      losses.resize(n);
+      grads.resize(want_grad ? n * static_cast<std::size_t>(d) : 0);
       if (want_grad) {
-        for (std::size_t k = 0; k < n; ++k) {
-          const double loss = f.value_and_grad(std::span<const double>(xs).subspan(k * d, d), grad);
-          reply_losses.push_back(std::isfinite(loss) ? Json(loss) : Json(nullptr));
-          reply_grads.push_back(std::isfinite(loss) ? Json(grad) : Json(nullptr));
-        }
+        for (std::size_t k = 0; k < n; ++k)
+          losses[k] = f.value_and_grad(std::span<const double>(xs).subspan(k * d, d),
+                                       std::span<double>(grads).subspan(k * d, d));
       } else {
-        losses.resize(n);
         f.values(std::span<const double>(xs).first(n * d), losses);
-        for (double loss : losses) reply_losses.push_back(std::isfinite(loss) ? Json(loss) : Json(nullptr));
       }
       diag_["points"] = diag_["points"].get<std::int64_t>() + static_cast<std::int64_t>(n);
-      Json reply = {{"losses", std::move(reply_losses)}, {"used", f.used()}, {"remaining", f.remaining()}};
-      if (want_grad) reply["grads"] = std::move(reply_grads);
+      // a failed episode (+inf from the objective): null in JSON, NaN in base64
+      Json reply = {{"used", f.used()}, {"remaining", f.remaining()}};
+      if (binary) {
+        for (std::size_t k = 0; k < n; ++k) {
+          if (std::isfinite(losses[k])) continue;
+          losses[k] = std::numeric_limits<double>::quiet_NaN();
+          if (want_grad) std::fill_n(grads.begin() + k * d, d, std::numeric_limits<double>::quiet_NaN());
+        }
+        reply["losses"] = base64_of_doubles(losses);
+        if (want_grad) reply["grads"] = base64_of_doubles(grads);
+      } else {
+        Json reply_losses = Json::array(), reply_grads = Json::array();
+        for (std::size_t k = 0; k < n; ++k) {
+          const bool ok = std::isfinite(losses[k]);
+          reply_losses.push_back(ok ? Json(losses[k]) : Json(nullptr));
+          if (want_grad)
+            reply_grads.push_back(ok ? Json(std::vector<double>(grads.begin() + k * d, grads.begin() + (k + 1) * d))
+                                     : Json(nullptr));
+        }
+        reply["losses"] = std::move(reply_losses);
+        if (want_grad) reply["grads"] = std::move(reply_grads);
+      }
       c.send(reply);
       if (f.remaining() == 0) {
         // the end: tell it, then it must exit 0 without asking again
@@ -205,13 +289,27 @@ class ExtOptimizer : public Optimizer {
   // {"ask": [[x...], ...], "grad": bool}: points of dim numbers in [-1, 1], row after row into xs
   bool read_ask(Conversation& c, const Json& m, int d, std::vector<double>& xs) const {
     const Json& ask = m["ask"];
-    if (!ask.is_array() || ask.empty()) c.fail("malformed ask (wants a non-empty list of points)");
+    if (!(ask.is_array() && !ask.empty()) && !ask.is_string())
+      c.fail("malformed ask (wants a non-empty list of points, or a base64 string)");
     bool grad = false;
     if (m.contains("grad")) {
       if (!m["grad"].is_boolean()) c.fail("malformed ask ('grad' must be true or false)");
       grad = m["grad"].get<bool>();
     }
     xs.clear();
+    if (ask.is_string()) {
+      // base64 of little-endian IEEE doubles, point after point
+      if (!doubles_of_base64(ask.get_ref<const std::string&>(), xs))
+        c.fail("malformed ask (the base64 string does not decode to doubles)");
+      if (xs.empty() || xs.size() % static_cast<std::size_t>(d) != 0)
+        c.fail("malformed ask (" + std::to_string(xs.size()) + " doubles in base64, not a multiple of dim " +
+               std::to_string(d) + ")");
+      for (std::size_t j = 0; j < xs.size(); ++j)
+        if (!(xs[j] >= -1.0 && xs[j] <= 1.0))
+          c.fail("point " + std::to_string(j / d) + " of the ask has x[" + std::to_string(j % d) + "] = " +
+                 number_text(xs[j]) + ", outside the box [-1, 1]");
+      return grad;
+    }
     xs.reserve(ask.size() * static_cast<std::size_t>(d));
     for (std::size_t k = 0; k < ask.size(); ++k) {
       const Json& p = ask[k];
@@ -221,7 +319,7 @@ class ExtOptimizer : public Optimizer {
         if (!p[i].is_number()) c.fail("point " + std::to_string(k) + " of the ask has a non-number x[" + std::to_string(i) + "]");
         const double v = p[i].get<double>();
         if (!(v >= -1.0 && v <= 1.0))
-          c.fail("point " + std::to_string(k) + " of the ask has x[" + std::to_string(i) + "] = " + Json(v).dump() +
+          c.fail("point " + std::to_string(k) + " of the ask has x[" + std::to_string(i) + "] = " + number_text(v) +
                  ", outside the box [-1, 1]");
         xs.push_back(v);
       }

@@ -5,12 +5,14 @@
     test_optimizer.py MODE [BATCH]
 
 Modes that follow the protocol: `random` (uniform points from random.Random(seed), BATCH at a
-time, default 1), `echo` (asks the box centre BATCH times per ask, for timing the protocol),
+time, default 1), `echo` (asks one random point BATCH times per ask, for timing the protocol), `echo-binary`
+(the same in base64, numpy),,
 `stop-early` (10 episodes, then returns), `roundtrip` (sends back each loss and gradient
-component as the next point's x[0], x[1]). Modes that break it, after 3 good episodes: `crash`
+component as the next point's x[0], x[1]), `roundtrip-binary` (the same in base64, numpy). Modes that break it, after 3 good episodes: `crash`
 (exits 3 with a traceback-like stderr line), `garbage` (a line that is not JSON), `outside`
 (a point with x[1] = 1.5), `hang` (sleeps for an hour), `after-end` (asks again after the end),
-`grad` (asks for a gradient, whatever the hello said); `bad-probe` fails the probe (exit 4 before
+`grad` (asks for a gradient, whatever the hello said), `bad-base64` (a binary ask that is not
+base64); `bad-probe` fails the probe (exit 4 before
 its hello). The version it reports is $TEST_OPT_VERSION (default 1).
 """
 import os
@@ -32,9 +34,21 @@ def optimize(s):
         return [rng.uniform(lo, hi) for lo, hi in zip(s.lower, s.upper)]
 
     if MODE == "echo":
-        centre = [0.0] * s.dim
+        x = point()  # a point with 17-digit coordinates, as an optimizer's are
         while True:
-            s.ask([centre] * BATCH)
+            s.ask([x] * BATCH)
+    if MODE == "echo-binary":
+        import numpy as np
+        xs = np.array([point()] * BATCH)
+        while True:
+            s.ask_array(xs)
+    if MODE == "roundtrip-binary":
+        import numpy as np
+        x = np.full((1, s.dim), 0.1)
+        while True:
+            losses, grads = s.ask_array(x, grad=True)
+            x = np.zeros((1, s.dim))
+            x[0, 0], x[0, 1] = losses[0], grads[0, 1]
     if MODE == "roundtrip":
         # each point carries the last loss and gradient component back: the harness records it,
         # so the test sees whether numbers survive both directions bit for bit
@@ -71,6 +85,8 @@ def optimize(s):
         s.evaluate(x)
     elif MODE == "hang":
         time.sleep(3600)
+    elif MODE == "bad-base64":
+        s._send({"ask": "not base64!"})
     elif MODE == "grad":
         s._send({"ask": [point()], "grad": True})
     else:
