@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <charconv>
+#include <cstdlib>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -47,6 +48,8 @@ struct RunArgs {
   std::string shard;
   bool quiet = false;
   std::vector<std::string> knobs;  // --set OPT.KNOB=VALUE, repeatable
+  std::vector<std::string> ext;    // --ext NAME=COMMAND, repeatable
+  std::string ext_timeout;         // --ext-timeout SECONDS (empty: the default)
 };
 
 // --set's help: the knobs of every optimizer that has some
@@ -70,6 +73,13 @@ void add_grid_options(CLI::App& app, RunArgs& a) {
   app.add_option("--seeds", a.seeds, "number of seeds per (env, optimizer), seed indices 0..N-1");
   app.add_option("--budget", a.budget, "episodes per run (default 1000)");
   app.add_option("--set", a.knobs, knob_help())->type_name("OPT.KNOB=VALUE");
+  app.add_option("--ext", a.ext,
+                 "the command of external optimizer ext:NAME, run once per run with /bin/sh -c and spoken to in "
+                 "JSON lines (docs/ext-protocol.md); repeatable")
+      ->type_name("NAME=COMMAND");
+  app.add_option("--ext-timeout", a.ext_timeout,
+                 "seconds an external optimizer may take per reply before its run fails (default 60)")
+      ->type_name("SECONDS");
 }
 
 void add_run_options(CLI::App& app, RunArgs& a) {
@@ -102,6 +112,13 @@ CheckedRun check_run_args(const RunArgs& a) {
   req.optimizers = a.optimizers;
   req.seeds = a.seeds;
   for (const auto& k : a.knobs) parse_knob_setting(k, req.knobs);
+  for (const auto& x : a.ext) parse_ext_setting(x, req.ext);
+  if (!a.ext_timeout.empty()) {
+    char* end = nullptr;
+    req.ext_timeout_s = std::strtod(a.ext_timeout.c_str(), &end);
+    if (end != a.ext_timeout.c_str() + a.ext_timeout.size() || !(req.ext_timeout_s > 0.0 && req.ext_timeout_s <= 86400.0))
+      throw UsageError("--ext-timeout must be seconds from 0 to 86400, got '" + a.ext_timeout + "'");
+  }
   {
     // parsed here, not by CLI11, which saturates 99999999999999999999 to INT64_MAX
     std::int64_t b = 0;
@@ -139,6 +156,8 @@ std::string grid_flags(const RunArgs& a) {
   if (!a.optimizers.empty()) f += " --optimizer " + join(a.optimizers);
   f += fmt::format(" --seeds {} --budget {}", a.seeds, a.budget);
   for (const auto& k : a.knobs) f += " --set " + k;
+  for (const auto& x : a.ext) f += " --ext " + shell_word(x);
+  if (!a.ext_timeout.empty()) f += " --ext-timeout " + a.ext_timeout;
   return f;
 }
 
@@ -242,7 +261,7 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
     shard_runs.assign(options.shards, 0);
     for (const PlannedRun& p : plan_grid(run.grid, {}, kVersion).pending) ++shard_runs[shard_of(p.key, options.shards)];
   }
-  const SlurmGridFlags flags{a.all, a.envs, a.optimizers, a.seeds, a.budget, a.knobs};
+  const SlurmGridFlags flags{a.all, a.envs, a.optimizers, a.seeds, a.budget, a.knobs, a.ext, a.ext_timeout};
   return command_slurm(flags, run.grid.size(), shard_runs, options, running_binary_path(), std::cout);
 }
 

@@ -101,6 +101,11 @@ double optimizer_overhead_seconds(const std::string& optimizer, int dim, std::in
 
 double CostModel::run_seconds(const PlannedRun& run) const {
   const EpisodeCost c = episode(run.spec.env, run.key.env_config_hash);
+  if (run.spec.ext) {
+    // an external optimizer: whether it asks for gradients is its own affair; counted at the
+    // gradient episode's cost (the upper bound), its own time unknown
+    return c.gradient_s * static_cast<double>(run.spec.budget);
+  }
   const OptimizerEntry& opt = optimizer_entry(run.spec.optimizer);
   double per_episode = opt.needs_gradient ? c.gradient_s : c.forward_s;
   if (opt.needs_rl) {

@@ -44,19 +44,41 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
     differentiable.push_back(env->differentiable());
     rl.push_back(env->supports_rl());
   }
+  if (!(req.ext_timeout_s > 0.0 && req.ext_timeout_s <= 86400.0))
+    throw UsageError("--ext-timeout must be from 0 to 86400 seconds, got " + std::to_string(req.ext_timeout_s));
+  std::map<std::string, ExtOptimizerSpec> ext;  // by optimizer name, probed
   for (const auto& name : optimizers) {
     if (!seen.insert("opt:" + name).second) throw UsageError("optimizer '" + name + "' given twice");
+    if (const std::string ext_name = ext_name_of(name); !ext_name.empty()) {
+      check_ext_name(ext_name);
+      const auto command = req.ext.find(ext_name);
+      if (command == req.ext.end())
+        throw UsageError("optimizer '" + name + "' needs its command: --ext " + ext_name + "='COMMAND'");
+      ext.emplace(name, ExtOptimizerSpec{ext_name, command->second, req.ext_timeout_s, "", ""});
+      continue;
+    }
     optimizer_entry(name);
   }
+  for (const auto& [name, command] : req.ext)
+    if (!ext.count("ext:" + name))
+      throw UsageError("--ext names 'ext:" + name + "', which is not in the grid's --optimizer list");
   for (const auto& [name, settings] : req.knobs) {
     if (!seen.count("opt:" + name))
       throw UsageError("--set names optimizer '" + name + "', which is not in the grid");
+    if (ext.count(name)) throw UsageError("optimizer '" + name + "' has no knobs to --set");
     make_optimizer(name, settings);  // unknown knob, malformed or out-of-range value: UsageError
   }
+  // the programs say who they are once, before anything runs (UsageError when one cannot)
+  for (auto& [name, spec] : ext) spec = ext_probe(std::move(spec));
 
   std::vector<RunSpec> grid;
   for (std::size_t e = 0; e < envs.size(); ++e) {
     for (const auto& opt : optimizers) {
+      if (const auto x = ext.find(opt); x != ext.end()) {
+        for (int s = 0; s < req.seeds; ++s)
+          grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s), {}, x->second});
+        continue;
+      }
       if (optimizer_entry(opt).needs_gradient && !differentiable[e]) {
         if (envs_explicit && opts_explicit)
           throw UsageError("optimizer '" + opt + "' needs gradients; env '" + envs[e] +
@@ -72,11 +94,25 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
       for (int s = 0; s < req.seeds; ++s) {
         const auto knobs = req.knobs.find(opt);
         grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s),
-                        knobs == req.knobs.end() ? KnobSettings{} : knobs->second});
+                        knobs == req.knobs.end() ? KnobSettings{} : knobs->second, std::nullopt});
       }
     }
   }
   return grid;
+}
+
+void parse_ext_setting(const std::string& text, std::map<std::string, std::string>& ext) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == text.size())
+    throw UsageError("--ext wants NAME=COMMAND (e.g. my-opt='python3 opt.py'), got '" + text + "'");
+  const std::string name = text.substr(0, eq);
+  check_ext_name(name);
+  if (!ext.emplace(name, text.substr(eq + 1)).second) throw UsageError("--ext " + name + " given twice");
+}
+
+std::unique_ptr<Optimizer> make_run_optimizer(const RunSpec& spec) {
+  if (spec.ext) return make_ext_optimizer(*spec.ext, spec.env, spec.rng_seed);
+  return make_optimizer(spec.optimizer, spec.knobs);
 }
 
 void parse_knob_setting(const std::string& text, std::map<std::string, KnobSettings>& knobs) {

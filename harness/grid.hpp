@@ -8,6 +8,8 @@
 
 #include "harness/run_spec.hpp"
 #include "optimizers/core/knobs.hpp"
+#include "optimizers/core/optimizer.hpp"
+#include "optimizers/ext/ext_optimizer.hpp"
 
 namespace dsb {
 
@@ -18,10 +20,15 @@ struct GridRequest {
   int seeds = 1;
   std::int64_t budget = 1000;
   std::map<std::string, KnobSettings> knobs;  // optimizer -> knob -> value (--set OPT.KEY=VALUE)
+  std::map<std::string, std::string> ext;     // NAME -> COMMAND of ext:NAME (--ext NAME=COMMAND)
+  double ext_timeout_s = kExtDefaultTimeoutS;  // per reply of an external optimizer (--ext-timeout)
 };
 
 // "boleap.sigma0=0.3" into knobs["boleap"]["sigma0"] = "0.3"; UsageError naming a malformed one
 void parse_knob_setting(const std::string& text, std::map<std::string, KnobSettings>& knobs);
+
+// "my-opt=python3 opt.py" into ext["my-opt"] = "python3 opt.py"; UsageError naming a malformed one
+void parse_ext_setting(const std::string& text, std::map<std::string, std::string>& ext);
 
 // the largest --budget and --seeds a grid accepts (a run keeps its evals in memory: 48 bytes each)
 inline constexpr std::int64_t kMaxBudget = 1'000'000;
@@ -29,8 +36,13 @@ inline constexpr int kMaxSeeds = 10'000;
 
 // Validates names and applicability (UsageError naming the bad value) and expands the grid.
 // Knobs must name an optimizer of the grid and are checked by building it once.
+// An external optimizer (ext:NAME) needs its --ext NAME=COMMAND and is probed once here (its name
+// and version enter its config, so the run key); it pairs with every env.
 // Pairs that are inapplicable (gradient optimizer on a non-differentiable env) are skipped when
 // they come from --all and refused when both were named explicitly.
 std::vector<RunSpec> expand_grid(const GridRequest& request);
+
+// the optimizer of one run: the registry's (with its knobs), or the external program of spec.ext
+std::unique_ptr<Optimizer> make_run_optimizer(const RunSpec& spec);
 
 }  // namespace dsb

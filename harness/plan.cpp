@@ -5,6 +5,7 @@
 #include "common/config_hash.hpp"
 #include "common/rng.hpp"
 #include "envs/core/registry.hpp"
+#include "harness/grid.hpp"
 #include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
 #include "optimizers/core/registry.hpp"
@@ -44,7 +45,7 @@ GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& don
     const ResolvedConfig& env =
         resolve(plan.env_configs, spec.env, [](const std::string& n) { return shared_env(n)->config(); });
     const ResolvedConfig& opt =
-        resolve(plan.opt_configs, spec.optimizer, [&](const std::string& n) { return make_optimizer(n, spec.knobs)->config(); });
+        resolve(plan.opt_configs, spec.optimizer, [&](const std::string&) { return make_run_optimizer(spec)->config(); });
     RunKey key{spec.env, spec.optimizer, spec.seed, spec.budget, env.hash, opt.hash, harness_version};
     if (shard.count > 1 && shard_of(key, shard.count) != shard.index) continue;
     ++plan.runs;

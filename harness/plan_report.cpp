@@ -18,6 +18,7 @@ namespace {
 constexpr double kShardTargetSeconds = 6.0 * 3600.0;
 
 std::string family_of(const std::string& optimizer) {
+  if (optimizer.rfind("ext:", 0) == 0) return "external (gradient episodes; own time unknown)";
   const OptimizerEntry& e = optimizer_entry(optimizer);
   if (e.needs_rl) return "rl (learner per decision)";
   if (optimizer == "bo" || optimizer == "boleap") return "gp (episodes + GP time)";

@@ -3,10 +3,13 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "optimizers/ext/ext_optimizer.hpp"
 
 namespace dsb {
 
@@ -17,6 +20,7 @@ struct RunSpec {
   std::int64_t budget = 0;   // episodes
   std::uint64_t rng_seed = 0;  // per-run seed = hash(seed index, env, optimizer)
   std::map<std::string, std::string> knobs;  // optimizer knobs set on the command line (--set)
+  std::optional<ExtOptimizerSpec> ext;       // an external optimizer (ext:NAME), probed
 };
 
 // per-run seed: FNV-1a over "env\0optimizer\0seed", mixed once more by splitmix64

@@ -8,6 +8,7 @@
 #include "envs/core/registry.hpp"
 #include "harness/budget.hpp"
 #include "harness/fault_injection.hpp"
+#include "harness/grid.hpp"
 #include "harness/interrupt.hpp"
 #include "harness/plan.hpp"
 #include "harness/progress.hpp"
@@ -126,7 +127,7 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
         RunResult r;
         for (int attempt = 0;; ++attempt) {
           // a resumed run replays its journal; one that diverged from it starts over without
-          const auto opt = make_optimizer(p.spec.optimizer, p.spec.knobs);
+          const auto opt = make_run_optimizer(p.spec);
           CommitListener listener(store, start.run_id, start.committed_episodes);
           RunControl control{&listener, &stop, std::move(start.journal), start.committed_episodes};
           r = execute_run(p.spec, *env, *opt, &progress.episodes_of(w), &team, &control);

@@ -174,6 +174,8 @@ std::string grid_flags_text(const SlurmGridFlags& g) {
   if (!g.optimizers.empty()) words.insert(words.end(), {"--optimizer", shell_quote(join(g.optimizers, ","))});
   words.insert(words.end(), {"--seeds", std::to_string(g.seeds), "--budget", shell_quote(g.budget)});
   for (const auto& k : g.knobs) words.insert(words.end(), {"--set", shell_quote(k)});
+  for (const auto& x : g.ext) words.insert(words.end(), {"--ext", shell_quote(x)});
+  if (!g.ext_timeout.empty()) words.insert(words.end(), {"--ext-timeout", shell_quote(g.ext_timeout)});
   return join(words, " ");
 }
 
@@ -259,6 +261,8 @@ void write_script(const fs::path& path, const std::string& text) {
 }
 
 }  // namespace
+
+std::string shell_word(const std::string& s) { return shell_quote(s); }
 
 std::string running_binary_path() {
   std::error_code ec;

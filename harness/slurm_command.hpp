@@ -19,6 +19,8 @@ struct SlurmGridFlags {
   int seeds = 1;
   std::string budget = "1000";
   std::vector<std::string> knobs;  // --set OPT.KNOB=VALUE
+  std::vector<std::string> ext;    // --ext NAME=COMMAND
+  std::string ext_timeout;         // --ext-timeout SECONDS (empty: not given)
 };
 
 // Slurm's default MaxArraySize is 1001: array indices 0..1000
@@ -38,6 +40,9 @@ struct SlurmOptions {
 // (absolute). Returns 0.
 int command_slurm(const SlurmGridFlags& grid, std::size_t grid_runs, const std::vector<std::int64_t>& shard_runs,
                   const SlurmOptions& options, const std::string& harness_path, std::ostream& out);
+
+// s as one word that bash reads back unchanged (quoted only when it must be)
+std::string shell_word(const std::string& s);
 
 // The absolute path of the running program (/proc/self/exe).
 std::string running_binary_path();

@@ -9,7 +9,7 @@ packages=(
   libnlopt-cxx-dev libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev libsleef-dev zlib1g-dev libgd-dev
   libmujoco-dev libqhull-dev libbullet-dev
-  python3 python3-pandas python3-matplotlib python3-scipy
+  python3 python3-pandas python3-matplotlib python3-scipy python3-optuna
   python3-dev python3-numpy pybind11-dev
   slurmctld slurmd slurm-client munge
   firefox-esr

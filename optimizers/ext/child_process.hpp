@@ -1,0 +1,71 @@
+#pragma once
+// A child process spoken to in lines: `/bin/sh -c COMMAND` with its stdin, stdout and stderr
+// connected to us, in its own process group (a terminal's Ctrl-C reaches the harness, which
+// stops the runs in order, not the child), inheriting no other descriptor of ours (the
+// database's lock stays ours). Every wait has a deadline; stderr is drained all the time into a
+// capped tail, shown in errors. The destructor kills (SIGKILL to the group) and reaps.
+#include <sys/types.h>
+
+#include <chrono>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace dsb {
+
+class ChildProcess {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  // throws std::runtime_error when the process cannot be started
+  explicit ChildProcess(const std::string& command);
+  ~ChildProcess();
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+
+  enum class Io { ok, closed, timeout };
+
+  // writes text whole before the deadline (reading stdout and stderr meanwhile, so a child
+  // that writes while we write cannot block us); closed when the child no longer reads
+  Io write(std::string_view text, Clock::time_point deadline);
+  // the next line of stdout without its '\n'; closed at end of file (a last unterminated line is
+  // kept in partial()), timeout at the deadline. Lines over max_line bytes end the read as
+  // closed with too_long() set.
+  Io read_line(std::string& line, Clock::time_point deadline);
+  // no more input for the child (it reads end of file)
+  void close_stdin();
+  // the exit status (as waitpid's) once the child has exited, before the deadline, else nullopt
+  std::optional<int> wait_exit(Clock::time_point deadline);
+  // SIGKILL to the group, then reap; safe to call twice
+  void kill();
+
+  pid_t pid() const { return pid_; }
+  bool too_long() const { return too_long_; }
+  const std::string& partial() const { return out_; }
+  // the last bytes of stderr, one line (newlines shown as " | "), at most max_chars
+  std::string stderr_tail(std::size_t max_chars = 400) const;
+
+  static constexpr std::size_t kMaxLine = 256u << 20;   // 256 MiB: a 400-D batch of 10^4 gradients fits
+  static constexpr std::size_t kStderrKeep = 16u << 10;  // bytes of stderr kept
+
+ private:
+  // one poll round until the deadline: reads what stdout and stderr have, writes pending input
+  // when want_write; false at the deadline
+  bool pump(Clock::time_point deadline, bool want_write);
+  void read_available(int& fd, bool is_stdout);
+
+  pid_t pid_ = -1;
+  bool reaped_ = false;
+  int status_ = 0;
+  int in_ = -1, out_fd_ = -1, err_fd_ = -1;  // our ends (in_ a socket: writes never raise SIGPIPE)
+  std::string out_;                           // stdout read but not yet returned as lines
+  std::size_t scanned_ = 0;                   // out_[0, scanned_) holds no '\n'
+  std::string err_;                           // the stderr tail
+  std::string_view pending_;                  // input still to write
+  bool too_long_ = false;
+};
+
+// "exited with status 3", "killed by signal 9 (Killed)"
+std::string describe_exit(int wait_status);
+
+}  // namespace dsb
