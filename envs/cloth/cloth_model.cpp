@@ -81,6 +81,16 @@ ClothState rest_state(const ClothModel& m) {
   return s;
 }
 
+Vec3 centre_of_mass(const ClothModel& m, std::span<const Vec3> x) {
+  double total = 0.0;
+  Vec3 sum = Vec3::Zero();
+  for (int i = 0; i < m.vertices(); ++i) {
+    sum += m.mass[i] * x[i];
+    total += m.mass[i];
+  }
+  return sum / total;
+}
+
 ClothModel build_grid(const GridSpec& g) {
   auto fail = [](const std::string& field, const std::string& why) { throw ConfigError("cloth grid", field, why); };
   if (g.cols < 2 || g.rows < 2) fail("cols/rows", "must be >= 2");

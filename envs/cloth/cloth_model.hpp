@@ -109,6 +109,9 @@ struct ClothState {
 // at rest in the rest positions
 ClothState rest_state(const ClothModel& m);
 
+// mass-weighted mean of the positions x (n), summed in vertex order
+Vec3 centre_of_mass(const ClothModel& m, std::span<const Vec3> x);
+
 // A W x H grid in the plane origin + u axis_u + v axis_v, u in [0, width], v in [0, height];
 // vertex (col, row) at origin + col du axis_u + row dv axis_v, index row * W + col. Springs, in
 // this order: structural (horizontal row by row, then vertical), shear (both diagonals of each

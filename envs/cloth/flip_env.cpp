@@ -273,13 +273,20 @@ ClothState FlipEnv::final_state(std::span<const double> x) const {
   return w.state;
 }
 
-std::vector<char> FlipEnv::contact_pattern(std::span<const double> x) const {
+std::unique_ptr<Workspace> FlipEnv::taped_rollout(std::span<const double> x) const {
   const FlipModel& m = model();
   auto base = make_workspace();
   auto& ws = static_cast<FlipWorkspace&>(*base);
   fill_path(x, ws.path);
   ws.pan->set_path(ws.path, ws.cloth.dt);
   cloth_rollout(ws.cloth, ClothInputs{m.stiffness, {}}, rest_state(ws.cloth), m.steps, ws.tape);
+  return base;
+}
+
+std::vector<char> FlipEnv::contact_pattern(std::span<const double> x) const {
+  const FlipModel& m = model();
+  const auto base = taped_rollout(x);
+  const auto& ws = static_cast<const FlipWorkspace&>(*base);
   const int n = ws.cloth.vertices();
   // the surfaces that acted on each vertex in each step, as cloth_step recorded them
   std::vector<char> flags(std::size_t(m.steps) * n, 0);

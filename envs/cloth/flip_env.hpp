@@ -105,6 +105,8 @@ class FlipEnv : public Env {
 
  private:
   void fill_path(std::span<const double> x, std::vector<PanPose>& path) const;
+  // a fresh FlipWorkspace after a forward rollout at x with its tape kept (frames, contact_pattern)
+  std::unique_ptr<Workspace> taped_rollout(std::span<const double> x) const;
 
   FlipConfig cfg_;
   LazyModel<FlipModel> model_;

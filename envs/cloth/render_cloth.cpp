@@ -27,17 +27,6 @@ void add_grid(Scene& sc, Role role, const std::string& name, std::span<const Vec
   }
 }
 
-// mass-weighted mean of the positions, vertex order (the single loss's centre of mass)
-Vec3 mass_centre(const ClothModel& c, std::span<const Vec3> x) {
-  double total = 0.0;
-  Vec3 sum = Vec3::Zero();
-  for (int i = 0; i < c.vertices(); ++i) {
-    sum += c.mass[i] * x[i];
-    total += c.mass[i];
-  }
-  return sum / total;
-}
-
 }  // namespace
 
 std::vector<Frame> SwingEnv::frames(std::span<const double> x, int n, ThreadTeam&) const {
@@ -68,7 +57,7 @@ std::vector<Frame> SwingEnv::frames(std::span<const double> x, int n, ThreadTeam
     // the target of the loss: the centre of mass, the 4 corners or the whole mesh
     if (loss_ == SwingLoss::single) {
       sc.discs.push_back({Role::target, "target", sp(m.target_com), 0.012, false});
-      sc.discs.push_back({Role::state, "centre of mass", sp(mass_centre(c, xs)), 0.008, true});
+      sc.discs.push_back({Role::state, "centre of mass", sp(centre_of_mass(c, xs)), 0.008, true});
     } else if (loss_ == SwingLoss::corner) {
       for (int v : m.corners) {
         sc.discs.push_back({Role::target, "target", sp(m.target[v]), 0.012, false});
@@ -91,11 +80,8 @@ std::vector<Frame> SwingEnv::frames(std::span<const double> x, int n, ThreadTeam
 
 std::vector<Frame> FlipEnv::frames(std::span<const double> x, int n, ThreadTeam&) const {
   const FlipModel& m = model();
-  auto base = make_workspace();
-  auto& ws = static_cast<FlipWorkspace&>(*base);
-  fill_path(x, ws.path);
-  ws.pan->set_path(ws.path, ws.cloth.dt);
-  cloth_rollout(ws.cloth, ClothInputs{m.stiffness, {}}, rest_state(ws.cloth), m.steps, ws.tape);
+  const auto base = taped_rollout(x);
+  const auto& ws = static_cast<const FlipWorkspace&>(*base);
   const PanShape& pan = cfg_.pan;
   const std::array<Vec3, 4> targets = corner_targets(ws.path.back());
   std::vector<Frame> out;

@@ -43,17 +43,6 @@ void run_forward(const SwingModel& m, std::span<const double> stiffness, ClothSt
   for (int t = 0; t < m.steps; ++t) cloth_step(m.cloth, in, t, s, force);
 }
 
-Vec3 centre_of_mass(const ClothModel& c, std::span<const Vec3> x) {
-  // mass-weighted mean, vertex order
-  double total = 0.0;
-  Vec3 sum = Vec3::Zero();
-  for (int i = 0; i < c.vertices(); ++i) {
-    sum += c.mass[i] * x[i];
-    total += c.mass[i];
-  }
-  return sum / total;
-}
-
 bool finite_state(const ClothState& s) {
   for (std::size_t i = 0; i < s.x.size(); ++i)
     if (!s.x[i].allFinite() || !s.v[i].allFinite()) return false;
