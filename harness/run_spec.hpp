@@ -19,8 +19,8 @@ struct RunSpec {
   int seed = 0;              // seed index 0..seeds-1
   std::int64_t budget = 0;   // episodes
   std::uint64_t rng_seed = 0;  // per-run seed = hash(seed index, env, optimizer)
-  std::map<std::string, std::string> knobs;  // optimizer knobs set on the command line (--set)
-  std::optional<ExtOptimizerSpec> ext;       // an external optimizer (ext:NAME), probed
+  std::map<std::string, std::string> knobs = {};  // optimizer knobs set on the command line (--set)
+  std::optional<ExtOptimizerSpec> ext = {};  // an external optimizer (ext:NAME), probed
 };
 
 // per-run seed: FNV-1a over "env\0optimizer\0seed", mixed once more by splitmix64
