@@ -80,6 +80,13 @@ class Session:
         ends inside the batch, only the points that fit are evaluated: the lists are shorter."""
         if self.remaining <= 0:
             raise BudgetEnd()
+        reply = self._exchange(points, grad)
+        losses = [_loss(v) for v in reply["losses"]]
+        return losses, (reply["grads"] if grad else None)
+
+    def _exchange(self, points, grad):
+        """sends one ask (points as a JSON list or a base64 string) and returns the reply, with
+        used and remaining taken from it"""
         message = {"ask": points}
         if grad:
             message["grad"] = True
@@ -88,8 +95,7 @@ class Session:
         if "losses" not in reply:
             raise ProtocolError("unexpected reply %r" % (reply,))
         self.used, self.remaining = int(reply["used"]), int(reply["remaining"])
-        losses = [_loss(v) for v in reply["losses"]]
-        return losses, (reply["grads"] if grad else None)
+        return reply
 
     def ask_array(self, xs, grad=False):
         """ask() for numpy users, in the protocol's binary form: xs a 2-D array (one point per
@@ -101,14 +107,7 @@ class Session:
         if self.remaining <= 0:
             raise BudgetEnd()
         xs = np.ascontiguousarray(np.asarray(xs, dtype="<f8").reshape(-1, self.dim))
-        message = {"ask": base64.b64encode(xs.tobytes()).decode("ascii")}
-        if grad:
-            message["grad"] = True
-        self._send(message)
-        reply = self._receive()
-        if "losses" not in reply:
-            raise ProtocolError("unexpected reply %r" % (reply,))
-        self.used, self.remaining = int(reply["used"]), int(reply["remaining"])
+        reply = self._exchange(base64.b64encode(xs.tobytes()).decode("ascii"), grad)
         losses = np.frombuffer(base64.b64decode(reply["losses"]), dtype="<f8").copy()
         losses[np.isnan(losses)] = np.inf
         grads = None
