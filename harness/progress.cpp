@@ -56,11 +56,20 @@ std::string Progress::line() const {
   // the estimated work done: finished runs, and running runs' episodes at their estimated cost
   double done_s = finished_cost_s_.load();
   for (const auto& s : slots_) done_s += static_cast<double>(s->episodes.load() - s->run_start.load()) * s->per_episode_s.load();
+  // the ETA: the speed seen so far once 2% of the estimated work is done; before that an
+  // extrapolation from a few cheap runs or the first episodes of a GP run is noise (it printed
+  // 50 hours for a 30-minute grid), so the plan's own estimate, the work left over the workers
   std::string eta = "--";
-  if (done_s > 0.0 && elapsed > 1.0 && total_cost_s_ > 0.0) {
-    const double left = std::max(0.0, (total_cost_s_ - done_s) * elapsed / done_s);
-    eta = fmt::format("{:02d}:{:02d}:{:02d}", static_cast<int>(left / 3600), static_cast<int>(left / 60) % 60,
-                      static_cast<int>(left) % 60);
+  const auto hms = [](double s) {
+    return fmt::format("{:02d}:{:02d}:{:02d}", static_cast<int>(s / 3600), static_cast<int>(s / 60) % 60,
+                       static_cast<int>(s) % 60);
+  };
+  if (total_cost_s_ > 0.0) {
+    const double left_work = std::max(0.0, total_cost_s_ - done_s);
+    if (elapsed > 1.0 && done_s >= 0.02 * total_cost_s_)
+      eta = hms(left_work * elapsed / done_s);
+    else
+      eta = hms(left_work / static_cast<double>(slots_.size())) + " (planned)";
   }
   return fmt::format("runs {}/{} ({} failed), episodes {}/{}, elapsed {:.1f} s, {:.1f}% of the estimated work, ETA {}",
                      runs_done_.load(), total_runs_, runs_failed_.load(), episodes(), total_episodes_, elapsed,

@@ -2,8 +2,9 @@
 // Progress of a grid: runs done/total, episodes, and an ETA from the cost model
 // (harness/cost_model.hpp): the share of the grid's estimated work that is done (finished runs,
 // plus the episodes of running runs at their estimated cost each), extrapolated at the speed seen
-// so far. Counts episodes inside runs, so runs that take hours still show movement. On a terminal
-// the line is redrawn in place; on a pipe or file a plain line is printed periodically.
+// so far once 2% of it is done (the plan's estimate before that). Counts episodes inside runs, so
+// runs that take hours still show movement. On a terminal the line is redrawn in place; on a pipe
+// or file a plain line is printed periodically.
 #include <atomic>
 #include <chrono>
 #include <condition_variable>

@@ -1,8 +1,10 @@
 // The grid's cost model and its uses: the progress line's share of the estimated work and ETA,
 // cheapest-first order, shards cut from run keys, durations as the plan prints them.
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -18,17 +20,30 @@ TEST(Progress, TheEstimatedWorkDoneCountsFinishedRunsAndTheEpisodesOfRunningOnes
   // two runs of 10 episodes, estimated 100 s and 300 s
   Progress p(2, 20, 400.0, 2, nullptr);
   p.start();
-  EXPECT_NE(p.line().find("0.0% of the estimated work, ETA --"), std::string::npos) << p.line();
+  // before 2% of the work is done (and within the first second) the ETA is the plan's: 400 s / 2 workers
+  EXPECT_NE(p.line().find("0.0% of the estimated work, ETA 00:03:20 (planned)"), std::string::npos) << p.line();
   p.run_started(0, 10.0);  // 100 s / 10 episodes
   p.run_started(1, 30.0);
   p.episodes_of(0) += 4;   // 40 s of work
   p.episodes_of(1) += 2;   // 60 s
   EXPECT_NE(p.line().find("episodes 6/20"), std::string::npos) << p.line();
-  EXPECT_NE(p.line().find("25.0% of the estimated work"), std::string::npos) << p.line();
+  EXPECT_NE(p.line().find("25.0% of the estimated work, ETA 00:02:30 (planned)"), std::string::npos) << p.line();
   p.episodes_of(0) += 6;
   p.run_finished(0, false, 100.0);  // the finished run counts at its estimate, not twice
   EXPECT_NE(p.line().find("runs 1/2 (0 failed)"), std::string::npos) << p.line();
   EXPECT_NE(p.line().find("40.0% of the estimated work"), std::string::npos) << p.line();
+}
+
+TEST(Progress, TheEtaExtrapolatesTheSpeedSeenOnceTwoPercentOfTheWorkIsDone) {
+  Progress p(2, 20, 100.0, 1, nullptr);
+  p.start();
+  p.run_started(0, 5.0);
+  p.episodes_of(0) += 10;
+  p.run_finished(0, false, 50.0);  // half the work
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  // half done in about 1.1 s: about 1 s left, from the speed seen, not the plan's 50 s
+  EXPECT_NE(p.line().find("50.0% of the estimated work, ETA 00:00:01"), std::string::npos) << p.line();
+  EXPECT_EQ(p.line().find("planned"), std::string::npos) << p.line();
 }
 
 TEST(PlanOrder, CheapestFirstIsStableSoEqualCostsKeepGridOrder) {
