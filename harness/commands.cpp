@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "common/error.hpp"
@@ -57,6 +58,12 @@ int command_list() {
   for (const auto& e : optimizer_entries())
     std::cout << fmt::format("{:<22} {:>14} {:>8}  {}\n", e.name, e.needs_gradient ? "yes" : "no",
                              e.needs_rl ? "yes" : "no", e.description);
+  std::cout << fmt::format("{:<22} {:>14} {:>8}  {}\n", "ext:NAME", "either", "no",
+                           "your own optimizer, a program on the process protocol: --ext NAME='COMMAND' "
+                           "(docs/ext-protocol.md)");
+  std::cout << "\nknobs (--set OPTIMIZER.KNOB=VALUE; a variant is its own run)\n";
+  for (const auto& e : optimizer_entries())
+    if (!e.knobs.empty()) std::cout << fmt::format("{:<22} {}\n", e.name, fmt::join(e.knobs, ", "));
   return 0;
 }
 

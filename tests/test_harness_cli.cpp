@@ -13,6 +13,8 @@
 #include <thread>
 #include <tuple>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <sqlite3.h>
@@ -20,6 +22,7 @@
 #include "envs/core/gradient_check.hpp"
 #include "envs/core/registry.hpp"
 #include "harness/grid.hpp"
+#include "optimizers/core/registry.hpp"
 #include "support/harness_process.hpp"
 
 namespace dsb {
@@ -419,6 +422,15 @@ TEST_F(HarnessCli, ListGradcheckVersionAndHelp) {
   EXPECT_NE(list.out.find("cartpole3"), std::string::npos);
   EXPECT_NE(list.out.find("400"), std::string::npos);
   EXPECT_NE(list.out.find("cmaes"), std::string::npos);
+  EXPECT_NE(list.out.find("ext:NAME"), std::string::npos) << list.out;
+  // every optimizer with knobs lists exactly the keys --set accepts
+  const auto knobs_at = list.out.find("knobs (--set");
+  ASSERT_NE(knobs_at, std::string::npos) << list.out;
+  for (const auto& e : optimizer_entries()) {
+    if (e.knobs.empty()) continue;
+    std::string line = fmt::format("{:<22} {}", e.name, fmt::join(e.knobs, ", "));
+    EXPECT_NE(list.out.find(line + "\n", knobs_at), std::string::npos) << line;
+  }
   const auto gc = harness("gradcheck --env cartpole3 --points 2 --seed 1 --amplitude 0.3");
   EXPECT_EQ(gc.code, 0) << gc.out;
   EXPECT_NE(gc.out.find("PASS"), std::string::npos);
