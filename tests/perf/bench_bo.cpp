@@ -104,15 +104,11 @@ BENCHMARK(BM_FullBoleapRun1000Rastrigin10)->Unit(benchmark::kSecond)->Iterations
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  dsb::perf::TimingReporter rep;
-  benchmark::RunSpecifiedBenchmarks(&rep);
-  const double add = rep.seconds("BM_GpAddPoint/1000"), full = rep.seconds("BM_GpRefactorization/1000");
-  if (add > 0 && full > 0)
-    std::printf("\nratio (same run): full factorization / O(n^2) add_point at n = 1000 = %.0f\n", full / add);
-  for (const char* name : {"BM_FullBoRun1000Rastrigin10/iterations:1", "BM_FullBoleapRun1000Rastrigin10/iterations:1"})
-    if (rep.seconds(name) > 0) std::printf("%s: %.1f s (targets: bo < 300 s, boleap < 60 s)\n", name, rep.seconds(name));
-  benchmark::Shutdown();
-  return 0;
+  return dsb::perf::run_benchmarks(argc, argv, [&](const dsb::perf::TimingReporter& rep) {
+    const double add = rep.seconds("BM_GpAddPoint/1000"), full = rep.seconds("BM_GpRefactorization/1000");
+    if (add > 0 && full > 0)
+      std::printf("\nratio (same run): full factorization / O(n^2) add_point at n = 1000 = %.0f\n", full / add);
+    for (const char* name : {"BM_FullBoRun1000Rastrigin10/iterations:1", "BM_FullBoleapRun1000Rastrigin10/iterations:1"})
+      if (rep.seconds(name) > 0) std::printf("%s: %.1f s (targets: bo < 300 s, boleap < 60 s)\n", name, rep.seconds(name));
+  });
 }

@@ -104,22 +104,18 @@ BENCHMARK(BM_GdRun1000EpisodesCartpole3)->Unit(benchmark::kMillisecond);
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  dsb::perf::TimingReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  const double fwd = reporter.seconds("BM_Cartpole3Forward"),
-               grad = reporter.seconds("BM_Cartpole3ForwardGradient"),
-               fresh = reporter.seconds("BM_Cartpole3ForwardGradientFreshWorkspace"),
-               fd = reporter.seconds("BM_Cartpole3CentralDifferences"),
-               gd = reporter.seconds("BM_GdRun1000EpisodesCartpole3");
-  if (fwd > 0 && grad > 0 && fd > 0) {
-    std::printf("\nratios (same run):\n");
-    std::printf("  forward+gradient / forward          = %6.2f   (target <= 3)\n", grad / fwd);
-    std::printf("  central differences / reverse pass   = %6.0f   (target >= 100)\n", fd / grad);
-    if (fresh > 0) std::printf("  fresh workspace / reused workspace   = %6.2f\n", fresh / grad);
-  }
-  if (gd > 0) std::printf("  1000-episode gd run on cartpole3     = %6.3f s (target < 2 s)\n", gd);
-  benchmark::Shutdown();
-  return 0;
+  return dsb::perf::run_benchmarks(argc, argv, [&](const dsb::perf::TimingReporter& reporter) {
+    const double fwd = reporter.seconds("BM_Cartpole3Forward"),
+                 grad = reporter.seconds("BM_Cartpole3ForwardGradient"),
+                 fresh = reporter.seconds("BM_Cartpole3ForwardGradientFreshWorkspace"),
+                 fd = reporter.seconds("BM_Cartpole3CentralDifferences"),
+                 gd = reporter.seconds("BM_GdRun1000EpisodesCartpole3");
+    if (fwd > 0 && grad > 0 && fd > 0) {
+      std::printf("\nratios (same run):\n");
+      std::printf("  forward+gradient / forward          = %6.2f   (target <= 3)\n", grad / fwd);
+      std::printf("  central differences / reverse pass   = %6.0f   (target >= 100)\n", fd / grad);
+      if (fresh > 0) std::printf("  fresh workspace / reused workspace   = %6.2f\n", fresh / grad);
+    }
+    if (gd > 0) std::printf("  1000-episode gd run on cartpole3     = %6.3f s (target < 2 s)\n", gd);
+  });
 }

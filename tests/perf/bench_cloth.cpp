@@ -120,23 +120,20 @@ int main(int argc, char** argv) {
   std::vector<double> rss;
   if (full)
     for (const auto& task : tasks()) rss.push_back(child_peak_rss_mb(task));
-  benchmark::Initialize(&argc, argv);
-  perf::TimingReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-
-  std::printf("\n| task | dims | forward ms | gradient ms | gradient / forward | central differences ms "
-              "(peer) | peer / gradient | 1,000 gradients s | peak MB |\n|---|---|---|---|---|---|---|---|---|\n");
-  for (std::size_t i = 0; i < tasks().size(); ++i) {
-    const std::string& task = tasks()[i];
-    const double f = reporter.seconds("BM_ClothForward/" + task + "/real_time");
-    const double g = reporter.seconds("BM_ClothGradient/" + task + "/real_time");
-    const double cd = reporter.seconds("BM_ClothCentralDifference/" + task + "/real_time");
-    const double k = reporter.seconds("BM_Cloth1000GradientsFull/" + task + "/iterations:1/real_time");
-    if (f <= 0.0 || g <= 0.0) continue;
-    std::printf("| %s | %d | %.2f | %.2f | %.2fx | %.1f | %.1fx | %s | %s |\n", task.c_str(), make_env(task)->dim(),
-                1e3 * f, 1e3 * g, g / f, 1e3 * cd, cd > 0.0 ? cd / g : 0.0,
-                k > 0.0 ? std::to_string(k).substr(0, 5).c_str() : "-",
-                i < rss.size() ? std::to_string(static_cast<int>(std::lround(rss[i]))).c_str() : "-");
-  }
-  return 0;
+  return perf::run_benchmarks(argc, argv, [&](const perf::TimingReporter& reporter) {
+    std::printf("\n| task | dims | forward ms | gradient ms | gradient / forward | central differences ms "
+                "(peer) | peer / gradient | 1,000 gradients s | peak MB |\n|---|---|---|---|---|---|---|---|---|\n");
+    for (std::size_t i = 0; i < tasks().size(); ++i) {
+      const std::string& task = tasks()[i];
+      const double f = reporter.seconds("BM_ClothForward/" + task + "/real_time");
+      const double g = reporter.seconds("BM_ClothGradient/" + task + "/real_time");
+      const double cd = reporter.seconds("BM_ClothCentralDifference/" + task + "/real_time");
+      const double k = reporter.seconds("BM_Cloth1000GradientsFull/" + task + "/iterations:1/real_time");
+      if (f <= 0.0 || g <= 0.0) continue;
+      std::printf("| %s | %d | %.2f | %.2f | %.2fx | %.1f | %.1fx | %s | %s |\n", task.c_str(), make_env(task)->dim(),
+                  1e3 * f, 1e3 * g, g / f, 1e3 * cd, cd > 0.0 ? cd / g : 0.0,
+                  k > 0.0 ? std::to_string(k).substr(0, 5).c_str() : "-",
+                  i < rss.size() ? std::to_string(static_cast<int>(std::lround(rss[i]))).c_str() : "-");
+    }
+  });
 }

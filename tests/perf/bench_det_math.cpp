@@ -63,17 +63,13 @@ BENCHMARK(BM_pow_det);
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  dsb::perf::TimingReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  std::printf("\nper call, det / glibc (same run):\n");
-  for (const char* fn : {"exp", "log", "sin", "cos", "tanh", "pow"}) {
-    const double g = reporter.seconds(std::string("BM_") + fn + "_glibc") / kArgs,
-                 d = reporter.seconds(std::string("BM_") + fn + "_det") / kArgs;
-    if (g > 0 && d > 0)
-      std::printf("  %-5s %6.1f ns vs %6.1f ns  = %5.2f x\n", fn, 1e9 * d, 1e9 * g, d / g);
-  }
-  benchmark::Shutdown();
-  return 0;
+  return dsb::perf::run_benchmarks(argc, argv, [&](const dsb::perf::TimingReporter& reporter) {
+    std::printf("\nper call, det / glibc (same run):\n");
+    for (const char* fn : {"exp", "log", "sin", "cos", "tanh", "pow"}) {
+      const double g = reporter.seconds(std::string("BM_") + fn + "_glibc") / kArgs,
+                   d = reporter.seconds(std::string("BM_") + fn + "_det") / kArgs;
+      if (g > 0 && d > 0)
+        std::printf("  %-5s %6.1f ns vs %6.1f ns  = %5.2f x\n", fn, 1e9 * d, 1e9 * g, d / g);
+    }
+  });
 }

@@ -76,34 +76,30 @@ BENCHMARK(BM_InProcessRun)->ArgsProduct({{10, 400}, {1, 16, 64}})
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  dsb::perf::TimingReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  const double rollout = reporter.seconds("BM_Cartpole3Forward");
-  std::printf("\nprotocol overhead per episode (same run; (%lld-episode run - %lld-episode run) / %lld, minus the "
-              "in-process episode):\n", static_cast<long long>(kLong), static_cast<long long>(kShort),
-              static_cast<long long>(kLong - kShort));
-  for (const int binary : {0, 1}) {
-    for (const int dim : {10, 400}) {
-      for (const int batch : {1, 16, 64}) {
-        const std::string args = std::to_string(dim) + "/" + std::to_string(batch);
-        auto run = [&](std::int64_t episodes) {
-          return reporter.seconds("BM_ExtEchoRun/" + args + "/" + std::to_string(episodes) + "/" +
-                                  std::to_string(binary) + "/real_time");
-        };
-        const double long_run = run(kLong), short_run = run(kShort), direct = reporter.seconds("BM_InProcessRun/" + args);
-        if (long_run <= 0 || short_run <= 0 || direct <= 0) continue;
-        const double per_episode =
-            (long_run - short_run) / static_cast<double>(kLong - kShort) - direct / static_cast<double>(kLong);
-        std::printf("  %-6s D = %3d, batch %2d: %8.2f us per episode", binary ? "base64" : "JSON", dim, batch,
-                    per_episode * 1e6);
-        if (rollout > 0)
-          std::printf(" = %6.3f x a cartpole3 forward rollout (%.1f us)", per_episode / rollout, rollout * 1e6);
-        std::printf("\n");
+  return dsb::perf::run_benchmarks(argc, argv, [&](const dsb::perf::TimingReporter& reporter) {
+    const double rollout = reporter.seconds("BM_Cartpole3Forward");
+    std::printf("\nprotocol overhead per episode (same run; (%lld-episode run - %lld-episode run) / %lld, minus the "
+                "in-process episode):\n", static_cast<long long>(kLong), static_cast<long long>(kShort),
+                static_cast<long long>(kLong - kShort));
+    for (const int binary : {0, 1}) {
+      for (const int dim : {10, 400}) {
+        for (const int batch : {1, 16, 64}) {
+          const std::string args = std::to_string(dim) + "/" + std::to_string(batch);
+          auto run = [&](std::int64_t episodes) {
+            return reporter.seconds("BM_ExtEchoRun/" + args + "/" + std::to_string(episodes) + "/" +
+                                    std::to_string(binary) + "/real_time");
+          };
+          const double long_run = run(kLong), short_run = run(kShort), direct = reporter.seconds("BM_InProcessRun/" + args);
+          if (long_run <= 0 || short_run <= 0 || direct <= 0) continue;
+          const double per_episode =
+              (long_run - short_run) / static_cast<double>(kLong - kShort) - direct / static_cast<double>(kLong);
+          std::printf("  %-6s D = %3d, batch %2d: %8.2f us per episode", binary ? "base64" : "JSON", dim, batch,
+                      per_episode * 1e6);
+          if (rollout > 0)
+            std::printf(" = %6.3f x a cartpole3 forward rollout (%.1f us)", per_episode / rollout, rollout * 1e6);
+          std::printf("\n");
+        }
       }
     }
-  }
-  benchmark::Shutdown();
-  return 0;
+  });
 }

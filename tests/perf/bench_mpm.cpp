@@ -169,26 +169,24 @@ int main(int argc, char** argv) {
   }();
   const double rss_forward = full ? child_peak_rss_mb(false) : 0.0;
   const double rss_gradient = full ? child_peak_rss_mb(true) : 0.0;
-  benchmark::Initialize(&argc, argv);
-  dsb::perf::TimingReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  const double f1 = reporter.seconds("BM_ForwardEpisodeFull/1/iterations:1/real_time");
-  const double f2 = reporter.seconds("BM_ForwardEpisodeFull/2/iterations:1/real_time");
-  const double g1 = reporter.seconds("BM_GradientEpisodeFull/1/iterations:1/real_time");
-  const double g2 = reporter.seconds("BM_GradientEpisodeFull/2/iterations:1/real_time");
-  const double substeps = static_cast<double>(kEnvSteps) * scene().config.substeps;
-  if (f1 > 0.0) {
-    std::printf("\nscene: %d particles, %dx%dx%d grid, dt %g, %.0f substeps\n", kParticles, scene().config.grid[0],
-                scene().config.grid[1], scene().config.grid[2], scene().config.dt, substeps);
-    std::printf("forward: %.2f s = %.2f M particle-substeps/s (1 thread)\n", f1, kParticles * substeps / f1 / 1e6);
-    if (g1 > 0.0) std::printf("gradient episode: %.2f s = %.2fx the forward (1 thread)\n", g1, g1 / f1);
-    if (f2 > 0.0) std::printf("2 threads: forward %.2fx, gradient %.2fx one thread\n", f1 / f2, g2 > 0 ? g1 / g2 : 0.0);
-    print_phases("forward", forward_phases);
-    print_phases("gradient", gradient_phases);
-  }
-  if (full)
-    std::printf("peak RSS of a process running one episode: forward %.0f MB, gradient %.0f MB (full history of "
-                "the particle states: %.0f MB)\n",
-                rss_forward, rss_gradient, substeps * kParticles * sizeof(Particle) / 1e6);
-  return 0;
+  return perf::run_benchmarks(argc, argv, [&](const perf::TimingReporter& reporter) {
+    const double f1 = reporter.seconds("BM_ForwardEpisodeFull/1/iterations:1/real_time");
+    const double f2 = reporter.seconds("BM_ForwardEpisodeFull/2/iterations:1/real_time");
+    const double g1 = reporter.seconds("BM_GradientEpisodeFull/1/iterations:1/real_time");
+    const double g2 = reporter.seconds("BM_GradientEpisodeFull/2/iterations:1/real_time");
+    const double substeps = static_cast<double>(kEnvSteps) * scene().config.substeps;
+    if (f1 > 0.0) {
+      std::printf("\nscene: %d particles, %dx%dx%d grid, dt %g, %.0f substeps\n", kParticles, scene().config.grid[0],
+                  scene().config.grid[1], scene().config.grid[2], scene().config.dt, substeps);
+      std::printf("forward: %.2f s = %.2f M particle-substeps/s (1 thread)\n", f1, kParticles * substeps / f1 / 1e6);
+      if (g1 > 0.0) std::printf("gradient episode: %.2f s = %.2fx the forward (1 thread)\n", g1, g1 / f1);
+      if (f2 > 0.0) std::printf("2 threads: forward %.2fx, gradient %.2fx one thread\n", f1 / f2, g2 > 0 ? g1 / g2 : 0.0);
+      print_phases("forward", forward_phases);
+      print_phases("gradient", gradient_phases);
+    }
+    if (full)
+      std::printf("peak RSS of a process running one episode: forward %.0f MB, gradient %.0f MB (full history of "
+                  "the particle states: %.0f MB)\n",
+                  rss_forward, rss_gradient, substeps * kParticles * sizeof(Particle) / 1e6);
+  });
 }

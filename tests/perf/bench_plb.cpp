@@ -75,25 +75,22 @@ int main(int argc, char** argv) {
   std::vector<double> rss;
   if (full)
     for (const auto& task : mpm::plb_tasks()) rss.push_back(child_peak_rss_mb("plb-" + task.name));
-  benchmark::Initialize(&argc, argv);
-  perf::TimingReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-
-  if (reporter.seconds(full_name("Forward", mpm::plb_tasks().front().name, 1)) <= 0.0) return 0;
-  std::printf("\n| task | particles | dims | forward s (1 / 2 threads) | gradient s (1 / 2 threads) | "
-              "gradient / forward | peak MB |\n|---|---|---|---|---|---|---|\n");
-  for (std::size_t i = 0; i < mpm::plb_tasks().size(); ++i) {
-    const auto& task = mpm::plb_tasks()[i];
-    const auto env = make_env("plb-" + task.name);
-    int particles = 0;
-    for (const auto& shape : task.shapes) particles += shape.particles;
-    const double f1 = reporter.seconds(full_name("Forward", task.name, 1));
-    const double f2 = reporter.seconds(full_name("Forward", task.name, 2));
-    const double g1 = reporter.seconds(full_name("Gradient", task.name, 1));
-    const double g2 = reporter.seconds(full_name("Gradient", task.name, 2));
-    std::printf("| plb-%s | %d | %d | %.2f / %.2f | %.2f / %.2f | %.2fx | %s |\n", task.name.c_str(), particles,
-                env->dim(), f1, f2, g1, g2, f1 > 0.0 ? g1 / f1 : 0.0,
-                i < rss.size() ? std::to_string(static_cast<int>(std::lround(rss[i]))).c_str() : "-");
-  }
-  return 0;
+  return perf::run_benchmarks(argc, argv, [&](const perf::TimingReporter& reporter) {
+    if (reporter.seconds(full_name("Forward", mpm::plb_tasks().front().name, 1)) <= 0.0) return;
+    std::printf("\n| task | particles | dims | forward s (1 / 2 threads) | gradient s (1 / 2 threads) | "
+                "gradient / forward | peak MB |\n|---|---|---|---|---|---|---|\n");
+    for (std::size_t i = 0; i < mpm::plb_tasks().size(); ++i) {
+      const auto& task = mpm::plb_tasks()[i];
+      const auto env = make_env("plb-" + task.name);
+      int particles = 0;
+      for (const auto& shape : task.shapes) particles += shape.particles;
+      const double f1 = reporter.seconds(full_name("Forward", task.name, 1));
+      const double f2 = reporter.seconds(full_name("Forward", task.name, 2));
+      const double g1 = reporter.seconds(full_name("Gradient", task.name, 1));
+      const double g2 = reporter.seconds(full_name("Gradient", task.name, 2));
+      std::printf("| plb-%s | %d | %d | %.2f / %.2f | %.2f / %.2f | %.2fx | %s |\n", task.name.c_str(), particles,
+                  env->dim(), f1, f2, g1, g2, f1 > 0.0 ? g1 / f1 : 0.0,
+                  i < rss.size() ? std::to_string(static_cast<int>(std::lround(rss[i]))).c_str() : "-");
+    }
+  });
 }

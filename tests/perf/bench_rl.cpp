@@ -118,34 +118,32 @@ BENCHMARK(BM_SacRunCartpole3)->Unit(benchmark::kMillisecond);
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  perf::TimingReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  const double env = reporter.seconds("BM_Cartpole3RlStep");
-  const double act = reporter.seconds("BM_PpoAct");
-  const double mb = reporter.seconds("BM_PpoMinibatch");
-  const double run = reporter.seconds("BM_PpoRunCartpole3");
-  if (env <= 0.0 || act <= 0.0 || mb <= 0.0) return 0;
-  const PpoConfig cfg;
-  const double minibatches = cfg.n_epochs * ((cfg.n_steps + cfg.batch_size - 1) / cfg.batch_size);
-  const double update = mb * minibatches / cfg.n_steps;
-  std::printf("\n| per decision on cartpole3 | us | x env step |\n|---|---|---|\n");
-  std::printf("| env step (peer) | %.3f | 1 |\n", 1e6 * env);
-  std::printf("| ppo acting (2 forward passes, sample, log-prob) | %.2f | %.0f |\n", 1e6 * act, act / env);
-  std::printf("| ppo update, amortised (%.0f minibatches of %d per %d decisions; one minibatch %.0f us) | %.2f | %.0f |\n",
-              minibatches, cfg.batch_size, cfg.n_steps, 1e6 * mb, 1e6 * update, update / env);
-  std::printf("| ppo learner in all | %.2f | %.0f |\n", 1e6 * (act + update), (act + update) / env);
-  const double sac = reporter.seconds("BM_SacRunCartpole3");
-  if (sac > 0.0) {
-    const double per_step = (sac - 300 * env) / 200;
-    std::printf("| sac end to end: a 3-episode run (300 decisions, 200 gradient steps of batch 256) minus its env "
-                "steps, per gradient step | %.0f | %.0f |\n",
-                1e6 * per_step, per_step / env);
-  }
-  if (run > 0.0) {
-    const double learner = (run - 2100 * env) / 2100;
-    std::printf("| ppo end to end: a 21-episode run (2,100 decisions, one update) minus its env steps | %.2f | %.0f |\n",
-                1e6 * learner, learner / env);
-  }
-  return 0;
+  return perf::run_benchmarks(argc, argv, [&](const perf::TimingReporter& reporter) {
+    const double env = reporter.seconds("BM_Cartpole3RlStep");
+    const double act = reporter.seconds("BM_PpoAct");
+    const double mb = reporter.seconds("BM_PpoMinibatch");
+    const double run = reporter.seconds("BM_PpoRunCartpole3");
+    if (env <= 0.0 || act <= 0.0 || mb <= 0.0) return;
+    const PpoConfig cfg;
+    const double minibatches = cfg.n_epochs * ((cfg.n_steps + cfg.batch_size - 1) / cfg.batch_size);
+    const double update = mb * minibatches / cfg.n_steps;
+    std::printf("\n| per decision on cartpole3 | us | x env step |\n|---|---|---|\n");
+    std::printf("| env step (peer) | %.3f | 1 |\n", 1e6 * env);
+    std::printf("| ppo acting (2 forward passes, sample, log-prob) | %.2f | %.0f |\n", 1e6 * act, act / env);
+    std::printf("| ppo update, amortised (%.0f minibatches of %d per %d decisions; one minibatch %.0f us) | %.2f | %.0f |\n",
+                minibatches, cfg.batch_size, cfg.n_steps, 1e6 * mb, 1e6 * update, update / env);
+    std::printf("| ppo learner in all | %.2f | %.0f |\n", 1e6 * (act + update), (act + update) / env);
+    const double sac = reporter.seconds("BM_SacRunCartpole3");
+    if (sac > 0.0) {
+      const double per_step = (sac - 300 * env) / 200;
+      std::printf("| sac end to end: a 3-episode run (300 decisions, 200 gradient steps of batch 256) minus its env "
+                  "steps, per gradient step | %.0f | %.0f |\n",
+                  1e6 * per_step, per_step / env);
+    }
+    if (run > 0.0) {
+      const double learner = (run - 2100 * env) / 2100;
+      std::printf("| ppo end to end: a 21-episode run (2,100 decisions, one update) minus its env steps | %.2f | %.0f |\n",
+                  1e6 * learner, learner / env);
+    }
+  });
 }

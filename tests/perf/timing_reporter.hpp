@@ -1,6 +1,8 @@
 #pragma once
 // Console reporter that also keeps each benchmark's real time per iteration (seconds), by full
-// benchmark name, so a binary can print ratios of benchmarks measured in the same run.
+// benchmark name, so a binary can print ratios of benchmarks measured in the same run; and
+// run_benchmarks, every bench binary's main: run what the command line selects, then its summary.
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -26,5 +28,17 @@ class TimingReporter : public benchmark::ConsoleReporter {
  private:
   std::map<std::string, double> seconds_;
 };
+
+// Initialize, refuse unknown flags (exit 1), run the selected benchmarks through a TimingReporter,
+// print the binary's summary of same-run ratios from it, Shutdown; the process's exit code.
+inline int run_benchmarks(int argc, char** argv, const std::function<void(const TimingReporter&)>& summary) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  TimingReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  summary(reporter);
+  benchmark::Shutdown();
+  return 0;
+}
 
 }  // namespace dsb::perf
