@@ -22,6 +22,8 @@
 #include "optimizers/core/diagnostics.hpp"
 #include "optimizers/nlopt_adapters.hpp"
 #include "tests/support/test_functions.hpp"
+#include "support/harness_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
@@ -75,37 +77,13 @@ TEST(DiagnosticsBlocks, NloptStartListIsCappedAndItsBlobStaysSmall) {
 // ---------------------------------------------------------------------------------------------
 // the harness binary
 
-struct Result {
-  int code;
-  std::string out, err;
-};
+using Result = dsb::testing::HarnessResult;
+using dsb::testing::read_file;
 
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-class DiagnosticsCli : public ::testing::Test {
+class DiagnosticsCli : public dsb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("dsb_diag_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  Result harness(const std::string& args) {
-    const auto out = dir_ / "stdout", err = dir_ / "stderr";
-    const std::string cmd = std::string(DSB_HARNESS_EXE) + " " + args + " > " + out.string() + " 2> " +
-                            err.string() + " < /dev/null";
-    const int status = std::system(cmd.c_str());
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out), read_file(err)};
-  }
-  std::string db(const std::string& name) { return (dir_ / name).string(); }
-
-  fs::path dir_;
+  Result harness(const std::string& args) { return dsb::testing::run_harness(dir_, args); }
+  std::string db(const std::string& name) { return path(name); }
 };
 
 // one run with what its evals and config say, and its stored diagnostics

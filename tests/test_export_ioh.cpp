@@ -23,33 +23,22 @@
 #include <sqlite3.h>
 
 #include "support/harness_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
 
 namespace fs = std::filesystem;
 
-class ExportIoh : public ::testing::Test {
+class ExportIoh : public dsb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("dsb_ioh_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   testing::HarnessResult harness(const std::string& args) { return testing::run_harness(dir_, args); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
   // the small grid of these tests: 2 envs x 2 optimizers x 2 seeds x 20 episodes
   void run_grid(const std::string& db, const std::string& extra = "--optimizer random,cmaes --budget 20") {
     const auto r = harness("--env sphere-10,branin " + extra + " --seeds 2 --quiet --db " + db);
     ASSERT_EQ(r.code, 0) << r.err;
   }
-
-  fs::path dir_;
 };
 
 // (env, optimizer, seed, budget) -> losses by episode (NULL as NaN)

@@ -24,6 +24,7 @@
 #include "optimizers/ext/ext_optimizer.hpp"
 #include "support/function_objective.hpp"
 #include "support/harness_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
@@ -143,21 +144,12 @@ TEST(ExtProtocol, EachBreachFailsWithOneLineNamingTheOptimizerAndTheReason) {
 
 // ---- the harness program ----
 
-class ExtCli : public ::testing::Test {
+class ExtCli : public dsb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("dsb_ext_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   testing::HarnessResult harness(const std::string& args, const std::string& env_prefix = "") {
     return testing::run_harness(dir_, args, env_prefix);
   }
-  std::string db(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
+  std::string db(const std::string& name) const { return path(name); }
 };
 
 // rows of a query, columns joined by '|', NULL as "NULL"

@@ -28,6 +28,7 @@
 #include "envs/core/registry.hpp"
 #include "support/harness_process.hpp"
 #include "tests/support/contact_window.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
@@ -476,16 +477,7 @@ TEST(FlipTiming, ForwardAndGradientEpisodes) {
   std::printf("flip: forward %.2f ms, gradient %.2f ms per episode (ratio %.2f)\n", fwd, grad, grad / fwd);
 }
 
-class FlipHarness : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("dsb_flip_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
-};
+class FlipHarness : public dsb::testing::TempDirTest {};
 
 TEST_F(FlipHarness, ListEvalBadNameAndGd) {
   auto r = testing::run_harness(dir_, "list");

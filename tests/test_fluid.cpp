@@ -19,6 +19,7 @@
 #include "envs/mpm/fluid_env.hpp"
 #include "envs/mpm/fluid_scene.hpp"
 #include "support/harness_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
@@ -135,16 +136,7 @@ TEST(Fluid, BadNamesAreRefused) {
   EXPECT_NO_THROW(make_env("fluid-h25"));
 }
 
-class FluidHarness : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("dsb_fluid_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
-};
+class FluidHarness : public dsb::testing::TempDirTest {};
 
 TEST_F(FluidHarness, ListEvalAndAGridOfCmaesAndGd) {
   auto r = testing::run_harness(dir_, "list");

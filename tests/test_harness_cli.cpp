@@ -24,6 +24,7 @@
 #include "harness/grid.hpp"
 #include "optimizers/core/registry.hpp"
 #include "support/harness_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
@@ -32,25 +33,14 @@ namespace fs = std::filesystem;
 
 using Result = testing::HarnessResult;
 
-class HarnessCli : public ::testing::Test {
+class HarnessCli : public dsb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("dsb_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   // runs the harness through the shell; env_prefix may set variables
   Result harness(const std::string& args, const std::string& env_prefix = "") {
     return testing::run_harness(dir_, args, env_prefix);
   }
   static std::string read(const fs::path& p) { return testing::read_file(p); }
-  std::string db(const std::string& name) { return (dir_ / name).string(); }
-
-  fs::path dir_;
+  std::string db(const std::string& name) { return path(name); }
 };
 
 using EvalKey = std::tuple<std::string, std::string, int, std::int64_t>;

@@ -20,6 +20,7 @@
 #include "common/error.hpp"
 #include "common/rng.hpp"
 #include "envs/mpm/target_grid.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb::mpm {
 namespace {
@@ -189,16 +190,7 @@ TEST(MpmTargetGrid, SoftIouScaleInvariant) {
 
 // ---- files -------------------------------------------------------------------------------------
 
-class MpmTargetGridFile : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = std::filesystem::path(::testing::TempDir()) / ("dsb_target_grid_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::filesystem::path dir_;
-};
+class MpmTargetGridFile : public dsb::testing::TempDirTest {};
 
 std::string read_bytes(const std::string& path) {
   std::ifstream f(path, std::ios::binary);

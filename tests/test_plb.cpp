@@ -19,6 +19,7 @@
 #include "envs/mpm/episode.hpp"
 #include "envs/mpm/plb_env.hpp"
 #include "support/harness_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
@@ -186,16 +187,7 @@ std::string fmt_line(const Expected& e) {
   return buf;
 }
 
-class PlbHarness : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("dsb_plb_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
-};
+class PlbHarness : public dsb::testing::TempDirTest {};
 
 TEST_F(PlbHarness, EveryTaskRunsEndToEndWithItsMetricStored) {
   auto r = testing::run_harness(dir_, "list");

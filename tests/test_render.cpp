@@ -23,6 +23,7 @@
 #include "render/encode.hpp"
 #include "render/palette.hpp"
 #include "support/harness_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
@@ -220,17 +221,9 @@ TEST(Render, RasteriserDrawsAtTheFittedPixels) {
   EXPECT_EQ(render::encode_frames(frames, gif), anim);
 }
 
-class RenderCli : public ::testing::Test {
+class RenderCli : public dsb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("dsb_render_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   testing::HarnessResult harness(const std::string& args) { return testing::run_harness(dir_, args); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
   // one line on stderr that names `value`, exit 2, no output file
   void expect_usage_error(const std::string& args, const std::string& value) {
     const auto r = harness(args);
@@ -238,7 +231,6 @@ class RenderCli : public ::testing::Test {
     EXPECT_NE(r.err.find(value), std::string::npos) << args << ": " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   }
-  fs::path dir_;
 };
 
 TEST_F(RenderCli, SameCommandSameBytes) {

@@ -10,40 +10,32 @@
 #include <gtest/gtest.h>
 
 #include "harness/result_table.hpp"
+#include "support/harness_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
 
 namespace fs = std::filesystem;
 
-class ResultTable : public ::testing::Test {
+class ResultTable : public dsb::testing::TempDirTest {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("dsb_table_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    db_ = (dir_ / "r.sqlite").string();
-    csv_ = (dir_ / "base.csv").string();
+    TempDirTest::SetUp();
+    db_ = path("r.sqlite");
+    csv_ = path("base.csv");
     ASSERT_EQ(run("--env sphere-2,branin --optimizer random,cmaes --seeds 2 --budget 7 --quiet --db " + db_), 0);
     ASSERT_EQ(run("export --db " + db_ + " --out " + csv_), 0);
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   int run(const std::string& args) {
-    const std::string cmd = std::string(DSB_HARNESS_EXE) + " " + args + " > " + (dir_ / "out").string() +
-                            " 2> " + (dir_ / "err").string();
-    const int status = std::system(cmd.c_str());
-    out_ = slurp(dir_ / "out");
-    err_ = slurp(dir_ / "err");
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  static std::string slurp(const fs::path& p) {
-    std::ifstream in(p);
-    return std::string(std::istreambuf_iterator<char>(in), {});
+    const auto r = dsb::testing::run_harness(dir_, args);
+    out_ = r.out;
+    err_ = r.err;
+    return r.code;
   }
   std::vector<std::string> lines() {
-    std::istringstream in(slurp(csv_));
+    std::istringstream in(dsb::testing::read_file(csv_));
     std::vector<std::string> v;
     for (std::string l; std::getline(in, l);) v.push_back(l);
     return v;
@@ -54,7 +46,6 @@ class ResultTable : public ::testing::Test {
   }
   int check() { return run("check --db " + db_ + " --baseline " + csv_); }
 
-  fs::path dir_;
   std::string db_, csv_, out_, err_;
 };
 

@@ -15,23 +15,20 @@
 
 #include "common/config_hash.hpp"
 #include "harness/store.hpp"
+#include "support/harness_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
 
 namespace fs = std::filesystem;
 
-class StoreTest : public ::testing::Test {
+class StoreTest : public dsb::testing::TempDirTest {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("dsb_store_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    path_ = (dir_ / "r.sqlite").string();
+    TempDirTest::SetUp();
+    path_ = path("r.sqlite");
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   static RunKey key(int seed) { return {"sphere-2", "random", seed, 3, "aaaa", "bbbb", "0.1.0"}; }
   static RunResult result() {
@@ -54,7 +51,6 @@ class StoreTest : public ::testing::Test {
     return out.str();
   }
 
-  fs::path dir_;
   std::string path_;
 };
 
@@ -121,17 +117,12 @@ TEST_F(StoreTest, AnUnfinishedRunIsNotDoneAfterReopening) {
   EXPECT_EQ(done.count(key(1)), 0u);
 }
 
-std::string file_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
 TEST_F(StoreTest, RefusesANewerSchemaVersionWithoutTouchingTheFile) {
   {
     Store store(path_, {"0.1.0", "abc", "host"});
     store.db().exec("UPDATE meta SET value='4' WHERE key='schema_version'");
   }
-  const std::string before = file_bytes(path_);
+  const std::string before = testing::read_file(path_);
   try {
     Store again(path_, {"0.1.0", "abc", "host"});
     FAIL() << "a schema_version 4 file was opened";
@@ -139,7 +130,7 @@ TEST_F(StoreTest, RefusesANewerSchemaVersionWithoutTouchingTheFile) {
     EXPECT_NE(std::string(e.what()).find("schema_version 4, newer than this harness (3)"), std::string::npos)
         << e.what();
   }
-  EXPECT_EQ(file_bytes(path_), before);
+  EXPECT_EQ(testing::read_file(path_), before);
 }
 
 TEST_F(StoreTest, StoresTheRunDiagnosticsAsJsonAndTheMetricAsNull) {
@@ -350,7 +341,7 @@ TEST_F(StoreTest, ForeignDatabasesAreRefusedAndLeftAlone) {
   for (const auto& c : cases) {
     const std::string path = (dir_ / (std::string(c.name) + ".sqlite")).string();
     { Database db(path); db.exec(c.sql); }
-    const std::string before = file_bytes(path);
+    const std::string before = testing::read_file(path);
     try {
       Store store(path, {});
       ADD_FAILURE() << c.name << ": opened";
@@ -358,7 +349,7 @@ TEST_F(StoreTest, ForeignDatabasesAreRefusedAndLeftAlone) {
       EXPECT_NE(std::string(e.what()).find("is not a harness database"), std::string::npos) << c.name << ": " << e.what();
       EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << c.name << ": " << e.what();
     }
-    EXPECT_EQ(file_bytes(path), before) << c.name;
+    EXPECT_EQ(testing::read_file(path), before) << c.name;
     EXPECT_FALSE(fs::exists(path + "-wal") && fs::file_size(path + "-wal") > 0) << c.name;
   }
 }
@@ -429,7 +420,7 @@ TEST_F(StoreTest, ASecondStoreOnTheSameFileIsRefusedUntilTheFirstCloses) {
 
 TEST_F(StoreTest, ASqliteFileWithoutTablesIsNotStamped) {
   { Database db(path_); db.exec("PRAGMA user_version=5; CREATE TABLE t(x); DROP TABLE t;"); }
-  const std::string before = file_bytes(path_);
+  const std::string before = testing::read_file(path_);
   ASSERT_FALSE(before.empty());
   try {
     Store store(path_, {});
@@ -437,7 +428,7 @@ TEST_F(StoreTest, ASqliteFileWithoutTablesIsNotStamped) {
   } catch (const StoreError& e) {
     EXPECT_NE(std::string(e.what()).find("without harness tables"), std::string::npos) << e.what();
   }
-  EXPECT_EQ(file_bytes(path_), before);
+  EXPECT_EQ(testing::read_file(path_), before);
 }
 
 TEST_F(StoreTest, AnEmptyFileBecomesANewDatabase) {
@@ -458,9 +449,9 @@ TEST_F(StoreTest, UnwritablePathThrowsNamingIt) {
 
 TEST_F(StoreTest, NotADatabaseIsRefusedAndLeftAlone) {
   { std::ofstream(path_) << "hello, this is not SQLite\n"; }
-  const std::string before = file_bytes(path_);
+  const std::string before = testing::read_file(path_);
   EXPECT_THROW(Store(path_, {}), StoreError);
-  EXPECT_EQ(file_bytes(path_), before);
+  EXPECT_EQ(testing::read_file(path_), before);
 }
 
 }  // namespace

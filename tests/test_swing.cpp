@@ -26,6 +26,7 @@
 #include "envs/core/registry.hpp"
 #include "support/harness_process.hpp"
 #include "tests/support/contact_window.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
@@ -349,16 +350,7 @@ TEST(SwingTiming, ForwardAndGradientEpisodes) {
   }
 }
 
-class SwingHarness : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("dsb_swing_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
-};
+class SwingHarness : public dsb::testing::TempDirTest {};
 
 TEST_F(SwingHarness, ListEvalBadNameAndGdOnAllSix) {
   auto r = testing::run_harness(dir_, "list");
