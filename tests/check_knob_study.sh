@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # scripts/knob-study.sh end to end on a cheap env: two rand-descents variants x 3 seeds, merged,
-# tabled; the table's medians are recomputed from SQLite and the variants' configs checked.
+# tabled; the table's medians are recomputed from SQLite and the variants' configs checked (the
+# study's base point, lr 0.1, is set explicitly whatever the binary's default).
 set -euo pipefail
 build=${1:?usage: check_knob_study.sh BUILD_DIR SOURCE_DIR}
 src=${2:?usage: check_knob_study.sh BUILD_DIR SOURCE_DIR}
@@ -21,6 +22,8 @@ for (opt, variant), r in rows.items():
                                  "WHERE r.optimizer = ? AND r.status = 'done'", (opt,)):
         if opt == "rand-descents" and json.loads(cfg)["start_scale"] != want_scale:
             continue
+        # the study's base point is set explicitly (lr 0.1), not the binary's default (0.03)
+        assert opt != "rand-descents" or json.loads(cfg)["adam"]["lr"] == 0.1, (opt, variant, cfg)
         losses.append(best)
     assert int(r["seeds"]) == len(losses) == 3, (opt, variant, r["seeds"], losses)
     assert float(r["median"]) == statistics.median(losses), (opt, variant, r["median"], losses)
