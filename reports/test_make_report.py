@@ -219,7 +219,8 @@ class TestReport(ReportCase):
         for r in rows:
             if r["p_holm"]:
                 self.assertGreaterEqual(float(r["p_holm"]), float(r["p_raw"]))
-        self.assertIn("0.0079" if "5 seeds" in self.html else "smallest exact two-sided p", self.html)
+        # the test grid has 3 seeds: the smallest one-sided exact p is 1/C(6,3) = 0.05
+        self.assertIn("smallest exact one-sided p-value is 1/C(6,3) = 0.05", self.html)
 
     def test_missing_matches_grid(self):
         con = sqlite3.connect(self.db)
@@ -860,6 +861,26 @@ class TestRenders(ReportCase):
         start = self.html.index('id="env-sphere-2"')
         self.assertGreater(self.html.index('src="render_sphere-2.png"'), start)
         self.assertEqual(self.html.count("<img src=\"render_"), 1)
+
+
+class TestWinnerComparison(unittest.TestCase):
+    """The overview's 'worse than the winner?' test: one-sided, so ten optimizers at the default
+    5 seeds can be told apart after Holm (two-sided could not)."""
+
+    def test_five_seeds_separate_nine_comparisons_one_sided_only(self):
+        sys.path.insert(0, HERE)
+        from dsb_report import stats
+        # 9 comparisons x 1/C(10,5) = 0.036 < 0.05; two-sided 9 x 2/252 = 0.071
+        self.assertFalse(stats.too_few_seeds(9, 5, 5, sides=1))
+        self.assertTrue(stats.too_few_seeds(9, 5, 5, sides=2))
+        self.assertFalse(stats.too_few_seeds(12, 5, 5, sides=1))  # 12/252 = 0.048
+        self.assertTrue(stats.too_few_seeds(13, 5, 5, sides=1))   # 13/252 = 0.052
+        import numpy as np
+        best, worse = np.array([1.0, 2, 3, 4, 5]), np.array([6.0, 7, 8, 9, 10])
+        self.assertAlmostEqual(stats.mwu_p(worse, best, "greater"), 1 / 252, places=12)
+        self.assertAlmostEqual(stats.mwu_p(best, worse, "greater"), 1.0, places=12)
+        adj = stats.holm([stats.mwu_p(worse, best, "greater")] * 9)
+        self.assertLess(max(adj), 0.05)
 
 
 class TestBadInput(unittest.TestCase):

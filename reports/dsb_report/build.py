@@ -38,11 +38,11 @@ def _minp_text(tables: list) -> str:
     if not ns:
         return ""
     m = max((int((t["n_seeds"] > 0).sum()) - 1 for t in tables), default=0)
-    parts = [f"with {n} seeds per optimizer the smallest exact two-sided p-value is "
-             f"2/C({2 * n},{n}) = {stats.min_exact_p(n, n):.2g}" for n in ns]
+    parts = [f"with {n} seeds per optimizer the smallest exact one-sided p-value is "
+             f"1/C({2 * n},{n}) = {stats.min_exact_p(n, n, sides=1):.2g}" for n in ns]
     text = "Small samples: " + "; ".join(parts) + "."
     if m > 0:
-        low = min(1.0, m * stats.min_exact_p(max(ns), max(ns)))
+        low = min(1.0, m * stats.min_exact_p(max(ns), max(ns), sides=1))
         text += (f" With up to {m} comparisons per env, Holm multiplies the smallest p by {m}: the "
                  f"smallest corrected p is then {low:.2g}")
         text += ", so no difference can reach α = 0.05: more seeds are needed." if low >= 0.05 \
@@ -76,7 +76,7 @@ def _provenance(data, build_type, made, stored_episodes) -> list:
         ["report made", made],
         ["generator", f"reports/make_report.py ({versions})"],
         ["statistics", "final = runs.best_loss of done runs (NULL = +inf); 95% CI: Student t; "
-                       "tests: Mann-Whitney U two-sided vs the env's best, Holm, α = 0.05; ranks: "
+                       "tests: Mann-Whitney U one-sided (worse than the env's best?), Holm, α = 0.05; ranks: "
                        "ties averaged; quantiles: linear interpolation; no random numbers"],
     ]
 

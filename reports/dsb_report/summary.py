@@ -28,8 +28,8 @@ def render(ctx) -> str:
     h, rows = rank_md_rows(ctx["mean_ranks"])
     out += ["## Average ranks", "", captions.RANKS, "", md_table(h, rows), ""]
     out += ["## Final best loss per env", "",
-            "Over seeds at the budget; 95% CI = Student t; p (Holm) = two-sided Mann-Whitney U "
-            "against the env's best, Holm-corrected over the env. " + ctx["minp_text"], ""]
+            "Over seeds at the budget; 95% CI = Student t; p (Holm) = one-sided Mann-Whitney U "
+            "(worse than the env's best?), Holm-corrected over the env. " + ctx["minp_text"], ""]
     for it in ctx["panels"]:
         pn = it["panel"]
         out += [f"### {pn.env} (budget {pn.budget})", "", md_table(*final_md_rows(it["table"])), ""]
