@@ -29,7 +29,8 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
 # the env table of `harness list`: the rows between the header and the first blank line
-mapfile -t envs < <("$harness" list | awk 'NR == 1 { next } /^$/ { exit } { print $1 }')
+# (awk reads to the end: an early exit would leave the harness writing into a closed pipe)
+mapfile -t envs < <("$harness" list | awk 'NR == 1 || done { next } /^$/ { done = 1; next } { print $1 }')
 ((${#envs[@]} > 0)) || { echo "gradient-quality.sh: '$harness list' printed no env" >&2; exit 2; }
 
 start=$(date +%s)

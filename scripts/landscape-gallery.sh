@@ -48,13 +48,17 @@ harness=$build/bin/harness
 ((list)) || mkdir -p "$out"
 
 # the env table of `harness list`: the rows between the header and the first blank line
-mapfile -t envs < <("$harness" list | awk 'NR == 1 { next } /^$/ { exit } { print $1 }')
+# (awk reads to the end: an early exit would leave the harness writing into a closed pipe)
+mapfile -t envs < <("$harness" list | awk 'NR == 1 || done { next } /^$/ { done = 1; next } { print $1 }')
 ((${#envs[@]} > 0)) || { echo "landscape-gallery.sh: '$harness list' printed no env" >&2; exit 2; }
 if [[ -n $only ]]; then
   IFS=, read -ra wanted <<< "$only"
   for w in "${wanted[@]}"; do
-    printf '%s\n' "${envs[@]}" | grep -qx -- "$w" ||
-      { echo "landscape-gallery.sh: --envs: '$w' is not an env of 'harness list'" >&2; exit 2; }
+    # a loop, not `printf | grep -q`: grep -q exits at the first match and, under pipefail, the
+    # printf it leaves writing into a closed pipe (SIGPIPE) failed the check now and then
+    known=0
+    for e in "${envs[@]}"; do [[ $e == "$w" ]] && known=1; done
+    ((known)) || { echo "landscape-gallery.sh: --envs: '$w' is not an env of 'harness list'" >&2; exit 2; }
   done
   envs=("${wanted[@]}")
 fi

@@ -26,9 +26,11 @@ if [[ "$plain_levels" == "$masked_levels" ]]; then
 fi
 
 # every env of `harness list` but the particle tasks, which get their short-horizon variants
-light_envs=$("$harness" list | awk 'NR > 1 && NF == 0 { exit } NR > 1 { print $1 }' | grep -v -E '^(fluid|plb-)' | paste -sd, -)
+# (awk reads to the end: an early exit would leave the harness writing into a closed pipe)
+light_envs=$("$harness" list | awk 'NR > 1 && NF == 0 { done = 1 } NR > 1 && !done { print $1 }' | grep -v -E '^(fluid|plb-)' | paste -sd, -)
 # every optimizer but the RL learners (below, on the cartpoles, at budgets that reach an update)
-plain_optimizers=$("$harness" list | awk 'f && NF { print $1 } /^optimizer/ { f = 1 }' | grep -v -E '^(ppo|sac)$' | paste -sd, -)
+# (the optimizer table: from its header to the next blank line; ext:NAME needs a command)
+plain_optimizers=$("$harness" list | awk 'f && !NF { f = 0 } f { print $1 } /^optimizer/ { f = 1 }' | grep -v -E '^(ppo|sac|ext:NAME)$' | paste -sd, -)
 
 run() {  # run NAME [env assignments...]: grid into NAME.sqlite, export to NAME.csv
   local name=$1
