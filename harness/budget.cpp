@@ -85,13 +85,16 @@ std::vector<ReplayEntry> BudgetedObjective::take_journal(std::int64_t& first_seq
   return out;
 }
 
+bool BudgetedObjective::stop_if_requested() {
+  if (interrupted_) return true;
+  if (!stop_ || !stop_->load(std::memory_order_relaxed)) return false;
+  interrupted_ = true;
+  if (listener_) listener_->episode_finished(*this, true);
+  return true;
+}
+
 void BudgetedObjective::check_stop() {
-  if (interrupted_) throw RunInterrupted{};
-  if (stop_ && stop_->load(std::memory_order_relaxed)) {
-    interrupted_ = true;
-    if (listener_) listener_->episode_finished(*this, true);
-    throw RunInterrupted{};
-  }
+  if (stop_if_requested()) throw RunInterrupted{};
 }
 
 void BudgetedObjective::end_replay() {

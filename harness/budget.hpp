@@ -83,6 +83,9 @@ class BudgetedObjective : public Objective {
   std::vector<ReplayEntry> take_journal(std::int64_t& first_seq);
   std::int64_t replayed_episodes() const { return replayed_episodes_; }
   bool interrupted() const { return interrupted_; }
+  // When a stop was requested: marks the run interrupted and commits what it has, true. For an
+  // optimizer that ended with an error the stop caused (an external optimizer killed by it).
+  bool stop_if_requested();
 
  private:
   // the journal's next entry when it answers this call (kind and input digest match), else null;

@@ -105,7 +105,10 @@ struct CheckedRun {
   int jobs = 1;
 };
 
-CheckedRun check_run_args(const RunArgs& a) {
+// for_this_machine: the grid runs here, so --threads is capped at the CPUs this process may use
+// (more threads than CPUs only slow a rollout down; results are the same for any count). `plan`
+// passes false: it may plan for another machine.
+CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
   GridRequest req;
   req.all = a.all;
   req.envs = a.envs;
@@ -117,7 +120,7 @@ CheckedRun check_run_args(const RunArgs& a) {
     char* end = nullptr;
     req.ext_timeout_s = std::strtod(a.ext_timeout.c_str(), &end);
     if (end != a.ext_timeout.c_str() + a.ext_timeout.size() || !(req.ext_timeout_s > 0.0 && req.ext_timeout_s <= 86400.0))
-      throw UsageError("--ext-timeout must be seconds from 0 to 86400, got '" + a.ext_timeout + "'");
+      throw UsageError("--ext-timeout must be seconds above 0 and at most 86400, got '" + a.ext_timeout + "'");
   }
   {
     // parsed here, not by CLI11, which saturates 99999999999999999999 to INT64_MAX
@@ -138,9 +141,15 @@ CheckedRun check_run_args(const RunArgs& a) {
     shard = {i, n};
   }
   if (a.db.empty()) throw UsageError("--db must name a file, got ''");
-  if (a.jobs < 0 || a.jobs > 1024) throw UsageError("--jobs must be from 1 to 1024, got " + std::to_string(a.jobs));
+  if (a.jobs < 0 || a.jobs > 1024)
+    throw UsageError("--jobs must be from 1 to 1024, or 0 for the CPUs this process may use over --threads, got " +
+                     std::to_string(a.jobs));
   if (a.threads < 1 || a.threads > 1024)
     throw UsageError("--threads must be from 1 to 1024, got " + std::to_string(a.threads));
+  if (for_this_machine && a.threads > usable_cpus())
+    throw UsageError(fmt::format("--threads {} is more than the {} CPUs this process may use (the cap: more threads "
+                                 "than CPUs only slow a rollout down; results are the same for any count)",
+                                 a.threads, usable_cpus()));
   return {expand_grid(req), shard, a.jobs > 0 ? a.jobs : std::max(1, usable_cpus() / a.threads)};
 }
 
@@ -167,16 +176,19 @@ PlanContext plan_context(const RunArgs& a, const CheckedRun& run) {
 
 int command_plan(const RunArgs& a) {
   const auto start = std::chrono::steady_clock::now();
-  const CheckedRun run = check_run_args(a);
+  const CheckedRun run = check_run_args(a, false);
   std::set<RunKey> done;
+  std::map<RunKey, std::string> failed;
   try {
     done = done_keys_of_file(a.db);
+    failed = runs_of_file(a.db, "failed");
   } catch (const StoreError& e) {
     throw UsageError(std::string("--db: ") + e.what());
   }
   const GridPlan plan = plan_grid(run.grid, done, kVersion, run.shard);
   const CostModel costs;
   print_plan(std::cout, plan, costs, plan_context(a, run));
+  print_failed_runs(std::cout, plan, failed);
   const double planning_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cout << fmt::format("  planned in {:.3f} s; env models built: {} (nothing was written)\n", planning_s,
                            lazy_model_builds());
@@ -185,7 +197,7 @@ int command_plan(const RunArgs& a) {
 
 // `harness calibrate [grid flags] [--force]`: times the grid's envs on this machine, caches them
 int command_calibrate(const RunArgs& a, bool force) {
-  const CheckedRun run = check_run_args(a);
+  const CheckedRun run = check_run_args(a, false);
   const GridPlan plan = plan_grid(run.grid, {}, kVersion, run.shard);
   CostModel costs;
   std::cout << fmt::format("{:<26} {:>12} {:>12} {:>10}  {}\n", "env", "forward s", "gradient s", "decisions",
@@ -206,7 +218,8 @@ int command_calibrate(const RunArgs& a, bool force) {
 }
 
 int command_run(const RunArgs& a, const std::string& report_dir) {
-  const CheckedRun run = check_run_args(a);
+  const CheckedRun run = check_run_args(a, true);
+  if (!report_dir.empty()) check_report_folder(report_dir, false, "--report");
 
   std::unique_ptr<Store> store;
   try {
@@ -249,13 +262,20 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
                  sig == SIGINT ? "SIGINT" : sig == SIGHUP ? "SIGHUP" : "SIGTERM", static_cast<long long>(s.interrupted));
     return 128 + sig;
   }
+  if (s.failed > 0) {
+    std::fprintf(stderr,
+                 "harness: %lld runs failed (exit status %d); they are stored with their errors, `harness plan` with "
+                 "the same flags and --db lists them, and the same command runs them again\n",
+                 static_cast<long long>(s.failed), kExitRunsFailed);
+    return kExitRunsFailed;
+  }
   return 0;
 }
 
 // `harness slurm`: the grid is checked like a run's before anything is written; the runs of each
 // shard are counted from the run keys (metadata only)
 int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
-  const CheckedRun run = check_run_args(a);
+  const CheckedRun run = check_run_args(a, false);
   std::vector<std::int64_t> shard_runs;
   if (options.shards >= 1 && options.shards <= kMaxSlurmShards) {
     shard_runs.assign(options.shards, 0);
@@ -288,8 +308,12 @@ int harness_main(int argc, char** argv) {
   auto* list = app.add_subcommand("list", "envs (dim, differentiable, rl) and optimizers");
 
   std::string main_report, run_report;
-  app.add_option("--report", main_report, "keep a comparison report of the grid in this folder, rebuilt as runs finish");
-  run->add_option("--report", run_report, "keep a comparison report of the grid in this folder, rebuilt as runs finish");
+  app.add_option("--report", main_report,
+                 "keep a comparison report of the grid in this folder (new, empty, or an earlier report), rebuilt as "
+                 "runs finish");
+  run->add_option("--report", run_report,
+                  "keep a comparison report of the grid in this folder (new, empty, or an earlier report), rebuilt as "
+                  "runs finish");
 
   RunArgs plan_args;
   auto* plan = app.add_subcommand("plan", "what a grid would run (runs, core-hours per env and family, wall, Slurm), writing nothing");
@@ -327,6 +351,7 @@ int harness_main(int argc, char** argv) {
   render->add_option("--out", render_args.out, "FILE.png (frames side by side) or FILE.gif (animation)")->required();
   render->add_option("--frames", render_args.frames, "time points from the start to the end (default 5)");
   render->add_option("--width", render_args.width, "pixels per frame (default 320)");
+  render->add_flag("--force", render_args.force, "write over an existing file (never over a database)");
 
   std::string gc_env;
   GradientSurveyOptions gc;
@@ -349,7 +374,9 @@ int harness_main(int argc, char** argv) {
   landscape->add_option("--dims", ls_dims, "the two coordinates of the slice, I,J (0-based)")->required();
   landscape->add_option("--res", ls_res, "grid points per axis, N")->required();
   landscape->add_option("--center", ls_center, "comma-separated point for the other coordinates (default 0)");
-  landscape->add_option("--out", ls_out, "CSV file to write")->required();
+  landscape->add_option("--out", ls_out, "CSV file to write (a new file; see --force)")->required();
+  bool ls_force = false;
+  landscape->add_flag("--force", ls_force, "write over an existing file (never over a database)");
   GradientCheckOptions ls_check;
   ls_check.step = 0.0;
   landscape->add_option("--check-step", ls_check.step,
@@ -377,6 +404,9 @@ int harness_main(int argc, char** argv) {
   exporter->add_option("--db", export_db, "results database")->required();
   exporter->add_option("--out", export_out, "CSV file to write (csv), or a new or empty folder (ioh)")->required();
   exporter->add_option("--format", export_format, "csv (default: the baseline result table) or ioh (IOHanalyzer)");
+  bool export_force = false;
+  exporter->add_flag("--force", export_force,
+                     "write over an existing file, or into a folder with other files (never over a database)");
 
   std::string report_db = "results.sqlite", report_out = "report", report_landscapes, report_gradient_quality,
               report_renders;
@@ -387,6 +417,8 @@ int harness_main(int argc, char** argv) {
   report->add_option("--gradient-quality", report_gradient_quality,
                      "CSV of scripts/gradient-quality.sh (default data/gradient_quality.csv)");
   report->add_option("--renders", report_renders, "folder of scripts/render-best.sh's render_<env>.png to show");
+  bool report_force = false;
+  report->add_flag("--force", report_force, "write into a folder that holds other files (files of the report's names are replaced)");
 
   try {
     app.parse(argc, argv);
@@ -404,7 +436,8 @@ int harness_main(int argc, char** argv) {
     if (slurm->parsed()) return command_slurm_scripts(slurm_args, slurm_opts);
     if (landscape->parsed())
       return command_landscape(ls_env, ls_dims, ls_res, ls_center, ls_out,
-                               landscape->count("--check-step") > 0 ? std::optional(ls_check) : std::nullopt);
+                               landscape->count("--check-step") > 0 ? std::optional(ls_check) : std::nullopt,
+                               ls_force);
     if (crosscheck->parsed()) {
       if (!crosscheck_available())
         throw UsageError("crosscheck: this build has neither MuJoCo nor Bullet (DSB_WITH_MUJOCO, DSB_WITH_BULLET)");
@@ -412,9 +445,11 @@ int harness_main(int argc, char** argv) {
     }
     if (check->parsed()) return command_check(check_db, check_baseline);
     if (merge->parsed()) return command_merge(merge_into, merge_inputs);
-    if (exporter->parsed()) return command_export(export_db, export_out, export_format);
-    if (report->parsed())
+    if (exporter->parsed()) return command_export(export_db, export_out, export_format, export_force);
+    if (report->parsed()) {
+      check_report_folder(report_out, report_force);
       return command_report(report_db, report_out, report_landscapes, false, report_gradient_quality, report_renders);
+    }
     if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
     if (render->parsed()) return command_render(render_args);
     if (gradcheck->parsed())

@@ -13,6 +13,7 @@
 #include "common/error.hpp"
 #include "common/parallel.hpp"
 #include "envs/core/registry.hpp"
+#include "harness/output_path.hpp"
 #include "optimizers/core/registry.hpp"
 
 namespace dsb {
@@ -108,7 +109,7 @@ int command_eval(const std::string& env_name, const std::string& x_text, bool wi
 
 int command_landscape(const std::string& env_name, const std::string& dims, int resolution,
                       const std::string& center, const std::string& out_path,
-                      const std::optional<GradientCheckOptions>& check) {
+                      const std::optional<GradientCheckOptions>& check, bool force) {
   const auto env = make_env(env_name);
   const int n = env->dim();
   const auto d = parse_number_list("--dims", dims);
@@ -127,8 +128,8 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
   }
   std::vector<double> x(n, 0.0);
   if (!center.empty()) x = checked_point(*env, center, "--center");
-  std::ofstream out(out_path);
-  if (!out) throw UsageError("--out: cannot write '" + out_path + "'");
+  OutputFile file("--out", out_path, force);
+  std::ofstream& out = file.stream();
   const int i = static_cast<int>(d[0]), j = static_cast<int>(d[1]);
   const int slice[2] = {i, j};
   int agreeing = 0, aligned = 0, opposed = 0, compared = 0;
@@ -166,8 +167,7 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
       }
     }
   }
-  out.close();
-  if (!out) throw UsageError("--out: writing '" + out_path + "' failed");
+  file.commit();
   std::cerr << fmt::format("harness: wrote {} grid points of {} (dims {}, {}) to {}\n", resolution * resolution,
                            env_name, i, j, out_path);
   if (check)

@@ -25,17 +25,24 @@ int command_gradcheck(const std::string& env_name, const GradientSurveyOptions& 
 // central differences (check_gradient_along): columns fd_i,fd_j,rel_err,agrees are added (rel_err
 // the worse of the two, agrees 1 or 0) and the share of agreeing points is printed, with how often
 // the 2-D gradient points within 25 degrees of the differences' direction and how often against it.
+// The CSV is written whole or not at all (harness/output_path.hpp), over an existing file only
+// with force, never over a database.
 int command_landscape(const std::string& env_name, const std::string& dims, int resolution,
                       const std::string& center, const std::string& out_path,
-                      const std::optional<GradientCheckOptions>& check = std::nullopt);
+                      const std::optional<GradientCheckOptions>& check = std::nullopt, bool force = false);
 
 // Regression gate: compares the database's result table with a baseline CSV. 0 equal, 1 any
 // difference (diff printed), 2 malformed baseline or unreadable database.
 int command_check(const std::string& db_path, const std::string& baseline_path);
 // Writes the database's result table (the baseline format) to a CSV file (format "csv"), or its
 // 'done' runs in IOHprofiler's format to a new or empty folder (format "ioh", export_ioh.hpp).
-// Exit 2 for a bad format, an unreadable database or an unusable --out.
-int command_export(const std::string& db_path, const std::string& out_path, const std::string& format = "csv");
+// Exit 2 for a bad format, an unreadable database or an unusable --out: an existing file without
+// force, a database even with force, a folder with other files in it without force.
+int command_export(const std::string& db_path, const std::string& out_path, const std::string& format = "csv",
+                   bool force = false);
+// UsageError unless `dir` may take a report: missing, empty, or a report made before (its
+// index.html is ours); any other folder only with force (the option's name in the message)
+void check_report_folder(const std::string& dir, bool force, const std::string& option = "--out");
 // Runs the Python report generator (reports/make_report.py) with Debian's system interpreter.
 // quiet: the generator's stdout is dropped (refreshes during a grid run); gradient_quality: a CSV of
 // scripts/gradient-quality.sh for the "Gradient quality" section (empty: the generator's default,

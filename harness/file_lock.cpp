@@ -3,10 +3,14 @@
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "harness/sqlite_db.hpp"
@@ -14,44 +18,60 @@
 namespace dsb {
 namespace {
 
-std::string read_all(int fd) {
-  std::string text;
-  char buf[256];
-  ::lseek(fd, 0, SEEK_SET);
-  for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) text.append(buf, static_cast<std::size_t>(n));
-  while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
-  return text;
+std::string host_name() {
+  char host[256] = {0};
+  ::gethostname(host, sizeof host - 1);
+  return host;
+}
+
+// "pid N on HOST" of the process holding a flock on the file open at fd, from /proc/locks
+// (lines "1: FLOCK  ADVISORY  WRITE PID MAJ:MIN:INODE 0 EOF", device numbers in hex); the inode
+// alone matches when the device differs (an overlay filesystem reports another device)
+std::string flock_holder(int fd) {
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) return {};
+  std::ifstream locks("/proc/locks");
+  std::string line, by_inode;
+  while (std::getline(locks, line)) {
+    if (line.find("->") != std::string::npos) continue;  // a waiter, not a holder
+    std::istringstream words(line);
+    std::string id, type, mode, access, pid, where;
+    if (!(words >> id >> type >> mode >> access >> pid >> where) || type != "FLOCK") continue;
+    unsigned maj = 0, min = 0;
+    unsigned long long ino = 0;
+    if (std::sscanf(where.c_str(), "%x:%x:%llu", &maj, &min, &ino) != 3 || ino != st.st_ino) continue;
+    const std::string who = "pid " + pid + " on " + host_name();
+    if (maj == ::major(st.st_dev) && min == ::minor(st.st_dev)) return who;
+    if (by_inode.empty()) by_inode = who;
+  }
+  return by_inode;
 }
 
 }  // namespace
 
 FileLock::FileLock(const std::string& database_path) {
-  const std::string path = database_path + "-lock";
+  fd_ = ::open(database_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOCTTY, 0644);
+  if (fd_ < 0) {
+    const int err = errno;
+    if (err == EISDIR) throw StoreError("cannot open database '" + database_path + "': it is a directory");
+    throw StoreError("cannot open database '" + database_path + "' for writing: " + std::strerror(err));
+  }
   struct stat st {};
-  if (::stat(database_path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
-    throw StoreError("cannot open database '" + database_path + "': it is a directory");
-  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd_ < 0)
-    throw StoreError("cannot open the lock file '" + path + "' beside database '" + database_path +
-                     "': " + std::strerror(errno));
+  if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd_);
+    fd_ = -1;
+    throw StoreError("cannot open database '" + database_path + "': not a regular file");
+  }
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
-    const std::string holder = read_all(fd_);
+    const std::string holder = err == EWOULDBLOCK ? flock_holder(fd_) : std::string();
     ::close(fd_);
     fd_ = -1;
     if (err == EWOULDBLOCK)
       throw StoreError("database '" + database_path + "' is in use by another harness (" +
                        (holder.empty() ? std::string("holder unknown") : holder) +
                        "): wait for it to finish or stop it (it resumes later), or use another --db");
-    throw StoreError("cannot lock '" + path + "': " + std::strerror(err));
-  }
-  // who holds it, for the message above
-  char host[256] = {0};
-  ::gethostname(host, sizeof host - 1);
-  const std::string who = "pid " + std::to_string(::getpid()) + " on " + host;
-  if (::ftruncate(fd_, 0) == 0) {
-    ::lseek(fd_, 0, SEEK_SET);
-    [[maybe_unused]] const ssize_t n = ::write(fd_, who.data(), who.size());
+    throw StoreError("cannot lock database '" + database_path + "': " + std::strerror(err));
   }
 }
 

@@ -2,6 +2,8 @@
 
 #include <csignal>
 
+#include "optimizers/ext/child_process.hpp"
+
 namespace dsb {
 namespace {
 
@@ -19,6 +21,7 @@ extern "C" void on_stop_signal(int sig) {
   }
   g_signal.store(sig);
   g_stop.store(true);
+  ChildProcess::terminate_all();  // external optimizers hear it now, not after their reply
 }
 
 }  // namespace
@@ -40,6 +43,7 @@ int stop_signal() { return g_signal.load(); }
 void request_stop(int sig) {
   g_signal.store(sig);
   g_stop.store(true);
+  ChildProcess::terminate_all();
 }
 
 }  // namespace dsb

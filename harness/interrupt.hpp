@@ -4,6 +4,8 @@
 // stops; no new run starts; the harness says how to resume and exits 128 + the signal (143, 130,
 // 129). A second signal of the same kind kills the
 // process at once (the default action), for a user who will not wait for a long episode.
+// External optimizers get TERM at once (ChildProcess::terminate_all) and are killed after
+// ChildProcess::kStopGraceS seconds if still there; their runs commit and resume like the others.
 #include <atomic>
 
 namespace dsb {

@@ -1,6 +1,9 @@
 #include "harness/merge_command.hpp"
 
+#include <algorithm>
 #include <bit>
+#include <cstdio>
+#include <map>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -153,87 +156,162 @@ void insert_run(Database& db, const RunRecord& r) {
   }
 }
 
-// rank of a status when two files disagree about a run that is not finished in both:
-// done > failed > running (a 'running' row never replaces a finished one)
+// Two copies of one run key hold the same result where both have it: over the episodes both
+// committed, every loss, best-so-far, gradient use, failure flag and metric agree (wall times
+// aside). A shorter copy is an earlier point of the same run (interrupted, or failed by an
+// external cause such as a timeout); copies that differ there are different results.
+bool consistent(const RunRecord& a, const RunRecord& b) {
+  const std::size_t n = std::min(a.evals.size(), b.evals.size());
+  for (std::size_t k = 0; k < n; ++k)
+    for (int c : {0, 1, 2, 3, 5, 6})
+      if (!(a.evals[k][static_cast<std::size_t>(c)] == b.evals[k][static_cast<std::size_t>(c)])) return false;
+  return true;
+}
+
+// rank of a status: done > failed > running
 int rank(const std::string& status) { return status == "done" ? 2 : status == "failed" ? 1 : 0; }
+
+// every stored byte of a copy, in a fixed order: the last tiebreak between copies, so that which
+// copy survives never depends on the order of the inputs
+std::string content_of(const RunRecord& r) {
+  std::string bytes;
+  const auto add = [&](const Row& row) {
+    for (const Cell& c : row) {
+      bytes += static_cast<char>(c.type);
+      if (c.type == 1) bytes += std::to_string(c.i);
+      if (c.type == 2) bytes += std::to_string(std::bit_cast<std::uint64_t>(c.d));
+      if (c.type == 3 || c.type == 4) bytes += c.s;
+      bytes += '\0';
+    }
+  };
+  add(r.run);
+  for (const Row& e : r.evals) add(e);
+  for (const Row& j : r.journal) add(j);
+  return bytes;
+}
+
+// the copy to keep: the further status, then more committed episodes, then the smaller content
+bool better(const RunRecord& a, const RunRecord& b) {
+  if (rank(a.status()) != rank(b.status())) return rank(a.status()) > rank(b.status());
+  if (a.committed() != b.committed()) return a.committed() > b.committed();
+  return content_of(a) < content_of(b);
+}
+
+// A StoreError while reading an input is that input's fault: exit 2 naming it.
+template <class F>
+auto reading(const std::string& input, F&& f) {
+  try {
+    return f();
+  } catch (const StoreError& e) {
+    throw UsageError("merge: input '" + input + "': " + e.what());
+  }
+}
+
+// Every input is a harness database whose runs' configs are all there, checked before the
+// output is opened: a foreign or broken file changes nothing.
+void check_input(const std::string& in, const std::string& into) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(in)) throw UsageError("merge: input '" + in + "' does not exist");
+  if (fs::exists(into) && fs::equivalent(in, into, ec))
+    throw UsageError("merge: input '" + in + "' is the output itself");
+  reading(in, [&] {
+    Database db(in, Database::Mode::read_only);
+    if (check_schema(db) == 0) throw StoreError("it has no harness tables");
+    Statement q(db.handle(),
+                "SELECT env, optimizer, seed, CASE WHEN env_config_hash NOT IN (SELECT hash FROM configs) THEN "
+                "env_config_hash ELSE opt_config_hash END FROM runs WHERE env_config_hash NOT IN (SELECT hash FROM "
+                "configs) OR opt_config_hash NOT IN (SELECT hash FROM configs) ORDER BY run_id LIMIT 1");
+    if (q.step())
+      throw StoreError("run " + q.column_text(0) + "/" + q.column_text(1) + "/seed " +
+                       std::to_string(q.column_int(2)) + " names config " + q.column_text(3) +
+                       ", which its configs table lacks");
+    return 0;
+  });
+}
+
+// the output's new files, removed when a merge that created them is refused
+void remove_database_files(const std::string& path) {
+  for (const char* suffix : {"", "-wal", "-shm", "-journal"}) std::remove((path + suffix).c_str());
+}
+
+struct MergeCounts {
+  std::int64_t added = 0, identical = 0, replaced = 0, kept = 0;
+};
+
+MergeCounts merge_inputs(Store& store, const std::vector<std::string>& inputs) {
+  Database& out = store.db();
+  MergeCounts n;
+  std::map<RunKey, std::string> source;  // the input each merged run came from, for conflicts
+  Transaction tx(out);                   // all inputs or nothing
+  for (const auto& in : inputs) {
+    reading(in, [&] {
+      Database db(in, Database::Mode::read_only);
+      const bool has_journal = check_schema(db) >= 3;
+      Statement cfg(db.handle(), "SELECT hash, kind, json FROM configs");
+      Statement put(out.handle(), "INSERT OR IGNORE INTO configs(hash, kind, json) VALUES (?, ?, ?)");
+      while (cfg.step()) put.bind(1, cfg.column_text(0)).bind(2, cfg.column_text(1)).bind(3, cfg.column_text(2)).run();
+
+      std::vector<std::int64_t> ids;
+      Statement all(db.handle(), "SELECT run_id FROM runs ORDER BY run_id");
+      while (all.step()) ids.push_back(all.column_int(0));
+      for (const std::int64_t id : ids) {
+        RunRecord theirs = read_run(db, id, has_journal);
+        if (theirs.status() != "running") theirs.journal.clear();  // only an unfinished run resumes
+        const RunKey key = theirs.key();
+        const auto existing = find_run(out, key);
+        if (!existing) {
+          insert_run(out, theirs);
+          source[key] = in;
+          ++n.added;
+          continue;
+        }
+        const RunRecord ours = read_run(out, *existing, true);
+        const std::string other = source.count(key) ? "'" + source[key] + "'" : "the output";
+        const bool both_done = theirs.status() == "done" && ours.status() == "done";
+        if (!consistent(theirs, ours) || (both_done && !same_result(theirs, ours)))
+          throw UsageError("merge: run " + key.text() + " in '" + in + "' conflicts with its copy from " + other +
+                           " (same key, different evals); nothing was written");
+        if (better(theirs, ours)) {
+          delete_run(out, *existing);
+          insert_run(out, theirs);
+          source[key] = in;
+          ++n.replaced;
+        } else {
+          ++(both_done ? n.identical : n.kept);
+        }
+      }
+      return 0;
+    });
+  }
+  tx.commit();
+  return n;
+}
 
 }  // namespace
 
 int command_merge(const std::string& into, const std::vector<std::string>& inputs) {
   if (into.empty()) throw UsageError("--into must name a file, got ''");
   if (inputs.empty()) throw UsageError("merge: give the shard databases to merge after --into FILE");
-  namespace fs = std::filesystem;
-  for (const auto& in : inputs) {
-    if (!fs::exists(in)) throw UsageError("merge: input '" + in + "' does not exist");
-    std::error_code ec;
-    if (fs::exists(into) && fs::equivalent(in, into, ec))
-      throw UsageError("merge: input '" + in + "' is the output itself");
-  }
-  // every input is checked before the output is opened: a foreign file changes nothing
-  for (const auto& in : inputs) {
-    try {
-      Database db(in, Database::Mode::read_only);
-      if (check_schema(db) == 0) throw StoreError("database '" + in + "' has no harness tables");
-    } catch (const StoreError& e) {
-      throw UsageError(std::string("merge: ") + e.what());
-    }
-  }
-  std::unique_ptr<Store> store;
+  for (const auto& in : inputs) check_input(in, into);
+  const bool created = !std::filesystem::exists(into);
+  MergeCounts n;
   try {
-    store = std::make_unique<Store>(into, Provenance{});
-  } catch (const StoreError& e) {
-    throw UsageError(std::string("--into: ") + e.what());
-  }
-  Database& out = store->db();
-
-  std::int64_t added = 0, identical = 0, replaced = 0, kept = 0;
-  Transaction tx(out);  // all inputs or nothing
-  for (const auto& in : inputs) {
-    Database db(in, Database::Mode::read_only);
-    const bool has_journal = check_schema(db) >= 3;
-    Statement cfg(db.handle(), "SELECT hash, kind, json FROM configs");
-    Statement put(out.handle(), "INSERT OR IGNORE INTO configs(hash, kind, json) VALUES (?, ?, ?)");
-    while (cfg.step()) put.bind(1, cfg.column_text(0)).bind(2, cfg.column_text(1)).bind(3, cfg.column_text(2)).run();
-
-    std::vector<std::int64_t> ids;
-    Statement all(db.handle(), "SELECT run_id FROM runs ORDER BY run_id");
-    while (all.step()) ids.push_back(all.column_int(0));
-    for (const std::int64_t id : ids) {
-      const RunRecord theirs = read_run(db, id, has_journal);
-      const RunKey key = theirs.key();
-      const auto existing = find_run(out, key);
-      if (!existing) {
-        insert_run(out, theirs);
-        ++added;
-        continue;
-      }
-      const RunRecord ours = read_run(out, *existing, true);
-      if (theirs.status() == "done" && ours.status() == "done") {
-        if (!same_result(theirs, ours))
-          throw UsageError("merge: run " + key.text() + " in '" + in +
-                           "' conflicts with the same run already merged (same key, different evals); nothing was "
-                           "written");
-        ++identical;
-        continue;
-      }
-      // a finished run beats an unfinished one; of two unfinished ones the one further along
-      const bool take = rank(theirs.status()) > rank(ours.status()) ||
-                        (rank(theirs.status()) == rank(ours.status()) && theirs.status() == "running" &&
-                         theirs.committed() > ours.committed());
-      if (take) {
-        delete_run(out, *existing);
-        insert_run(out, theirs);
-        ++replaced;
-      } else {
-        ++kept;
-      }
+    std::unique_ptr<Store> store;
+    try {
+      store = std::make_unique<Store>(into, Provenance{});
+    } catch (const StoreError& e) {
+      throw UsageError(std::string("--into: ") + e.what());
     }
+    n = merge_inputs(*store, inputs);
+  } catch (...) {
+    if (created) remove_database_files(into);  // a refused merge leaves no new file behind
+    throw;
   }
-  tx.commit();
   std::cerr << fmt::format(
-      "harness: merged {} files into {}: {} runs added, {} identical duplicates, {} unfinished runs replaced by "
-      "further ones, {} kept\n",
-      inputs.size(), into, added, identical, replaced, kept);
+      "harness: merged {} files into {}: {} runs added, {} identical duplicates, {} runs replaced by further "
+      "copies, {} further copies kept\n",
+      inputs.size(), into, n.added, n.identical, n.replaced, n.kept);
   return 0;
 }
 

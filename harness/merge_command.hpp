@@ -1,12 +1,15 @@
 #pragma once
-// `harness merge --into OUT IN...`: combines shard databases by run key (design.md "Cluster
-// runs"). A run new to OUT is copied with its evals (and, unfinished, its journal, so it resumes
-// there); the same finished run in two files must have the same evals (wall times aside) or the
-// merge is refused with a one-line error naming the run, and nothing is written (one transaction
-// over all inputs); a finished run is never replaced by an unfinished one, and of two unfinished
-// copies the one with more committed episodes is kept. Runs of other harness versions or configs
-// have other keys and stay apart. Every input is checked to be a harness database before OUT is
-// opened. Returns the exit code.
+// `harness merge --into OUT IN...`: combines shard databases by run key. A run new to OUT is
+// copied with its evals (and, unfinished, its journal, so it resumes there). Copies of one run
+// key in several files must agree on every episode that both hold (wall times aside; two done
+// copies on everything), or the merge is refused (exit 2) with a line naming the run and both
+// inputs, and nothing is written: one transaction over all inputs, and an OUT the merge created
+// is removed again. Of consistent copies the one kept is done over failed over running, then the
+// one with more episodes, then the one whose stored bytes sort first, so the result never
+// depends on the order of the inputs. Runs of other harness versions or configs have other keys
+// and stay apart. Every input is checked before OUT is opened (opened read-only: a read-only
+// file or mount is fine): a harness database whose runs' configs rows are all there; an error
+// names the input at fault. Returns the exit code.
 #include <string>
 #include <vector>
 

@@ -59,17 +59,25 @@ GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& don
   return plan;
 }
 
+std::map<RunKey, std::string> runs_of_file(const std::string& path, const std::string& status) {
+  std::map<RunKey, std::string> runs;
+  if (!std::filesystem::exists(path)) return runs;
+  Database db(path, Database::Mode::read_only);
+  if (check_schema(db) == 0) return runs;  // refuses a file that is not a harness database
+  Statement q(db.handle(),
+              "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, "
+              "COALESCE(error, '') FROM runs WHERE status=?");
+  q.bind(1, status);
+  while (q.step())
+    runs.emplace(RunKey{q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
+                        q.column_text(4), q.column_text(5), q.column_text(6)},
+                 q.column_text(7));
+  return runs;
+}
+
 std::set<RunKey> done_keys_of_file(const std::string& path) {
   std::set<RunKey> keys;
-  if (!std::filesystem::exists(path)) return keys;
-  Database db(path, Database::Mode::read_only);
-  if (check_schema(db) == 0) return keys;  // refuses a file that is not a harness database
-  Statement q(db.handle(),
-              "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version FROM runs "
-              "WHERE status='done'");
-  while (q.step())
-    keys.insert({q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
-                 q.column_text(4), q.column_text(5), q.column_text(6)});
+  for (auto& [key, error] : runs_of_file(path, "done")) keys.insert(key);
   return keys;
 }
 

@@ -49,8 +49,11 @@ int shard_of(const RunKey& key, int count);
 GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done,
                    const std::string& harness_version, Shard shard = {});
 
-// keys of the 'done' runs of an existing database, opened read-only (a file that is not a
-// harness database throws StoreError); an empty set when the file does not exist
+// the runs of an existing database with this status ('done', 'failed'), each with its error
+// (empty when it has none); the file is opened read-only (a file that is not a harness database
+// throws StoreError); nothing when the file does not exist
+std::map<RunKey, std::string> runs_of_file(const std::string& path, const std::string& status);
+// the keys of its 'done' runs
 std::set<RunKey> done_keys_of_file(const std::string& path);
 
 }  // namespace dsb

@@ -34,6 +34,18 @@ struct Tally {
 
 }  // namespace
 
+void print_failed_runs(std::ostream& out, const GridPlan& plan, const std::map<RunKey, std::string>& failed) {
+  std::vector<const PlannedRun*> runs;
+  for (const auto& p : plan.pending)
+    if (failed.count(p.key)) runs.push_back(&p);
+  if (runs.empty()) return;
+  out << fmt::format("  failed in the database: {} of these runs (a grid exits 3 while any fails; each runs again):\n",
+                     runs.size());
+  for (std::size_t i = 0; i < runs.size() && i < kFailedRunsShown; ++i)
+    out << fmt::format("    {}: {}\n", runs[i]->key.text(), failed.at(runs[i]->key));
+  if (runs.size() > kFailedRunsShown) out << fmt::format("    ... and {} more\n", runs.size() - kFailedRunsShown);
+}
+
 std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs) {
   std::vector<double> c;
   c.reserve(plan.pending.size());

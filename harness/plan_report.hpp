@@ -2,6 +2,7 @@
 // `harness plan`'s text (also printed by a grid run before it starts): runs to do, their
 // estimated core-hours per env and per optimizer family (harness/cost_model.hpp), the wall time
 // for the given jobs, and the Slurm route for grids bigger than one machine.
+#include <map>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -25,5 +26,10 @@ std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs);
 std::vector<std::size_t> cheapest_first(const std::vector<double>& run_cost_s);
 
 void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& context);
+
+// the grid's runs that the database holds as 'failed' (`failed`: key -> error, runs_of_file),
+// each with its error, at most kFailedRunsShown of them; nothing when there are none
+void print_failed_runs(std::ostream& out, const GridPlan& plan, const std::map<RunKey, std::string>& failed);
+inline constexpr std::size_t kFailedRunsShown = 50;
 
 }  // namespace dsb

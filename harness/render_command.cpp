@@ -12,19 +12,12 @@
 #include "common/parallel.hpp"
 #include "envs/core/registry.hpp"
 #include "harness/commands.hpp"
+#include "harness/output_path.hpp"
 #include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
 #include "render/encode.hpp"
 
 namespace dsb {
-
-namespace {
-
-struct FileCloser {
-  void operator()(std::FILE* f) const { std::fclose(f); }
-};
-
-}  // namespace
 
 BestRun best_run_of(const std::string& db_path, const std::string& env) {
   try {
@@ -68,18 +61,13 @@ int command_render(const RenderArgs& a) {
                          best.best_loss);
   }
   const auto x = checked_point(*env, x_text, a.best_of.empty() ? "--x" : "--best-of best_x");
-  // open the output before the rollout, so an unwritable path fails at once
-  std::unique_ptr<std::FILE, FileCloser> file(std::fopen(a.out.c_str(), "wb"));
-  if (!file) throw UsageError(fmt::format("--out: cannot write '{}'", a.out));
+  // open the output before the rollout, so an unusable path fails at once
+  OutputFile file("--out", a.out, a.force);
   const std::vector<Frame> frames = env->frames(x, a.frames, serial_team());
-  if (frames.empty()) {
-    file.reset();
-    std::remove(a.out.c_str());
-    throw std::runtime_error(fmt::format("env '{}' blew up before its first frame", a.env));
-  }
+  if (frames.empty()) throw std::runtime_error(fmt::format("env '{}' blew up before its first frame", a.env));
   const std::vector<unsigned char> bytes = render::encode_frames(frames, options);
-  if (std::fwrite(bytes.data(), 1, bytes.size(), file.get()) != bytes.size() || std::fflush(file.get()) != 0)
-    throw UsageError(fmt::format("--out: cannot write '{}'", a.out));
+  file.stream().write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  file.commit();
   std::cout << fmt::format("render: {} at {}: {} frames (t = {:.3f} .. {:.3f} s) -> {} ({} bytes)\n", a.env, source,
                            frames.size(), frames.front().time, frames.back().time, a.out, bytes.size());
   return 0;

@@ -11,6 +11,7 @@
 #include "common/error.hpp"
 #include "harness/commands.hpp"
 #include "harness/export_ioh.hpp"
+#include "harness/output_path.hpp"
 #include "harness/result_table.hpp"
 #include "harness/sqlite_db.hpp"
 
@@ -27,15 +28,13 @@ std::vector<ResultRow> database_table(const std::string& db_path) {
   }
 }
 
-// --out for ioh is a folder that does not exist yet (created) or an empty folder; anything else is
-// refused before a file is written, so an export never mixes with other files.
-int export_ioh(const std::string& db_path, const std::string& out_path) {
+// --out for ioh is a folder that does not exist yet (created) or an empty folder, so an export
+// never mixes with other files; with force, another folder (files of the export's names replaced)
+int export_ioh(const std::string& db_path, const std::string& out_path, bool force) {
   if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
+  check_output_folder("--out", out_path, force, [](const std::string&) { return false; });
   std::error_code ec;
   const std::filesystem::path out(out_path);
-  if (std::filesystem::exists(out, ec) &&
-      !(std::filesystem::is_directory(out, ec) && std::filesystem::is_empty(out, ec)))
-    throw UsageError("--out: '" + out_path + "' exists and is not an empty folder");
   std::vector<IohRun> runs;
   try {
     Database db(db_path, Database::Mode::read_only);
@@ -76,17 +75,29 @@ int command_check(const std::string& db_path, const std::string& baseline_path) 
   return 1;
 }
 
-int command_export(const std::string& db_path, const std::string& out_path, const std::string& format) {
+int command_export(const std::string& db_path, const std::string& out_path, const std::string& format,
+                   bool force) {
   if (format != "csv" && format != "ioh") throw UsageError("--format must be csv or ioh, got '" + format + "'");
-  if (format == "ioh") return export_ioh(db_path, out_path);
+  if (format == "ioh") return export_ioh(db_path, out_path, force);
+  check_output_file("--out", out_path, force);  // before the database is read: a refusal costs nothing
   const auto rows = database_table(db_path);
-  std::ofstream out(out_path);
-  if (!out) throw UsageError("--out: cannot write '" + out_path + "'");
-  write_result_csv(rows, out);
-  out.close();
-  if (!out) throw UsageError("--out: writing '" + out_path + "' failed");
+  OutputFile out("--out", out_path, force);
+  write_result_csv(rows, out.stream());
+  out.commit();
   std::cerr << "harness: wrote " << rows.size() << " rows to " << out_path << "\n";
   return 0;
+}
+
+void check_report_folder(const std::string& dir, bool force, const std::string& option) {
+  // ours: its index.html is a report's (reports/dsb_report/html.py writes this title)
+  const auto is_report = [](const std::string& d) {
+    std::ifstream index(std::filesystem::path(d) / "index.html");
+    std::string head(4096, '\0');
+    index.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(index.gcount()));
+    return head.find("<title>diffsim-bench report</title>") != std::string::npos;
+  };
+  check_output_folder(option, dir, force, is_report, option == "--out" ? "--force" : "");
 }
 
 int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,

@@ -37,6 +37,9 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
   } catch (const std::exception& e) {
     result.status = "failed";
     result.error = e.what();
+    // an error after a stop request is the stop's doing (an external optimizer killed by it):
+    // the run commits and resumes like any other
+    if (objective.stop_if_requested()) result.error.clear();
   }
   // an optimizer may catch a stop like the budget's end and return: the objective knows
   if (objective.interrupted()) result.status = "interrupted";

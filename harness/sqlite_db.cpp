@@ -1,7 +1,12 @@
 #include "harness/sqlite_db.hpp"
 
+#include <sys/stat.h>
+
 #include <cmath>
+#include <filesystem>
 #include <limits>
+
+#include <fmt/format.h>
 
 #include <sqlite3.h>
 
@@ -95,12 +100,14 @@ bool Statement::column_is_null(int col) const {
 Database::Database(const std::string& path, Mode mode) : path_(path) {
   const int flags = (mode == Mode::read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE) |
                     (mode == Mode::write_create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
-  const int rc = sqlite3_open_v2(path.c_str(), &db_, flags, nullptr);
-  if (rc != SQLITE_OK) {
-    const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+  open(path, flags);
+  if (mode == Mode::read_only && !readable() && !wal_has_frames(path)) {
+    // A WAL database read where its -shm file cannot be made (a read-only folder or mount, a file
+    // the user may not write): with no -wal frames the file alone is the whole database, which
+    // SQLite then reads as immutable (no -shm, no locks)
     sqlite3_close(db_);
     db_ = nullptr;
-    throw StoreError("cannot open database '" + path + "': " + msg);
+    open(immutable_uri(path), SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX);
   }
   if (mode != Mode::read_only && sqlite3_db_readonly(db_, "main") == 1) {
     sqlite3_close(db_);
@@ -108,6 +115,39 @@ Database::Database(const std::string& path, Mode mode) : path_(path) {
     throw StoreError("cannot open database '" + path + "' for writing");
   }
   sqlite3_busy_timeout(db_, 10000);
+}
+
+void Database::open(const std::string& name, int flags) {
+  const int rc = sqlite3_open_v2(name.c_str(), &db_, flags, nullptr);
+  if (rc != SQLITE_OK) {
+    const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw StoreError("cannot open database '" + path_ + "': " + msg);
+  }
+}
+
+bool Database::readable() {
+  const int rc = sqlite3_exec(db_, "SELECT count(*) FROM sqlite_master", nullptr, nullptr, nullptr);
+  const int primary = rc & 0xff;
+  return !(primary == SQLITE_READONLY || primary == SQLITE_CANTOPEN);
+}
+
+bool Database::wal_has_frames(const std::string& path) {
+  struct stat st {};
+  return ::stat((path + "-wal").c_str(), &st) == 0 && st.st_size > 0;
+}
+
+std::string Database::immutable_uri(const std::string& path) {
+  // file:ABSOLUTE?immutable=1, with the characters a URI gives meaning to escaped
+  std::string uri = "file:";
+  for (const char c : std::filesystem::absolute(path).string()) {
+    if (c == '%' || c == '?' || c == '#')
+      uri += fmt::format("%{:02X}", static_cast<unsigned char>(c));
+    else
+      uri += c;
+  }
+  return uri + "?immutable=1";
 }
 
 Database::~Database() { sqlite3_close(db_); }

@@ -46,7 +46,9 @@ class Database {
  public:
   enum class Mode { write_create, write, read_only };
   // Opens a database file (write_create: creating it if needed); throws StoreError naming the
-  // path when it cannot be opened in that mode.
+  // path when it cannot be opened in that mode. read_only also reads a WAL database that SQLite
+  // cannot open read-only because its -shm file cannot be made (a read-only folder or mount):
+  // when it has no -wal frames, the file is opened as immutable.
   explicit Database(const std::string& path, Mode mode = Mode::write_create);
   ~Database();
   Database(const Database&) = delete;
@@ -57,6 +59,11 @@ class Database {
   const std::string& path() const { return path_; }
 
  private:
+  void open(const std::string& name, int flags);
+  bool readable();  // false when a first read fails for want of write access (READONLY, CANTOPEN)
+  static bool wal_has_frames(const std::string& path);
+  static std::string immutable_uri(const std::string& path);
+
   sqlite3* db_ = nullptr;
   std::string path_;
 };

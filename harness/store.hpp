@@ -1,8 +1,9 @@
 #pragma once
 // The results database (schema of design.md and harness/schema.hpp): runs, evals, configs, meta,
-// replay. WAL mode, one writer: a Store holds an exclusive lock on the file (flock on the sidecar
-// FILE-lock, released by the kernel when the process ends, however it ends), so a second harness
-// on the same file is refused with a message naming the first. Opening refuses a foreign or newer
+// replay. WAL mode, one writer: a Store holds an exclusive lock on the file itself (harness/
+// file_lock.hpp: a flock every path to the file meets, released by the kernel when the process
+// ends, however it ends), so a second harness on the same file is refused with a message naming
+// the first. Opening refuses a foreign or newer
 // file and migrates an older one. A run row is inserted as 'running' when it starts; its episodes
 // and their journal (harness/replay.hpp) are committed as it goes (append_progress), and its
 // final status when it ends, so a killed harness leaves no run that counts as done and loses at

@@ -26,6 +26,7 @@
 
 #include "common/error.hpp"
 #include "common/thread_team.hpp"
+#include "common/usable_cpus.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/registry.hpp"
 
@@ -167,6 +168,12 @@ class PyEnv {
  public:
   PyEnv(const std::string& name, int threads) {
     if (threads < 1) throw py::value_error("threads must be >= 1, got " + std::to_string(threads));
+    // the harness's --threads cap: more threads than CPUs only slow a rollout down
+    if (threads > usable_cpus())
+      throw py::value_error("threads " + std::to_string(threads) + " is more than the " +
+                            std::to_string(usable_cpus()) +
+                            " CPUs this process may use (the cap: more threads than CPUs only slow a rollout down; "
+                            "results are the same for any count)");
     env_ = shared_env(name);  // metadata only: the model is built on the first rollout
     description_ = description_of(name);
     team_ = std::make_unique<ThreadTeam>(threads);
@@ -295,6 +302,6 @@ PYBIND11_MODULE(diffsim_bench, m) {
       "make", [](const std::string& name, int threads) { return std::make_unique<PyEnv>(name, threads); },
       py::arg("name"), py::arg("threads") = 1,
       "The env NAME (any name the harness takes, e.g. 'sphere-3' or 'fluid-h5') with a team of THREADS "
-      "threads inside each rollout (same results for every THREADS). Cheap: the model is built on the first "
+      "threads inside each rollout (same results for every THREADS; at most the CPUs this process may use). Cheap: the model is built on the first "
       "rollout and shared by every Env of that name. ValueError for an unknown name.");
 }

@@ -95,7 +95,7 @@ for env in "${envs[@]}"; do
   for d in $dims; do
     t0=$(date +%s.%N)
     file=$out/${variant}_${d/,/_}.csv
-    "$harness" landscape --env "$variant" --dims "$d" --res "$res" --out "$file" 2>/dev/null ||
+    "$harness" landscape --env "$variant" --dims "$d" --res "$res" --force --out "$file" 2>/dev/null ||
       { echo "landscape-gallery.sh: harness landscape --env $variant --dims $d failed" >&2; exit 1; }
     printf 'landscape-gallery: %-24s %-20s dims %-6s %3d x %-3d %8.1f s\n' "$env" "$variant" "$d" \
       "$res" "$res" "$(echo "$(date +%s.%N) - $t0" | bc)" >&2

@@ -15,7 +15,7 @@ mapfile -t envs < <(sqlite3 -readonly "$db" "SELECT DISTINCT env FROM runs WHERE
 rendered=0
 for env in "${envs[@]}"; do
   # a synthetic env answers "is not simulated" (exit 2): skipped; any other error stops the script
-  if ! msg=$("$harness" render --best-of "$db" --env "$env" --frames 4 --out "$out/render_$env.png" 2>&1); then
+  if ! msg=$("$harness" render --best-of "$db" --env "$env" --frames 4 --force --out "$out/render_$env.png" 2>&1); then
     if [[ "$msg" == *"is not simulated"* ]]; then continue; fi
     echo "$msg" >&2
     exit 1

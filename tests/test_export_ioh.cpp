@@ -221,7 +221,7 @@ TEST_F(ExportIoh, BadInputExitsTwoWithOneLineNamingIt) {
 
   r = harness("export --db " + db + " --out " + path("grid.sqlite") + " --format ioh");  // a file
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("not an empty folder"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("not a folder"), std::string::npos) << r.err;
 
   fs::create_directories(path("empty"));  // an empty folder is accepted
   r = harness("export --db " + db + " --out " + path("empty") + " --format ioh");

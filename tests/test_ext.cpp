@@ -152,38 +152,8 @@ class ExtCli : public dsb::testing::TempDirTest {
   std::string db(const std::string& name) const { return path(name); }
 };
 
-// rows of a query, columns joined by '|', NULL as "NULL"
-std::vector<std::string> rows(const std::string& path, const std::string& sql) {
-  sqlite3* db = nullptr;
-  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* q = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(db, sql.c_str(), -1, &q, nullptr), SQLITE_OK) << sql;
-  std::vector<std::string> out;
-  while (sqlite3_step(q) == SQLITE_ROW) {
-    std::string r;
-    for (int c = 0; c < sqlite3_column_count(q); ++c) {
-      if (c) r += "|";
-      if (sqlite3_column_type(q, c) == SQLITE_NULL) {
-        r += "NULL";
-      } else if (sqlite3_column_type(q, c) == SQLITE_FLOAT) {
-        char buf[40];
-        std::snprintf(buf, sizeof buf, "%a", sqlite3_column_double(q, c));  // every bit
-        r += buf;
-      } else {
-        r += reinterpret_cast<const char*>(sqlite3_column_text(q, c));
-      }
-    }
-    out.push_back(r);
-  }
-  sqlite3_finalize(q);
-  sqlite3_close(db);
-  return out;
-}
-
-std::string scalar(const std::string& path, const std::string& sql) {
-  const auto r = rows(path, sql);
-  return r.empty() ? "" : r[0];
-}
+using testing::rows;
+using testing::scalar;
 
 // every episode of every run (key, episode, loss, best, grad, failed), without timings
 std::vector<std::string> evals_of(const std::string& path, const std::string& where = "1") {
@@ -251,8 +221,10 @@ TEST_F(ExtCli, EachFailureModeFailsOnlyItsRunAndLeavesTheDatabaseIntact) {
     ext += " --ext " + mode + "='" + test_optimizer(mode) + "'";
   const auto r = harness("--env sphere-10 " + ext + " --seeds 1 --budget 20 --jobs 2 --ext-timeout 2 --db " +
                          db("f.sqlite"));
-  ASSERT_EQ(r.code, 0) << r.err;  // failed runs are results, not a harness failure
+  // failed runs are results, told by exit status 3 (not 1, a harness failure; not 2, bad input)
+  ASSERT_EQ(r.code, 3) << r.err;
   EXPECT_NE(r.err.find("0 already done, 1 done now, 5 failed"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("5 runs failed (exit status 3)"), std::string::npos) << r.err;
   const std::map<std::string, std::string> reason = {
       {"ext:crash", "ext:crash: closed its stdout and exited with status 3 before the budget end; stderr: "
                     "Traceback (most recent call last): | ZeroDivisionError: division by zero"},

@@ -5,6 +5,7 @@
 
 #include "common/error.hpp"
 #include "common/parallel.hpp"
+#include "envs/core/horizon_name.hpp"
 #include "envs/mpm/episode.hpp"
 #include "envs/mpm/fluid_scene.hpp"
 #include "envs/mpm/substep.hpp"
@@ -157,19 +158,14 @@ EnvFamily fluid_family() {
   f.pattern = "fluid";
   f.description =
       "MLS-MPM (9,834 particles, 400 substeps): a 2-DOF ladle scoops a sugar cube out of syrup in a 0.4 x 0.4 "
-      "x 0.2 m tank, 5 segments x 2 speeds; fluid-hN: N env steps instead of 50";
+      "x 0.2 m tank, 5 segments x 2 speeds; fluid-hN: the first N env steps of 50 (N = 5..45, a multiple of 5)";
   f.grid_names = {"fluid"};
   f.try_make = [](const std::string& requested) -> std::unique_ptr<Env> {
     if (requested == "fluid") return std::make_unique<FluidEnv>("fluid", FluidConfig{});
-    const std::string prefix = "fluid-h";
-    if (requested.rfind(prefix, 0) != 0) return nullptr;
-    const std::string digits = requested.substr(prefix.size());
-    if (digits.empty() || digits.size() > 3 || !std::all_of(digits.begin(), digits.end(), ::isdigit))
-      throw UsageError("unknown env '" + requested + "' (fluid-hN: N env steps, a multiple of 5 up to 50)");
     FluidConfig cfg;
-    cfg.env_steps = std::stoi(digits);
-    if (cfg.env_steps < 5 || cfg.env_steps > 50 || cfg.env_steps % cfg.segments != 0)
-      throw UsageError("unknown env '" + requested + "' (fluid-hN: N env steps, a multiple of 5 up to 50)");
+    const auto steps = parse_horizon_name(requested, "fluid", cfg.env_steps, cfg.segments);
+    if (!steps) return nullptr;
+    cfg.env_steps = *steps;
     return std::make_unique<FluidEnv>(requested, cfg);
   };
   return f;

@@ -5,6 +5,7 @@
 
 #include "common/error.hpp"
 #include "common/parallel.hpp"
+#include "envs/core/horizon_name.hpp"
 #include "envs/mpm/episode.hpp"
 #include "envs/mpm/substep.hpp"
 
@@ -155,25 +156,19 @@ EnvFamily plb_family() {
   EnvFamily f;
   f.pattern = "plb-NAME";
   f.description = "PlasticineLab tasks on the MPM engine (64^3, dt 1e-4, 19 x 50 substeps, von Mises); "
-                  "plb-NAME-hN: N env steps instead of 50";
+                  "plb-NAME-hN: the first N env steps of 50 (N = 5..45, a multiple of 5)";
   for (const auto& t : plb_tasks()) f.grid_names.push_back("plb-" + t.name);
   f.try_make = [](const std::string& requested) -> std::unique_ptr<Env> {
     if (requested.rfind("plb-", 0) != 0) return nullptr;
-    std::string rest = requested.substr(4);
-    int steps = 50;
-    const auto h = rest.rfind("-h");
-    if (h != std::string::npos) {
-      const std::string digits = rest.substr(h + 2);
-      if (digits.empty() || digits.size() > 3 || !std::all_of(digits.begin(), digits.end(), ::isdigit))
-        throw UsageError("unknown env '" + requested + "' (plb-NAME-hN: N env steps, a multiple of 5 up to 50)");
-      steps = std::stoi(digits);
-      rest = rest.substr(0, h);
+    const std::string rest = requested.substr(4);
+    const std::string task = rest.substr(0, rest.rfind("-h"));  // the whole rest when there is no -h
+    if (!find_plb_task(task)) return nullptr;
+    PlbConfig cfg = plb_config(task);
+    if (task != rest) {
+      const auto steps = parse_horizon_name(requested, "plb-" + task, cfg.env_steps, cfg.segments);
+      if (!steps) return nullptr;
+      cfg.env_steps = *steps;
     }
-    if (!find_plb_task(rest)) return nullptr;
-    if (steps < 5 || steps > 50 || steps % 5 != 0)
-      throw UsageError("unknown env '" + requested + "' (plb-NAME-hN: N env steps, a multiple of 5 up to 50)");
-    PlbConfig cfg = plb_config(rest);
-    cfg.env_steps = steps;
     return std::make_unique<PlbEnv>(requested, cfg);
   };
   return f;

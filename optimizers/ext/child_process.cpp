@@ -10,6 +10,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstdint>
+#include <ctime>
 #include <cstring>
 #include <stdexcept>
 #include <thread>
@@ -33,7 +36,110 @@ std::runtime_error sys_error(const std::string& what, int err) {
   return std::runtime_error(what + ": " + std::strerror(err));
 }
 
+// the process groups of the live children, for terminate_all() (a signal handler: lock-free
+// atomics only). A slot is emptied before its child is reaped, so a group id in the table is
+// never one the kernel has given to another process.
+constexpr int kMaxChildren = 4096;
+std::atomic<pid_t> g_groups[kMaxChildren];
+// CLOCK_MONOTONIC nanoseconds of the first terminate_all(), 0 while none came
+std::atomic<std::int64_t> g_stop_ns{0};
+static_assert(std::atomic<pid_t>::is_always_lock_free && std::atomic<std::int64_t>::is_always_lock_free,
+              "terminate_all() runs in a signal handler");
+
+// a poll never sleeps longer than this, so a stop is seen within it
+constexpr int kPollSliceMs = 100;
+
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+int register_group(pid_t group) {
+  for (int i = 0; i < kMaxChildren; ++i) {
+    pid_t empty = 0;
+    if (g_groups[i].compare_exchange_strong(empty, group)) return i;
+  }
+  return -1;  // a full table: this child gets no TERM from a stop, only the kill after the grace
+}
+
+void unregister_group(int& slot) {
+  if (slot >= 0) g_groups[slot].store(0);
+  slot = -1;
+}
+
+// The watchdog's whole life, in a process forked from a threaded one: async-signal-safe calls
+// only. It ignores the signals a terminal or `kill` sends the harness's group, keeps no
+// descriptor of the harness's but the pipe's read end, and waits: a byte disarms it, end of file
+// (the harness is gone) kills the child's group.
+[[noreturn]] void watchdog_main(int read_end, pid_t group) {
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE}) ::sigaction(sig, &ignore, nullptr);
+  const int guard = ::fcntl(read_end, F_DUPFD, 100);
+  const int nul = ::open("/dev/null", O_RDWR);
+  if (nul >= 0)
+    for (int fd = 0; fd < 3; ++fd) ::dup2(nul, fd);
+  ::dup2(guard >= 0 ? guard : read_end, 3);
+  if (::close_range(4, ~0U, 0) != 0)
+    for (int fd = 4; fd < 4096; ++fd) ::close(fd);
+  char byte = 0;
+  for (;;) {
+    const ssize_t n = ::read(3, &byte, 1);
+    if (n < 0 && errno == EINTR) continue;
+    if (n == 0) ::kill(-group, SIGKILL);
+    ::_exit(0);
+  }
+}
+
 }  // namespace
+
+void ChildProcess::terminate_all() {
+  std::int64_t none = 0;
+  g_stop_ns.compare_exchange_strong(none, monotonic_ns());
+  for (auto& group : g_groups) {
+    const pid_t g = group.load();
+    if (g > 0) ::kill(-g, SIGTERM);
+  }
+}
+
+void ChildProcess::start_watchdog() {
+  int guard[2];
+  if (::pipe2(guard, O_CLOEXEC) != 0) return;  // no watchdog: only a killed harness would orphan the child
+  const pid_t group = pid_;
+  const pid_t w = ::fork();
+  if (w == 0) watchdog_main(guard[0], group);
+  ::close(guard[0]);
+  if (w < 0) {
+    ::close(guard[1]);
+    return;
+  }
+  guard_fd_ = guard[1];
+  watchdog_pid_ = w;
+}
+
+void ChildProcess::stop_watchdog() {
+  if (guard_fd_ >= 0) {
+    const char disarm = 'x';
+    [[maybe_unused]] const ssize_t n = ::write(guard_fd_, &disarm, 1);
+    close_fd(guard_fd_);
+  }
+  if (watchdog_pid_ > 0) {
+    int status = 0;
+    while (::waitpid(watchdog_pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+  }
+  watchdog_pid_ = -1;
+}
+
+void ChildProcess::end_if_stopped() {
+  const std::int64_t since = g_stop_ns.load();
+  if (since == 0 || monotonic_ns() - since < std::int64_t{kStopGraceS} * 1'000'000'000) return;
+  kill();
+  close_fd(in_);
+  close_fd(out_fd_);
+  close_fd(err_fd_);
+}
 
 ChildProcess::ChildProcess(const std::string& command) {
   // stdin: a socket pair, so that writing to a child that has gone gives EPIPE, never SIGPIPE
@@ -88,6 +194,9 @@ ChildProcess::ChildProcess(const std::string& command) {
     throw sys_error("posix_spawn /bin/sh", rc);
   }
   for (int fd : {in_, out_fd_, err_fd_}) ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK);
+  slot_ = register_group(pid_);
+  if (g_stop_ns.load() != 0) ::kill(-pid_, SIGTERM);  // started after a stop: told at once
+  start_watchdog();
 }
 
 ChildProcess::~ChildProcess() {
@@ -118,6 +227,7 @@ void ChildProcess::read_available(int& fd, bool is_stdout) {
 }
 
 bool ChildProcess::pump(Clock::time_point deadline, bool want_write) {
+  end_if_stopped();
   pollfd fds[3];
   int n = 0, i_out = -1, i_err = -1, i_in = -1;
   if (out_fd_ >= 0) fds[i_out = n++] = {out_fd_, POLLIN, 0};
@@ -127,7 +237,7 @@ bool ChildProcess::pump(Clock::time_point deadline, bool want_write) {
     // nothing left to watch: wait out the deadline in small steps is pointless; report it
     return Clock::now() < deadline;
   }
-  const int rc = ::poll(fds, static_cast<nfds_t>(n), ms_until(deadline));
+  const int rc = ::poll(fds, static_cast<nfds_t>(n), std::min(ms_until(deadline), kPollSliceMs));
   if (rc < 0 && errno != EINTR) throw sys_error("poll", errno);
   if (rc <= 0) return Clock::now() < deadline;
   if (i_out >= 0 && fds[i_out].revents) read_available(out_fd_, true);
@@ -189,9 +299,15 @@ std::optional<int> ChildProcess::wait_exit(Clock::time_point deadline) {
   if (reaped_) return status_;
   if (pid_ < 0) return std::nullopt;
   for (;;) {
-    int status = 0;
-    const pid_t r = ::waitpid(pid_, &status, WNOHANG);
-    if (r == pid_) {
+    if (reaped_) return status_;  // killed after a stop's grace (pump)
+    // has it exited? (not reaped yet: its group id leaves the stop table first)
+    siginfo_t info{};
+    const int r = ::waitid(P_PID, static_cast<id_t>(pid_), &info, WEXITED | WNOHANG | WNOWAIT);
+    if (r == 0 && info.si_pid == pid_) {
+      unregister_group(slot_);
+      int status = 0;
+      while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+      }
       reaped_ = true;
       status_ = status;
       return status_;
@@ -205,14 +321,17 @@ std::optional<int> ChildProcess::wait_exit(Clock::time_point deadline) {
 }
 
 void ChildProcess::kill() {
-  if (pid_ < 0 || reaped_) return;
-  ::kill(-pid_, SIGKILL);  // the group: the shell and what it started
-  ::kill(pid_, SIGKILL);
-  int status = 0;
-  while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+  if (pid_ >= 0 && !reaped_) {
+    unregister_group(slot_);
+    ::kill(-pid_, SIGKILL);  // the group: the shell and what it started
+    ::kill(pid_, SIGKILL);
+    int status = 0;
+    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+    reaped_ = true;
+    status_ = status;
   }
-  reaped_ = true;
-  status_ = status;
+  stop_watchdog();
 }
 
 std::string ChildProcess::stderr_tail(std::size_t max_chars) const {

@@ -4,6 +4,15 @@
 // stops the runs in order, not the child), inheriting no other descriptor of ours (the
 // database's lock stays ours). Every wait has a deadline; stderr is drained all the time into a
 // capped tail, shown in errors. The destructor kills (SIGKILL to the group) and reaps.
+//
+// The child never outlives the harness:
+// - a stop (terminate_all(), from the harness's SIGTERM/SIGINT/SIGHUP handler) sends TERM to
+//   every child's group at once, and every wait ends within kStopGraceS after it: a child still
+//   there is killed (SIGKILL to its group) and its reads and writes end as `closed`;
+// - a harness that dies without a word (SIGKILL, a crash) leaves no orphan: each child has a
+//   watchdog, a small forked process that holds the read end of a pipe whose write end only the
+//   harness has. The harness's death closes it; the watchdog reads end of file and kills the
+//   child's group. A child that ends normally disarms it with one byte first.
 #include <sys/types.h>
 
 #include <chrono>
@@ -39,7 +48,14 @@ class ChildProcess {
   // SIGKILL to the group, then reap; safe to call twice
   void kill();
 
+  // Async-signal-safe, for a signal handler: TERM to every live child's process group now, and
+  // from then on every wait of every ChildProcess ends by kStopGraceS after this call, killing
+  // the child if it is still there. Children started later get TERM at once.
+  static void terminate_all();
+  static constexpr int kStopGraceS = 3;
+
   pid_t pid() const { return pid_; }
+  pid_t watchdog_pid() const { return watchdog_pid_; }
   bool too_long() const { return too_long_; }
   const std::string& partial() const { return out_; }
   // the last bytes of stderr, one line (newlines shown as " | "), at most max_chars
@@ -54,7 +70,16 @@ class ChildProcess {
   bool pump(Clock::time_point deadline, bool want_write);
   void read_available(int& fd, bool is_stdout);
 
+  // the watchdog (see above): forked after the child, disarmed by one byte on guard_fd_
+  void start_watchdog();
+  void stop_watchdog();
+  // after a stop's grace: the child is killed and every descriptor closed
+  void end_if_stopped();
+
   pid_t pid_ = -1;
+  pid_t watchdog_pid_ = -1;
+  int guard_fd_ = -1;  // our end of the watchdog's pipe
+  int slot_ = -1;      // our entry in the table terminate_all() walks
   bool reaped_ = false;
   int status_ = 0;
   int in_ = -1, out_fd_ = -1, err_fd_ = -1;  // our ends (in_ a socket: writes never raise SIGPIPE)

@@ -10,13 +10,16 @@ time, default 1), `echo` (asks one random point BATCH times per ask, for timing 
 `stop-early` (10 episodes, then returns), `roundtrip` (sends back each loss and gradient
 component as the next point's x[0], x[1]), `roundtrip-binary` (the same in base64, numpy). Modes that break it, after 3 good episodes: `crash`
 (exits 3 with a traceback-like stderr line), `garbage` (a line that is not JSON), `outside`
-(a point with x[1] = 1.5), `hang` (sleeps for an hour), `after-end` (asks again after the end),
+(a point with x[1] = 1.5), `hang` (sleeps for an hour), `hang-ignoring-term` (the same with
+SIGTERM ignored: only SIGKILL ends it), `after-end` (asks again after the end),
 `grad` (asks for a gradient, whatever the hello said), `bad-base64` (a binary ask that is not
 base64); `bad-probe` fails the probe (exit 4 before
-its hello). The version it reports is $TEST_OPT_VERSION (default 1).
+its hello). The version it reports is $TEST_OPT_VERSION (default 1). The hanging modes write
+their pid to $TEST_OPT_PIDFILE when it is set, once they hang.
 """
 import os
 import random
+import signal
 import sys
 import time
 
@@ -83,7 +86,13 @@ def optimize(s):
         x = point()
         x[1] = 1.5
         s.evaluate(x)
-    elif MODE == "hang":
+    elif MODE in ("hang", "hang-ignoring-term"):
+        if MODE == "hang-ignoring-term":
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        if os.environ.get("TEST_OPT_PIDFILE"):
+            with open(os.environ["TEST_OPT_PIDFILE"] + ".tmp", "w") as f:
+                f.write(str(os.getpid()))
+            os.rename(os.environ["TEST_OPT_PIDFILE"] + ".tmp", os.environ["TEST_OPT_PIDFILE"])
         time.sleep(3600)
     elif MODE == "bad-base64":
         s._send({"ask": "not base64!"})
