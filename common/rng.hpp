@@ -26,6 +26,20 @@ class Rng {
   }
 
   std::uint64_t next_u64() {
+    ++draws_;
+    return advance();
+  }
+
+  // The next value without counting it as a draw: for a value no result depends on (a seed for a
+  // generator that the algorithm at hand never uses). Advances the stream exactly as next_u64.
+  std::uint64_t skip_u64() { return advance(); }
+
+  // values drawn so far (next_u64 and everything built on it, skip_u64 not counted): a run's
+  // episodes before its first draw are the same for every seed (harness/budget.hpp)
+  std::uint64_t draws() const { return draws_; }
+
+ private:
+  std::uint64_t advance() {
     const std::uint64_t result = rotl(state_[1] * 5, 7) * 9;
     const std::uint64_t t = state_[1] << 17;
     state_[2] ^= state_[0];
@@ -36,6 +50,8 @@ class Rng {
     state_[3] = rotl(state_[3], 45);
     return result;
   }
+
+ public:
 
   // uniform in [0, 1) with 53 random bits
   double uniform() { return static_cast<double>(next_u64() >> 11) * 0x1.0p-53; }
@@ -70,6 +86,7 @@ class Rng {
  private:
   static std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
   std::uint64_t state_[4];
+  std::uint64_t draws_ = 0;
   double cached_ = 0.0;
   bool has_cached_ = false;
 };

@@ -85,6 +85,17 @@ std::vector<ReplayEntry> BudgetedObjective::take_journal(std::int64_t& first_seq
   return out;
 }
 
+void BudgetedObjective::note_first_draw() {
+  if (!rng_ || first_draw_ || rng_->draws() == 0) return;
+  // a draw since the last call: what was recorded before it is seed-free (an open RL episode's
+  // decisions came after it)
+  first_draw_ = SeedFreePrefix{used(), rl_open_ ? rl_episode_call_ : calls_, true};
+}
+
+SeedFreePrefix BudgetedObjective::seed_free_prefix() const {
+  return first_draw_ ? *first_draw_ : SeedFreePrefix{used(), rl_open_ ? rl_episode_call_ : calls_, false};
+}
+
 bool BudgetedObjective::stop_if_requested() {
   if (interrupted_) return true;
   if (!stop_ || !stop_->load(std::memory_order_relaxed)) return false;
@@ -130,6 +141,7 @@ void BudgetedObjective::journal(ReplayKind kind, std::span<const double> input, 
 }
 
 double BudgetedObjective::value(std::span<const double> x) {
+  note_first_draw();
   check_stop();
   if (used() >= budget_) throw BudgetExhausted{};
   check_point(x);
@@ -143,6 +155,7 @@ double BudgetedObjective::value(std::span<const double> x) {
 }
 
 double BudgetedObjective::value_and_grad(std::span<const double> x, std::span<double> grad) {
+  note_first_draw();
   check_stop();
   if (used() >= budget_) throw BudgetExhausted{};
   check_point(x);
@@ -184,6 +197,7 @@ void BudgetedObjective::values(std::span<const double> xs, std::span<double> out
     throw std::logic_error("batch of " + std::to_string(out.size()) + " points has " +
                            std::to_string(xs.size()) + " values, expected " + std::to_string(out.size() * d));
   if (out.empty()) return;
+  note_first_draw();
   check_stop();
   if (used() >= budget_) throw BudgetExhausted{};
   auto point = [&](std::size_t i) { return xs.subspan(i * d, d); };
@@ -270,8 +284,10 @@ void BudgetedObjective::write_observation(std::span<double> observation) const {
 void BudgetedObjective::rl_reset(std::span<double> observation) {
   RlEnv& rl = rl_env();
   if (rl_open_) throw std::logic_error("rl_reset while an episode is open: finish it first (it is recorded)");
+  note_first_draw();
   check_stop();  // between episodes only: an open episode always runs to its end
   if (used() >= budget_) throw BudgetExhausted{};
+  rl_episode_call_ = calls_;
   if (const ReplayEntry* r = replay_next(ReplayKind::rl_reset, {})) {
     if (r->payload.size() != observation.size()) throw ReplayDiverged("resume: a journal observation of the wrong size");
     std::copy(r->payload.begin(), r->payload.end(), observation.begin());
@@ -290,6 +306,7 @@ void BudgetedObjective::rl_reset(std::span<double> observation) {
 RlStep BudgetedObjective::rl_step(std::span<const double> action, std::span<double> observation) {
   RlEnv& rl = rl_env();
   if (!rl_open_) throw std::logic_error("rl_step without an open episode (call rl_reset first)");
+  note_first_draw();
   if (static_cast<int>(action.size()) != rl.action_dim())
     throw std::logic_error("optimizer gave an action of size " + std::to_string(action.size()) + " on env '" +
                            env_.name() + "' with " + std::to_string(rl.action_dim()) + " actions");

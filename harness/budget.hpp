@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -83,6 +84,12 @@ class BudgetedObjective : public Objective {
   std::vector<ReplayEntry> take_journal(std::int64_t& first_seq);
   std::int64_t replayed_episodes() const { return replayed_episodes_; }
   bool interrupted() const { return interrupted_; }
+
+  // Watches the run's generator for its first draw (checked at the start of every call): the
+  // episodes recorded before it, and the calls that produced them, are the run's seed-free
+  // prefix (an open RL episode is not part of it)
+  void watch_draws(const Rng* rng) { rng_ = rng; }
+  SeedFreePrefix seed_free_prefix() const;
   // When a stop was requested: marks the run interrupted and commits what it has, true. For an
   // optimizer that ended with an error the stop caused (an external optimizer killed by it).
   bool stop_if_requested();
@@ -94,6 +101,7 @@ class BudgetedObjective : public Objective {
   void end_replay();
   void journal(ReplayKind kind, std::span<const double> input, std::vector<double> payload);
   void check_stop();
+  void note_first_draw();
   double finish_episode(double loss_to_return);
 
   void check_point(std::span<const double> x) const;
@@ -128,6 +136,10 @@ class BudgetedObjective : public Objective {
   std::size_t replay_cursor_ = 0;
   std::int64_t replay_episodes_ = 0, replayed_episodes_ = 0;
   bool serving_ = false;  // the call being recorded was answered from the journal
+  // the seed-free prefix
+  const Rng* rng_ = nullptr;
+  std::optional<SeedFreePrefix> first_draw_;
+  std::int64_t rl_episode_call_ = 0;  // calls before the open RL episode's reset
 };
 
 }  // namespace dsb

@@ -50,6 +50,7 @@ struct RunArgs {
   std::vector<std::string> knobs;  // --set OPT.KNOB=VALUE, repeatable
   std::vector<std::string> ext;    // --ext NAME=COMMAND, repeatable
   std::string ext_timeout;         // --ext-timeout SECONDS (empty: the default)
+  bool no_sharing = false;         // --no-sharing: simulate every seed's every episode
 };
 
 // --set's help: the knobs of every optimizer that has some
@@ -89,6 +90,9 @@ void add_run_options(CLI::App& app, RunArgs& a) {
   app.add_option("--threads", a.threads, "threads inside one run's rollouts and batches (default 1; same results for any value)");
   app.add_option("--shard", a.shard, "run only shard I of N (I/N, 0-based): deterministic slices");
   app.add_flag("--quiet", a.quiet, "no progress lines");
+  app.add_flag("--no-sharing", a.no_sharing,
+               "simulate every episode of every seed (by default a run replays the episodes an earlier seed's run "
+               "simulated before its optimizer's first random draw: the same bits)");
 }
 
 std::string host_name() {
@@ -185,7 +189,14 @@ int command_plan(const RunArgs& a) {
   } catch (const StoreError& e) {
     throw UsageError(std::string("--db: ") + e.what());
   }
-  const GridPlan plan = plan_grid(run.grid, done, kVersion, run.shard);
+  GridPlan plan = plan_grid(run.grid, done, kVersion, run.shard);
+  if (!a.no_sharing) {
+    try {
+      estimate_sharing(plan, kept_prefixes_of_file(a.db));
+    } catch (const StoreError& e) {
+      throw UsageError(std::string("--db: ") + e.what());
+    }
+  }
   const CostModel costs;
   print_plan(std::cout, plan, costs, plan_context(a, run));
   print_failed_runs(std::cout, plan, failed);
@@ -227,18 +238,20 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
   } catch (const StoreError& e) {
     throw UsageError(std::string("--db: ") + e.what());
   }
-  const GridPlan plan = plan_grid(run.grid, store->done_keys(), kVersion, run.shard);
+  GridPlan plan = plan_grid(run.grid, store->done_keys(), kVersion, run.shard);
+  if (!a.no_sharing) estimate_sharing(plan, kept_prefixes_of_file(a.db));
   const CostModel costs;
   if (!a.quiet) {
     std::ostringstream text;
     print_plan(text, plan, costs, plan_context(a, run));
     std::fputs(text.str().c_str(), stderr);
   }
-  // cheapest runs first, so partial reports come early (each run's result does not depend on order)
+  // cheapest runs first, so partial reports come early, but the first seed of a sharing group
+  // before them (each run's result does not depend on order)
   const std::vector<double> cost = run_costs(plan, costs);
   std::vector<PlannedRun> pending;
   std::vector<double> pending_cost;
-  for (const std::size_t i : cheapest_first(cost)) {
+  for (const std::size_t i : run_order(plan.pending, cost, !a.no_sharing)) {
     pending.push_back(plan.pending[i]);
     pending_cost.push_back(cost[i]);
   }
@@ -247,7 +260,13 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
   std::unique_ptr<ReportRefresher> reports;
   if (!report_dir.empty()) reports = std::make_unique<ReportRefresher>(a.db, report_dir);
   const auto s = run_grid(pending, pending_cost, plan.skipped, *store, run.jobs, a.threads, progress,
-                          reports ? std::function<void()>([&] { reports->run_finished(); }) : std::function<void()>());
+                          reports ? std::function<void()>([&] { reports->run_finished(); }) : std::function<void()>(),
+                          !a.no_sharing);
+  if (s.shared_runs > 0)
+    std::fprintf(stderr,
+                 "harness: %lld runs took %lld episodes from an earlier seed's run (the episodes before the "
+                 "optimizer's first draw, replayed: the same bits as simulating them)\n",
+                 static_cast<long long>(s.shared_runs), static_cast<long long>(s.shared_episodes));
   if (s.resumed > 0)
     std::fprintf(stderr, "harness: resumed %lld interrupted runs, %lld of their episodes replayed from the database\n",
                  static_cast<long long>(s.resumed), static_cast<long long>(s.replayed_episodes));

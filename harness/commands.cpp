@@ -55,11 +55,13 @@ int command_list() {
     }
   }
   std::cout << "\n"
-            << fmt::format("{:<22} {:>14} {:>8}  {}\n", "optimizer", "needs gradient", "needs rl", "description");
+            << fmt::format("{:<22} {:>14} {:>8} {:>9}  {}\n", "optimizer", "needs gradient", "needs rl", "seed use",
+                           "description");
+  const auto seed_use = [](SeedUse u) { return u == SeedUse::never ? "never" : u == SeedUse::late ? "late" : "at start"; };
   for (const auto& e : optimizer_entries())
-    std::cout << fmt::format("{:<22} {:>14} {:>8}  {}\n", e.name, e.needs_gradient ? "yes" : "no",
-                             e.needs_rl ? "yes" : "no", e.description);
-  std::cout << fmt::format("{:<22} {:>14} {:>8}  {}\n", "ext:NAME", "either", "no",
+    std::cout << fmt::format("{:<22} {:>14} {:>8} {:>9}  {}\n", e.name, e.needs_gradient ? "yes" : "no",
+                             e.needs_rl ? "yes" : "no", seed_use(e.seed_use), e.description);
+  std::cout << fmt::format("{:<22} {:>14} {:>8} {:>9}  {}\n", "ext:NAME", "either", "no", "its own",
                            "your own optimizer, a program on the process protocol: --ext NAME='COMMAND' "
                            "(docs/ext-protocol.md)");
   std::cout << "\nknobs (--set OPTIMIZER.KNOB=VALUE; a variant is its own run)\n";

@@ -99,7 +99,7 @@ double optimizer_overhead_seconds(const std::string& optimizer, int dim, std::in
   return per_1000 * scale * scale;
 }
 
-double CostModel::run_seconds(const PlannedRun& run) const {
+double CostModel::run_seconds(const PlannedRun& run, double shared_share) const {
   const EpisodeCost c = episode(run.spec.env, run.key.env_config_hash);
   if (run.spec.ext) {
     // an external optimizer: whether it asks for gradients is its own affair; counted at the
@@ -115,7 +115,7 @@ double CostModel::run_seconds(const PlannedRun& run) const {
                                                               : kPpoLearnerSecondsPerDecision);
   }
   const int dim = shared_env(run.spec.env)->info().dim;  // metadata
-  return per_episode * static_cast<double>(run.spec.budget) +
+  return per_episode * static_cast<double>(run.spec.budget) * (1.0 - shared_share) +
          optimizer_overhead_seconds(run.spec.optimizer, dim, run.spec.budget);
 }
 

@@ -47,8 +47,9 @@ class CostModel {
 
   // the cost of one episode of `env_name` (config hash as stored with runs)
   EpisodeCost episode(const std::string& env_name, const std::string& env_config_hash) const;
-  // the estimated seconds of a whole run on one core
-  double run_seconds(const PlannedRun& run) const;
+  // the estimated seconds of a whole run on one core, `shared_share` of its episodes taken from
+  // another seed's run (replayed: free)
+  double run_seconds(const PlannedRun& run, double shared_share = 0.0) const;
 
   // times one forward and one gradient episode of the env (repeated to at least 0.2 s for cheap
   // envs: the median is kept) and its RL view's decisions, and records them

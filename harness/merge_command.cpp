@@ -22,12 +22,16 @@ namespace dsb {
 namespace {
 
 // every column of a run row but run_id, in schema order; `harness_version` is read as '' when
-// NULL (files before schema version 3)
-const char* kRunColumns =
-    "env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, failed_episodes, "
-    "best_loss, best_x, wall_s, error, started_at, finished_at, COALESCE(harness_version, ''), git_sha, host, "
-    "diagnostics";
-constexpr int kRunColumnCount = 20;
+// NULL (files before schema version 3), the sharing columns as what a run without sharing has
+// (files before version 4)
+std::string run_columns(int version) {
+  return std::string("env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, "
+                     "failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
+                     "COALESCE(harness_version, ''), git_sha, host, diagnostics, ") +
+         (version >= 4 ? "seed_free_episodes, seed_free_calls, shared_episodes, shared_from_seed"
+                       : "NULL, NULL, 0, NULL");
+}
+constexpr int kRunColumnCount = 24;
 const char* kEvalColumns = "episode, loss, best_loss, used_grad, wall_s, failed, metric";
 constexpr int kEvalColumnCount = 7;
 
@@ -73,9 +77,10 @@ void bind_row(Statement& st, const Row& row, int first_index) {
 }
 
 struct RunRecord {
-  Row run;                       // kRunColumns
+  Row run;                       // run_columns()
   std::vector<Row> evals;        // kEvalColumns, by episode
   std::vector<Row> journal;      // seq, kind, input_hash, payload (running runs)
+  std::vector<Row> prefix;       // the same, of a done run's kept seed-free episodes
   std::string status() const { return run[7].s; }
   std::int64_t committed() const { return static_cast<std::int64_t>(evals.size()); }
   RunKey key() const {
@@ -83,18 +88,23 @@ struct RunRecord {
   }
 };
 
-RunRecord read_run(Database& db, std::int64_t run_id, bool with_journal) {
+RunRecord read_run(Database& db, std::int64_t run_id, int version) {
   RunRecord r;
-  Statement q(db.handle(), std::string("SELECT ") + kRunColumns + " FROM runs WHERE run_id=?");
+  Statement q(db.handle(), "SELECT " + run_columns(version) + " FROM runs WHERE run_id=?");
   q.bind(1, run_id);
   if (q.step()) r.run = read_row(q, kRunColumnCount);
   Statement e(db.handle(), std::string("SELECT ") + kEvalColumns + " FROM evals WHERE run_id=? ORDER BY episode");
   e.bind(1, run_id);
   while (e.step()) r.evals.push_back(read_row(e, kEvalColumnCount));
-  if (with_journal) {
+  if (version >= 3) {
     Statement j(db.handle(), "SELECT seq, kind, input_hash, payload FROM replay WHERE run_id=? ORDER BY seq");
     j.bind(1, run_id);
     while (j.step()) r.journal.push_back(read_row(j, 4));
+  }
+  if (version >= 4) {
+    Statement p(db.handle(), "SELECT seq, kind, input_hash, payload FROM prefix WHERE run_id=? ORDER BY seq");
+    p.bind(1, run_id);
+    while (p.step()) r.prefix.push_back(read_row(p, 4));
   }
   return r;
 }
@@ -125,7 +135,7 @@ std::optional<std::int64_t> find_run(Database& db, const RunKey& k) {
 
 void delete_run(Database& db, std::int64_t run_id) {
   for (const char* sql : {"DELETE FROM evals WHERE run_id=?", "DELETE FROM replay WHERE run_id=?",
-                          "DELETE FROM runs WHERE run_id=?"}) {
+                          "DELETE FROM prefix WHERE run_id=?", "DELETE FROM runs WHERE run_id=?"}) {
     Statement st(db.handle(), sql);
     st.bind(1, run_id).run();
   }
@@ -135,8 +145,9 @@ void insert_run(Database& db, const RunRecord& r) {
   Statement run(db.handle(), std::string("INSERT INTO runs(") +
                                  "env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, "
                                  "episodes, failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
-                                 "harness_version, git_sha, host, diagnostics) VALUES (" +
-                                 "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING run_id");
+                                 "harness_version, git_sha, host, diagnostics, seed_free_episodes, seed_free_calls, "
+                                 "shared_episodes, shared_from_seed) VALUES (" +
+                                 "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING run_id");
   bind_row(run, r.run, 1);
   if (!run.step()) throw StoreError("merge: no run_id returned");
   const std::int64_t id = run.column_int(0);
@@ -148,11 +159,14 @@ void insert_run(Database& db, const RunRecord& r) {
     bind_row(ev, e, 2);
     ev.run();
   }
-  Statement j(db.handle(), "INSERT INTO replay(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
-  for (const auto& e : r.journal) {
-    j.bind(1, id);
-    bind_row(j, e, 2);
-    j.run();
+  for (const auto& [table, rows] : {std::pair{"replay", &r.journal}, std::pair{"prefix", &r.prefix}}) {
+    Statement j(db.handle(), std::string("INSERT INTO ") + table +
+                                 "(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
+    for (const auto& e : *rows) {
+      j.bind(1, id);
+      bind_row(j, e, 2);
+      j.run();
+    }
   }
 }
 
@@ -187,6 +201,7 @@ std::string content_of(const RunRecord& r) {
   add(r.run);
   for (const Row& e : r.evals) add(e);
   for (const Row& j : r.journal) add(j);
+  for (const Row& p : r.prefix) add(p);
   return bytes;
 }
 
@@ -247,7 +262,7 @@ MergeCounts merge_inputs(Store& store, const std::vector<std::string>& inputs) {
   for (const auto& in : inputs) {
     reading(in, [&] {
       Database db(in, Database::Mode::read_only);
-      const bool has_journal = check_schema(db) >= 3;
+      const int version = check_schema(db);
       Statement cfg(db.handle(), "SELECT hash, kind, json FROM configs");
       Statement put(out.handle(), "INSERT OR IGNORE INTO configs(hash, kind, json) VALUES (?, ?, ?)");
       while (cfg.step()) put.bind(1, cfg.column_text(0)).bind(2, cfg.column_text(1)).bind(3, cfg.column_text(2)).run();
@@ -256,8 +271,9 @@ MergeCounts merge_inputs(Store& store, const std::vector<std::string>& inputs) {
       Statement all(db.handle(), "SELECT run_id FROM runs ORDER BY run_id");
       while (all.step()) ids.push_back(all.column_int(0));
       for (const std::int64_t id : ids) {
-        RunRecord theirs = read_run(db, id, has_journal);
+        RunRecord theirs = read_run(db, id, version);
         if (theirs.status() != "running") theirs.journal.clear();  // only an unfinished run resumes
+        if (theirs.status() != "done") theirs.prefix.clear();      // only a done run keeps a prefix
         const RunKey key = theirs.key();
         const auto existing = find_run(out, key);
         if (!existing) {
@@ -266,7 +282,7 @@ MergeCounts merge_inputs(Store& store, const std::vector<std::string>& inputs) {
           ++n.added;
           continue;
         }
-        const RunRecord ours = read_run(out, *existing, true);
+        const RunRecord ours = read_run(out, *existing, kSchemaVersion);
         const std::string other = source.count(key) ? "'" + source[key] + "'" : "the output";
         const bool both_done = theirs.status() == "done" && ours.status() == "done";
         if (!consistent(theirs, ours) || (both_done && !same_result(theirs, ours)))

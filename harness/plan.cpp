@@ -28,9 +28,12 @@ const ResolvedConfig& resolve(std::map<std::string, ResolvedConfig>& cache, cons
 }  // namespace
 
 int shard_of(const RunKey& key, int count) {
+  // the seeds of a group that shares across seeds go to one shard, where they can share
+  const bool grouped =
+      key.optimizer.rfind("ext:", 0) != 0 && optimizer_entry(key.optimizer).seed_use != SeedUse::at_start;
   std::string text;
-  for (const std::string& part : {key.env, key.optimizer, std::to_string(key.seed), std::to_string(key.budget),
-                                  key.env_config_hash, key.opt_config_hash}) {
+  for (const std::string& part : {key.env, key.optimizer, grouped ? std::string() : std::to_string(key.seed),
+                                  std::to_string(key.budget), key.env_config_hash, key.opt_config_hash}) {
     text += part;
     text.push_back('\0');
   }
@@ -57,6 +60,68 @@ GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& don
     plan.pending.push_back({spec, std::move(key), &env, &opt});
   }
   return plan;
+}
+
+bool may_share_seeds(const RunSpec& spec) {
+  return !spec.ext && optimizer_entry(spec.optimizer).seed_use != SeedUse::at_start;
+}
+
+std::string seed_group_of(const RunKey& key) {
+  std::string g;
+  for (const std::string& part : {key.env, key.optimizer, std::to_string(key.budget), key.env_config_hash,
+                                  key.opt_config_hash, key.harness_version}) {
+    g += part;
+    g.push_back('\0');
+  }
+  return g;
+}
+
+std::vector<std::ptrdiff_t> share_leads(const std::vector<PlannedRun>& runs) {
+  std::map<std::string, std::size_t> lead_of;  // group -> index of its smallest seed
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (!may_share_seeds(runs[i].spec)) continue;
+    const auto [it, added] = lead_of.emplace(seed_group_of(runs[i].key), i);
+    if (!added && runs[i].spec.seed < runs[it->second].spec.seed) it->second = i;
+  }
+  std::vector<std::ptrdiff_t> lead(runs.size(), -1);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (!may_share_seeds(runs[i].spec)) continue;
+    const std::size_t l = lead_of.at(seed_group_of(runs[i].key));
+    if (l != i) lead[i] = static_cast<std::ptrdiff_t>(l);
+  }
+  return lead;
+}
+
+void estimate_sharing(GridPlan& plan, const std::map<std::string, std::int64_t>& kept) {
+  const std::vector<std::ptrdiff_t> lead = share_leads(plan.pending);
+  plan.shared_share.assign(plan.pending.size(), 0.0);
+  for (std::size_t i = 0; i < plan.pending.size(); ++i) {
+    const PlannedRun& p = plan.pending[i];
+    if (!may_share_seeds(p.spec)) continue;
+    const auto k = kept.find(seed_group_of(p.key));
+    if (k != kept.end())
+      plan.shared_share[i] = std::min(1.0, static_cast<double>(k->second) / static_cast<double>(p.spec.budget));
+    else if (lead[i] >= 0)
+      plan.shared_share[i] = optimizer_entry(p.spec.optimizer).typical_seed_free_share;
+  }
+}
+
+std::map<std::string, std::int64_t> kept_prefixes_of_file(const std::string& path) {
+  std::map<std::string, std::int64_t> kept;
+  if (!std::filesystem::exists(path)) return kept;
+  Database db(path, Database::Mode::read_only);
+  if (check_schema(db) < 4) return kept;
+  Statement q(db.handle(),
+              "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, "
+              "seed_free_episodes FROM runs r WHERE status='done' AND seed_free_episodes > 0 AND EXISTS (SELECT 1 "
+              "FROM prefix p WHERE p.run_id=r.run_id)");
+  while (q.step()) {
+    const RunKey key{q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
+                     q.column_text(4), q.column_text(5), q.column_text(6)};
+    std::int64_t& e = kept[seed_group_of(key)];
+    e = std::max(e, q.column_int(7));
+  }
+  return kept;
 }
 
 std::map<RunKey, std::string> runs_of_file(const std::string& path, const std::string& status) {

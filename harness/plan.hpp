@@ -34,6 +34,9 @@ struct GridPlan {
   std::int64_t skipped = 0;         // runs already done
   std::int64_t pending_episodes = 0;
   std::map<std::string, ResolvedConfig> env_configs, opt_configs;  // by name
+  // per pending run: the share of its episodes expected to come from another seed's run
+  // (estimate_sharing); empty when nothing is shared
+  std::vector<double> shared_share;
 };
 
 // A shard I/N of the grid: the runs whose key hashes to I mod N (shard_of), so adding an env or an
@@ -43,11 +46,31 @@ struct Shard {
 };
 
 // the shard of a run: FNV-1a over "env\0optimizer\0seed\0budget\0env_config_hash\0opt_config_hash",
-// mixed by splitmix64, mod count (the harness version is not hashed: a new version keeps the cut)
+// mixed by splitmix64, mod count (the harness version is not hashed: a new version keeps the cut);
+// the seed is left out (an empty string) for optimizers that share across seeds, so that a
+// group's seeds share a shard and its later seeds replay the first one's seed-free episodes
 int shard_of(const RunKey& key, int count);
 
 GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done,
                    const std::string& harness_version, Shard shard = {});
+
+// Sharing across seeds (harness/store.hpp, Store::begin_run): a run of an optimizer that does not
+// draw from its start (OptimizerEntry::seed_use) takes the episodes before its first draw from
+// another seed's run of its group (the run key but the seed) instead of simulating them.
+bool may_share_seeds(const RunSpec& spec);
+// "env\0optimizer\0budget\0env config\0optimizer config\0version"
+std::string seed_group_of(const RunKey& key);
+// For each run of `runs`: the index of its lead (the run of its group with the smallest seed)
+// when the run may share and is not the lead itself, else -1. A run waits for its lead.
+std::vector<std::ptrdiff_t> share_leads(const std::vector<PlannedRun>& runs);
+
+// Fills plan.shared_share: a pending run that may share takes the seed-free episodes of the
+// group's longest prefix kept in the database (`kept`: seed_group_of -> episodes), else, when an
+// earlier seed of its group is in the grid, its optimizer's typical seed-free share.
+void estimate_sharing(GridPlan& plan, const std::map<std::string, std::int64_t>& kept);
+// the seed-free episodes that done runs of a database keep for other seeds, by group
+// (read-only; nothing when the file does not exist or predates sharing)
+std::map<std::string, std::int64_t> kept_prefixes_of_file(const std::string& path);
 
 // the runs of an existing database with this status ('done', 'failed'), each with its error
 // (empty when it has none); the file is opened read-only (a file that is not a harness database

@@ -49,7 +49,8 @@ void print_failed_runs(std::ostream& out, const GridPlan& plan, const std::map<R
 std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs) {
   std::vector<double> c;
   c.reserve(plan.pending.size());
-  for (const auto& p : plan.pending) c.push_back(costs.run_seconds(p));
+  for (std::size_t i = 0; i < plan.pending.size(); ++i)
+    c.push_back(costs.run_seconds(plan.pending[i], plan.shared_share.empty() ? 0.0 : plan.shared_share[i]));
   return c;
 }
 
@@ -57,6 +58,20 @@ std::vector<std::size_t> cheapest_first(const std::vector<double>& run_cost_s) {
   std::vector<std::size_t> order(run_cost_s.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return run_cost_s[a] < run_cost_s[b]; });
+  return order;
+}
+
+std::vector<std::size_t> run_order(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
+                                   bool share) {
+  std::vector<std::size_t> order = cheapest_first(run_cost_s);
+  if (!share) return order;
+  std::vector<char> leads(pending.size(), 0);
+  for (const std::ptrdiff_t l : share_leads(pending))
+    if (l >= 0) leads[static_cast<std::size_t>(l)] = 1;
+  // the leads, the most expensive first, then the rest as they were
+  std::stable_partition(order.begin(), order.end(), [&](std::size_t i) { return leads[i] != 0; });
+  const auto n_leads = std::count(leads.begin(), leads.end(), char{1});
+  std::reverse(order.begin(), order.begin() + n_leads);
   return order;
 }
 
@@ -97,6 +112,20 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
     for (const auto& n : t.names) names += (names.empty() ? "" : ", ") + n;
     out << fmt::format("  {:<26} {:>6} {:>11.2f}  {}\n", name, t.runs, t.seconds / 3600.0, names);
   }
+  // what sharing across seeds saves
+  double unshared = 0.0, shared_episodes = 0.0;
+  std::int64_t sharing_runs = 0;
+  for (std::size_t i = 0; i < plan.pending.size(); ++i) {
+    unshared += costs.run_seconds(plan.pending[i]);
+    const double share = plan.shared_share.empty() ? 0.0 : plan.shared_share[i];
+    shared_episodes += share * static_cast<double>(plan.pending[i].spec.budget);
+    sharing_runs += share > 0.0;
+  }
+  if (sharing_runs > 0)
+    out << fmt::format("  sharing across seeds: {} runs take about {:.0f} episodes from an earlier seed's run of "
+                       "their group (the episodes before the optimizer's first draw, replayed: counted as free), "
+                       "saving about {:.4g} of {:.4g} core-hours; --no-sharing simulates them\n",
+                       sharing_runs, shared_episodes, (unshared - total) / 3600.0, unshared / 3600.0);
   // wall: the work over the runs at once, but never less than the longest run
   const int parallel = std::max(1, std::min<int>(ctx.jobs, static_cast<int>(plan.pending.size())));
   const double wall = std::max(total / parallel, longest);

@@ -24,6 +24,10 @@ std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs);
 // the order to run them: cheapest first (stable, so equal costs keep grid order), so partial
 // reports come early; results do not depend on the order
 std::vector<std::size_t> cheapest_first(const std::vector<double>& run_cost_s);
+// With sharing across seeds: the leads of sharing groups (share_leads) first, the most expensive
+// first, so that their other seeds can replay them while the rest runs; then cheapest first.
+std::vector<std::size_t> run_order(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
+                                   bool share);
 
 void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& context);
 

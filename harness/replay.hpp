@@ -29,6 +29,15 @@ struct ReplayEntry {
   std::vector<double> payload;
 };
 
+// A run's seed-free prefix: its episodes before the optimizer's first draw from the run's Rng
+// (common/rng.hpp counts draws), and the journal entries (calls) that produced them. Those are
+// the same for every seed of the same env, optimizer, configs, budget and harness version, so a
+// run of another seed takes them by replay instead of simulating them (harness/store.hpp).
+struct SeedFreePrefix {
+  std::int64_t episodes = 0, calls = 0;
+  bool drew = false;  // false: the optimizer never drew, and the whole run is seed-free
+};
+
 // FNV-1a over the bytes of the doubles (bit-exact: -0.0 and 0.0 differ, as do NaN payloads)
 inline std::uint64_t replay_input_hash(std::span<const double> input) {
   std::string bytes(input.size() * sizeof(double), '\0');

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "harness/replay.hpp"
 #include "optimizers/ext/ext_optimizer.hpp"
 
 namespace dsb {
@@ -48,6 +49,11 @@ struct RunResult {
   // stored as runs.diagnostics (JSON); deterministic, no timings
   nlohmann::json diagnostics;
   std::int64_t replayed_episodes = 0;  // episodes answered from a resumed run's journal (not stored)
+  // the episodes before the optimizer's first draw, and the journal entries not committed yet
+  // (from journal_tail_first_seq on): a done run keeps its seed-free prefix for other seeds
+  SeedFreePrefix seed_free;
+  std::vector<ReplayEntry> journal_tail;
+  std::int64_t journal_tail_first_seq = 0;
 };
 
 }  // namespace dsb

@@ -2,7 +2,9 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "envs/core/registry.hpp"
@@ -26,6 +28,7 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
     objective.set_replay(std::move(control->journal), control->journal_episodes);
   }
   Rng rng(spec.rng_seed);
+  objective.watch_draws(&rng);
   result.status = "done";
   try {
     optimizer.minimize(objective, rng);
@@ -51,6 +54,8 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
   result.evals = objective.evals();
   result.diagnostics = {{"optimizer", optimizer.diagnostics()}, {"objective", objective.diagnostics()}};
   result.replayed_episodes = objective.replayed_episodes();
+  result.seed_free = objective.seed_free_prefix();
+  if (control) result.journal_tail = objective.take_journal(result.journal_tail_first_seq);
   return result;
 }
 
@@ -71,7 +76,8 @@ class CommitListener : public EpisodeListener {
     const auto first = static_cast<std::size_t>(std::min<std::int64_t>(committed_, evals.size()));
     std::int64_t first_seq = 0;
     const std::vector<ReplayEntry> journal = objective.take_journal(first_seq);
-    store_.append_progress(run_id_, std::span<const EvalRecord>(evals).subspan(first), first_seq, journal);
+    store_.append_progress(run_id_, std::span<const EvalRecord>(evals).subspan(first), first_seq, journal,
+                           objective.seed_free_prefix());
     committed_ = static_cast<std::int64_t>(evals.size());
     last_ = now;
     if (fault != 0) fault_raise(fault);
@@ -87,7 +93,7 @@ class CommitListener : public EpisodeListener {
 
 GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
                      std::int64_t skipped, Store& store, int jobs, int threads, std::FILE* progress_out,
-                     const std::function<void()>& on_run_finished) {
+                     const std::function<void()>& on_run_finished, bool share) {
   GridSummary summary;
   summary.skipped = skipped;
   std::int64_t pending_episodes = 0;
@@ -105,20 +111,50 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
   progress.start();
 
   const std::atomic<bool>& stop = stop_requested();
-  std::atomic<std::size_t> next{0};
-  std::atomic<std::int64_t> n_done{0}, n_failed{0}, n_interrupted{0}, n_resumed{0}, n_replayed{0};
+  std::atomic<std::int64_t> n_done{0}, n_failed{0}, n_interrupted{0}, n_resumed{0}, n_replayed{0}, n_shared{0},
+      n_shared_episodes{0};
   std::mutex error_mutex;
   std::exception_ptr store_error;
   std::mutex finished_mutex;
+  // which run a worker takes: the first in order not taken whose lead (sharing) has ended
+  const std::vector<std::ptrdiff_t> lead = share ? share_leads(pending) : std::vector<std::ptrdiff_t>(pending.size(), -1);
+  std::mutex queue_mutex;
+  std::condition_variable queue_changed;
+  std::vector<char> taken(pending.size(), 0), ended(pending.size(), 0);
+  std::size_t first_open = 0;  // every run before it is taken
+  bool abandon = false;        // a store error: no new run
+  auto take_next = [&]() -> std::optional<std::size_t> {
+    std::unique_lock lock(queue_mutex);
+    for (;;) {
+      if (stop.load() || abandon) return std::nullopt;  // no new run after a stop request
+      while (first_open < pending.size() && taken[first_open]) ++first_open;
+      if (first_open == pending.size()) return std::nullopt;
+      for (std::size_t i = first_open; i < pending.size(); ++i)
+        if (!taken[i] && (lead[i] < 0 || ended[static_cast<std::size_t>(lead[i])])) {
+          taken[i] = 1;
+          return i;
+        }
+      // every open run waits for a lead that runs now: wait for a run to end (or a stop)
+      queue_changed.wait_for(lock, std::chrono::milliseconds(200));
+    }
+  };
+  auto run_ended = [&](std::size_t i) {
+    {
+      std::lock_guard lock(queue_mutex);
+      ended[i] = 1;
+    }
+    queue_changed.notify_all();
+  };
   auto worker = [&](int w) {
     ThreadTeam team(threads);  // this job's threads, reused by all its runs
     for (;;) {
-      if (stop.load()) return;  // no new run after a stop request
-      const std::size_t i = next.fetch_add(1);
-      if (i >= pending.size()) return;
+      const auto next_run = take_next();
+      if (!next_run) return;
+      const std::size_t i = *next_run;
       const PlannedRun& p = pending[i];
       try {
-        RunStart start = store.begin_run(p.key, p.spec.rng_seed, p.env_config->config, p.opt_config->config);
+        RunStart start = store.begin_run(p.key, p.spec.rng_seed, p.env_config->config, p.opt_config->config,
+                                         share && may_share_seeds(p.spec));
         if (start.committed_episodes > 0 && start.journal.empty()) {
           // episodes without the journal that regenerates them (e.g. left by an older harness):
           // nothing to replay, so the run starts over
@@ -128,11 +164,13 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
         const auto env = shared_env(p.spec.env);
         progress.run_started(w, run_cost_s[i] / static_cast<double>(p.spec.budget));
         RunResult r;
+        const std::int64_t shared_episodes = start.shared_episodes;
         for (int attempt = 0;; ++attempt) {
-          // a resumed run replays its journal; one that diverged from it starts over without
+          // a resumed run replays its journal, a run of a later seed the seed-free episodes of an
+          // earlier one; one that diverged from it starts over without
           const auto opt = make_run_optimizer(p.spec);
           CommitListener listener(store, start.run_id, start.committed_episodes);
-          RunControl control{&listener, &stop, std::move(start.journal), start.committed_episodes};
+          RunControl control{&listener, &stop, std::move(start.journal), start.journal_episodes};
           r = execute_run(p.spec, *env, *opt, &progress.episodes_of(w), &team, &control);
           if (r.status != "diverged" || attempt > 0) break;
           if (progress_out)
@@ -145,13 +183,18 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
         if (start.committed_episodes > 0) {
           n_resumed.fetch_add(1);
           n_replayed.fetch_add(r.replayed_episodes);
+        } else if (shared_episodes > 0 && start.journal_episodes > 0) {
+          n_shared.fetch_add(1);
+          n_shared_episodes.fetch_add(shared_episodes);
         }
         if (r.status == "interrupted") {
           n_interrupted.fetch_add(1);
+          run_ended(i);
           continue;  // committed; the next harness resumes it
         }
         if (r.status == "diverged") r.status = "failed";
         store.finish_run(start.run_id, r);
+        run_ended(i);
         (r.status == "done" ? n_done : n_failed).fetch_add(1);
         progress.run_finished(w, r.status != "done", run_cost_s[i]);
         if (on_run_finished) {
@@ -160,9 +203,15 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
         }
       } catch (...) {
         // a store failure stops the grid; runs already committed stay
-        std::lock_guard lock(error_mutex);
-        if (!store_error) store_error = std::current_exception();
-        next.store(pending.size());
+        {
+          std::lock_guard lock(error_mutex);
+          if (!store_error) store_error = std::current_exception();
+        }
+        {
+          std::lock_guard lock(queue_mutex);
+          abandon = true;
+        }
+        queue_changed.notify_all();
         return;
       }
     }
@@ -176,6 +225,8 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
   summary.interrupted = n_interrupted.load();
   summary.resumed = n_resumed.load();
   summary.replayed_episodes = n_replayed.load();
+  summary.shared_runs = n_shared.load();
+  summary.shared_episodes = n_shared_episodes.load();
   return summary;
 }
 

@@ -42,6 +42,8 @@ struct GridSummary {
   std::int64_t interrupted = 0;        // runs stopped by a signal, committed, to resume
   std::int64_t resumed = 0;            // runs that resumed an earlier attempt
   std::int64_t replayed_episodes = 0;  // episodes those served from their journals
+  std::int64_t shared_runs = 0;        // runs that took episodes from another seed's run
+  std::int64_t shared_episodes = 0;    // those episodes
 };
 
 // `jobs` runs at once, each with a team of `threads` threads. Runs already done are recognised by
@@ -49,8 +51,12 @@ struct GridSummary {
 // model is built for a run that is skipped.
 // `pending` in the order to run them; `run_cost_s` their estimated seconds (the progress line's
 // ETA); on_run_finished (may be empty) is called after every run that ends (done or failed).
+// With `share` (the default; --no-sharing turns it off), runs share their seed-free episodes
+// across seeds (Store::begin_run): a run of a sharing group waits until its lead (share_leads)
+// has ended, and a worker takes the first run in order that is free to start. Sharing changes
+// no result: a shared episode is the same bits as simulating it.
 GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
                      std::int64_t skipped, Store& store, int jobs, int threads, std::FILE* progress_out,
-                     const std::function<void()>& on_run_finished = {});
+                     const std::function<void()>& on_run_finished = {}, bool share = true);
 
 }  // namespace dsb

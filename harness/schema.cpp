@@ -10,9 +10,17 @@ namespace dsb {
 
 namespace {
 
-// The runs table under a name (the migration to version 3 builds it beside the old one). Columns
-// added by migrations come last, so a migrated file and a new one have the same column order.
-std::string runs_table_sql(const std::string& name) {
+// runs' columns of version 4, in the order a migration adds them
+const std::string kSharingColumns = R"sql(  seed_free_episodes INTEGER,   -- episodes before the optimizer's first draw (NULL: unknown)
+  seed_free_calls INTEGER,      -- the journal entries that produced them
+  shared_episodes INTEGER NOT NULL DEFAULT 0,  -- episodes replayed from another seed's run
+  shared_from_seed INTEGER,     -- that run's seed
+)sql";
+
+// The runs table of a schema version under a name (the migration to version 3 builds it beside
+// the old one). Columns added by migrations come last, so a migrated file and a new one have the
+// same column order.
+std::string runs_table_sql(const std::string& name, int version) {
   return "CREATE TABLE " + name + R"sql((
   run_id INTEGER PRIMARY KEY,
   env TEXT NOT NULL,
@@ -35,9 +43,22 @@ std::string runs_table_sql(const std::string& name) {
   git_sha TEXT,
   host TEXT,
   diagnostics TEXT,             -- JSON {"optimizer": {...}, "objective": {...}} (version 2)
-  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version));
+)sql" + (version >= 4 ? kSharingColumns : std::string()) +
+         R"sql(  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version));
 )sql";
 }
+
+// The journal of a done run's seed-free episodes (version 4): what a run of another seed replays
+// instead of simulating them (harness/store.hpp). Rows as in `replay`.
+const char* kPrefixTable = R"sql(
+CREATE TABLE prefix(
+  run_id INTEGER NOT NULL REFERENCES runs(run_id),
+  seq INTEGER NOT NULL,
+  kind INTEGER NOT NULL,
+  input_hash INTEGER NOT NULL,
+  payload BLOB NOT NULL,
+  PRIMARY KEY(run_id, seq)) WITHOUT ROWID;
+)sql";
 
 // What a run that is not done yet needs to be resumed by replay (version 3): one row per
 // objective call (kind: harness/replay.hpp), the digest of the call's input and what the call
@@ -62,7 +83,7 @@ CREATE TABLE configs(
   hash TEXT PRIMARY KEY,
   kind TEXT NOT NULL,           -- 'env' or 'optimizer'
   json TEXT NOT NULL);          -- resolved config, canonical JSON
-)sql" + runs_table_sql("runs") +
+)sql" + runs_table_sql("runs", kSchemaVersion) +
          R"sql(
 CREATE TABLE evals(
   run_id INTEGER NOT NULL REFERENCES runs(run_id),
@@ -74,7 +95,7 @@ CREATE TABLE evals(
   failed INTEGER NOT NULL DEFAULT 0,
   metric REAL,                  -- optional second per-episode metric, NULL when none (version 2)
   PRIMARY KEY(run_id, episode)) WITHOUT ROWID;
-)sql" + kReplayTable;
+)sql" + kReplayTable + kPrefixTable;
 }
 
 // One step of the chain: SQL that takes a database of version `from` to version from + 1.
@@ -98,10 +119,14 @@ std::vector<Migration> migrations() {
   return {
       {1, "ALTER TABLE runs ADD COLUMN diagnostics TEXT;"
           "ALTER TABLE evals ADD COLUMN metric REAL;"},
-      {2, runs_table_sql("runs_v3") + "INSERT INTO runs_v3(" + with("harness_version") + ") SELECT " +
+      {2, runs_table_sql("runs_v3", 3) + "INSERT INTO runs_v3(" + with("harness_version") + ") SELECT " +
               with("COALESCE(harness_version, '')") + " FROM runs;"
               "DROP TABLE runs;"
               "ALTER TABLE runs_v3 RENAME TO runs;" + kReplayTable},
+      {3, "ALTER TABLE runs ADD COLUMN seed_free_episodes INTEGER;"
+          "ALTER TABLE runs ADD COLUMN seed_free_calls INTEGER;"
+          "ALTER TABLE runs ADD COLUMN shared_episodes INTEGER NOT NULL DEFAULT 0;"
+          "ALTER TABLE runs ADD COLUMN shared_from_seed INTEGER;" + std::string(kPrefixTable)},
   };
 }
 
@@ -120,6 +145,11 @@ std::map<std::string, std::vector<std::string>> required_columns(int version) {
     cols["evals"].push_back("metric");
   }
   if (version >= 3) cols["replay"] = {"run_id", "seq", "kind", "input_hash", "payload"};
+  if (version >= 4) {
+    for (const char* c : {"seed_free_episodes", "seed_free_calls", "shared_episodes", "shared_from_seed"})
+      cols["runs"].push_back(c);
+    cols["prefix"] = {"run_id", "seq", "kind", "input_hash", "payload"};
+  }
   return cols;
 }
 

@@ -8,6 +8,10 @@
 //      + evals.metric (REAL, NULL: an optional second per-episode metric)
 //   3  runs.harness_version is part of the run key (UNIQUE; NOT NULL, '' for older rows) and the
 //      table `replay` holds what a run that is not done yet needs to be resumed by replay
+//   4  sharing across seeds: runs.seed_free_episodes and seed_free_calls (the episodes before the
+//      optimizer's first draw and their journal entries; NULL where unknown), runs.shared_episodes
+//      and shared_from_seed (episodes taken by replay from another seed's run), and the table
+//      `prefix`: the journal of a done run's seed-free episodes, which other seeds replay
 // A later version adds one migration step (from = kSchemaVersion - 1) and bumps kSchemaVersion.
 #include <string>
 
@@ -15,7 +19,7 @@
 
 namespace dsb {
 
-inline constexpr int kSchemaVersion = 3;
+inline constexpr int kSchemaVersion = 4;
 
 // The schema_version of an opened file: 0 for an empty database (no tables at all). Throws
 // StoreError naming the file when it is not a harness database (tables but no meta table, no

@@ -41,8 +41,72 @@ std::set<RunKey> Store::done_keys() {
   return keys;
 }
 
+namespace {
+
+// the group of a run: its key but the seed, as SQL over runs (7 parameters from `first`)
+const char* kGroupSql =
+    "env=? AND optimizer=? AND budget=? AND env_config_hash=? AND opt_config_hash=? AND harness_version=?";
+
+void bind_group(Statement& st, int first, const RunKey& key) {
+  st.bind(first, key.env).bind(first + 1, key.optimizer).bind(first + 2, key.budget)
+      .bind(first + 3, key.env_config_hash).bind(first + 4, key.opt_config_hash).bind(first + 5, key.harness_version);
+}
+
+std::vector<ReplayEntry> read_journal(Database& db, const std::string& table, std::int64_t run_id, std::int64_t calls) {
+  std::vector<ReplayEntry> journal;
+  Statement j(db.handle(),
+              "SELECT seq, kind, input_hash, payload FROM " + table + " WHERE run_id=? AND seq<? ORDER BY seq");
+  j.bind(1, run_id).bind(2, calls);
+  while (j.step()) {
+    if (j.column_int(0) != static_cast<std::int64_t>(journal.size())) break;  // a gap: keep the prefix
+    journal.push_back({static_cast<ReplayKind>(j.column_int(1)), static_cast<std::uint64_t>(j.column_int(2)),
+                       replay_payload_from_bytes(j.column_blob(3))});
+  }
+  return journal;
+}
+
+// The longest seed-free prefix another seed's run of the group holds: a done run's kept prefix,
+// or what a running one committed (all of it while its optimizer has not drawn). Ties go to the
+// smallest seed. Nothing (episodes 0) when there is none.
+struct Donor {
+  std::int64_t run_id = 0, episodes = 0, calls = 0;
+  int seed = -1;
+  std::string table;
+};
+
+Donor find_donor(Database& db, const RunKey& key) {
+  Donor best;
+  Statement q(db.handle(), std::string("SELECT run_id, seed, status, seed_free_episodes, seed_free_calls, "
+                                       "(SELECT count(*) FROM evals e WHERE e.run_id=r.run_id), "
+                                       "(SELECT count(*) FROM replay j WHERE j.run_id=r.run_id), "
+                                       "(SELECT count(*) FROM prefix p WHERE p.run_id=r.run_id) "
+                                       "FROM runs r WHERE ") +
+                               kGroupSql + " AND seed<>? AND status IN ('done', 'running') ORDER BY seed");
+  bind_group(q, 1, key);
+  q.bind(7, static_cast<std::int64_t>(key.seed));
+  while (q.step()) {
+    Donor d{q.column_int(0), 0, 0, static_cast<int>(q.column_int(1)), ""};
+    const bool known = !q.column_is_null(3);
+    if (q.column_text(2) == "done") {
+      if (!known || q.column_int(7) < q.column_int(4)) continue;  // no kept prefix
+      d.episodes = q.column_int(3);
+      d.calls = q.column_int(4);
+      d.table = "prefix";
+    } else {
+      const bool drew_before = known && q.column_int(3) <= q.column_int(5);
+      d.episodes = drew_before ? q.column_int(3) : q.column_int(5);
+      d.calls = drew_before ? q.column_int(4) : q.column_int(6);
+      d.table = "replay";
+    }
+    if (d.episodes > best.episodes) best = d;
+  }
+  return best;
+}
+
+}  // namespace
+
 RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohmann::json& env_config,
-                          const nlohmann::json& opt_config) {
+                          const nlohmann::json& opt_config, bool share) {
   std::lock_guard lock(mutex_);
   Transaction tx(db_);
   Statement cfg(db_.handle(), "INSERT OR IGNORE INTO configs(hash, kind, json) VALUES (?, ?, ?)");
@@ -70,6 +134,13 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
       start.journal.push_back({static_cast<ReplayKind>(j.column_int(1)), static_cast<std::uint64_t>(j.column_int(2)),
                                replay_payload_from_bytes(j.column_blob(3))});
     }
+    start.journal_episodes = start.committed_episodes;
+    Statement shared(db_.handle(), "SELECT shared_episodes, COALESCE(shared_from_seed, -1) FROM runs WHERE run_id=?");
+    shared.bind(1, start.run_id);
+    if (shared.step()) {
+      start.shared_episodes = shared.column_int(0);
+      start.shared_from_seed = static_cast<int>(shared.column_int(1));
+    }
     Statement host(db_.handle(), "UPDATE runs SET host=?, git_sha=? WHERE run_id=?");
     host.bind(1, provenance_.host).bind(2, provenance_.git_sha).bind(3, start.run_id).run();
     tx.commit();
@@ -86,7 +157,8 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
     ON CONFLICT(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version) DO UPDATE SET
       status='running', episodes=0, failed_episodes=0, best_loss=NULL, best_x=NULL, wall_s=NULL,
       error=NULL, diagnostics=NULL, started_at=excluded.started_at, finished_at=NULL,
-      git_sha=excluded.git_sha, host=excluded.host
+      git_sha=excluded.git_sha, host=excluded.host, seed_free_episodes=NULL, seed_free_calls=NULL,
+      shared_episodes=0, shared_from_seed=NULL
     RETURNING run_id)sql");
   up.bind(1, key.env).bind(2, key.optimizer).bind(3, static_cast<std::int64_t>(key.seed))
       .bind(4, key.budget).bind(5, key.env_config_hash).bind(6, key.opt_config_hash)
@@ -100,6 +172,25 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
   del_evals.bind(1, start.run_id).run();
   Statement del_journal(db_.handle(), "DELETE FROM replay WHERE run_id=?");
   del_journal.bind(1, start.run_id).run();
+  if (share) {
+    // the seed-free prefix of another seed's run, copied into this run's journal (so that an
+    // interruption resumes from it as from the run's own) and replayed
+    const Donor donor = find_donor(db_, key);
+    if (donor.episodes > 0) {
+      start.journal = read_journal(db_, donor.table, donor.run_id, donor.calls);
+      if (static_cast<std::int64_t>(start.journal.size()) == donor.calls) {
+        Statement copy(db_.handle(), "INSERT INTO replay(run_id, seq, kind, input_hash, payload) SELECT ?, seq, kind, "
+                                     "input_hash, payload FROM " + donor.table + " WHERE run_id=? AND seq<?");
+        copy.bind(1, start.run_id).bind(2, donor.run_id).bind(3, donor.calls).run();
+        Statement mark(db_.handle(), "UPDATE runs SET shared_episodes=?, shared_from_seed=? WHERE run_id=?");
+        mark.bind(1, donor.episodes).bind(2, static_cast<std::int64_t>(donor.seed)).bind(3, start.run_id).run();
+        start.journal_episodes = start.shared_episodes = donor.episodes;
+        start.shared_from_seed = donor.seed;
+      } else {
+        start.journal.clear();  // a prefix with a gap is not used
+      }
+    }
+  }
   tx.commit();
   return start;
 }
@@ -121,7 +212,7 @@ void insert_evals(Database& db, std::int64_t run_id, std::span<const EvalRecord>
 }  // namespace
 
 void Store::append_progress(std::int64_t run_id, std::span<const EvalRecord> evals, std::int64_t first_seq,
-                            const std::vector<ReplayEntry>& journal) {
+                            const std::vector<ReplayEntry>& journal, const SeedFreePrefix& seed_free) {
   std::lock_guard lock(mutex_);
   Transaction tx(db_);
   insert_evals(db_, run_id, evals);
@@ -135,6 +226,10 @@ void Store::append_progress(std::int64_t run_id, std::span<const EvalRecord> eva
   }
   Statement upd(db_.handle(), "UPDATE runs SET episodes=(SELECT count(*) FROM evals WHERE run_id=?) WHERE run_id=?");
   upd.bind(1, run_id).bind(2, run_id).run();
+  if (seed_free.drew) {
+    Statement mark(db_.handle(), "UPDATE runs SET seed_free_episodes=?, seed_free_calls=? WHERE run_id=?");
+    mark.bind(1, seed_free.episodes).bind(2, seed_free.calls).bind(3, run_id).run();
+  }
   tx.commit();
 }
 
@@ -145,9 +240,48 @@ void Store::reset_progress(std::int64_t run_id) {
   del_evals.bind(1, run_id).run();
   Statement del_journal(db_.handle(), "DELETE FROM replay WHERE run_id=?");
   del_journal.bind(1, run_id).run();
-  Statement upd(db_.handle(), "UPDATE runs SET episodes=0 WHERE run_id=?");
+  Statement upd(db_.handle(),
+                "UPDATE runs SET episodes=0, seed_free_episodes=NULL, seed_free_calls=NULL, shared_episodes=0, "
+                "shared_from_seed=NULL WHERE run_id=?");
   upd.bind(1, run_id).run();
   tx.commit();
+}
+
+void Store::keep_seed_free_prefix(std::int64_t run_id, const RunResult& r) {
+  const std::int64_t calls = r.seed_free.calls;
+  if (r.seed_free.episodes <= 0 || calls <= 0) return;
+  // the other done runs of the group that keep a prefix
+  const std::string others =
+      "SELECT o.run_id FROM runs o JOIN runs me ON me.run_id=? AND o.run_id<>me.run_id AND o.env=me.env AND "
+      "o.optimizer=me.optimizer AND o.budget=me.budget AND o.env_config_hash=me.env_config_hash AND "
+      "o.opt_config_hash=me.opt_config_hash AND o.harness_version=me.harness_version AND o.status='done' "
+      "WHERE EXISTS (SELECT 1 FROM prefix p WHERE p.run_id=o.run_id)";
+  Statement longest(db_.handle(), "SELECT COALESCE(max(seed_free_calls), 0) FROM runs WHERE run_id IN (" + others + ")");
+  longest.bind(1, run_id);
+  if (longest.step() && longest.column_int(0) >= calls) return;
+  // the committed journal's entries of the prefix, then those not committed yet
+  Statement copy(db_.handle(), "INSERT OR REPLACE INTO prefix(run_id, seq, kind, input_hash, payload) SELECT run_id, "
+                               "seq, kind, input_hash, payload FROM replay WHERE run_id=? AND seq<?");
+  copy.bind(1, run_id).bind(2, calls).run();
+  Statement ins(db_.handle(),
+                "INSERT OR REPLACE INTO prefix(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
+  std::int64_t seq = r.journal_tail_first_seq;
+  for (const auto& e : r.journal_tail) {
+    if (seq >= calls) break;
+    ins.bind(1, run_id).bind(2, seq++).bind(3, static_cast<std::int64_t>(e.kind))
+        .bind(4, static_cast<std::int64_t>(e.input_hash)).bind_blob(5, replay_payload_bytes(e.payload));
+    ins.run();
+  }
+  Statement count(db_.handle(), "SELECT count(*) FROM prefix WHERE run_id=?");
+  count.bind(1, run_id);
+  count.step();
+  const bool whole = count.column_int(0) == calls;
+  count.reset();
+  // a prefix with a gap (a journal lost to an older harness) is not kept; a whole one replaces
+  // the group's shorter ones
+  Statement drop(db_.handle(), whole ? "DELETE FROM prefix WHERE run_id IN (" + others + ")"
+                                     : std::string("DELETE FROM prefix WHERE run_id=?"));
+  drop.bind(1, run_id).run();
 }
 
 void Store::finish_run(std::int64_t run_id, const RunResult& r) {
@@ -156,12 +290,14 @@ void Store::finish_run(std::int64_t run_id, const RunResult& r) {
   Statement del(db_.handle(), "DELETE FROM evals WHERE run_id=?");
   del.bind(1, run_id).run();
   insert_evals(db_, run_id, r.evals);
+  if (r.status == "done") keep_seed_free_prefix(run_id, r);
   // what only a resume needs goes with the run's end
   Statement del_journal(db_.handle(), "DELETE FROM replay WHERE run_id=?");
   del_journal.bind(1, run_id).run();
   Statement upd(db_.handle(), R"sql(
     UPDATE runs SET status=?, episodes=?, failed_episodes=?, best_loss=?, best_x=?, wall_s=?,
-                    error=?, finished_at=?, diagnostics=? WHERE run_id=?)sql");
+                    error=?, finished_at=?, diagnostics=?, seed_free_episodes=?, seed_free_calls=?
+                WHERE run_id=?)sql");
   upd.bind(1, r.status).bind(2, r.episodes).bind(3, r.failed_episodes).bind(4, r.best_loss);
   if (r.best_x.empty())
     upd.bind_null(5);
@@ -177,7 +313,8 @@ void Store::finish_run(std::int64_t run_id, const RunResult& r) {
     upd.bind_null(9);
   else
     upd.bind(9, r.diagnostics.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
-  upd.bind(10, run_id);
+  upd.bind(10, r.seed_free.episodes).bind(11, r.seed_free.calls);
+  upd.bind(12, run_id);
   upd.run();
   tx.commit();
 }

@@ -43,11 +43,15 @@ struct RunKey {
   std::string text() const;
 };
 
-// where a run starts: its row, and what an interrupted earlier attempt committed
+// where a run starts: its row, and what an interrupted earlier attempt committed, or the
+// seed-free prefix it takes from another seed's run
 struct RunStart {
   std::int64_t run_id = 0;
   std::int64_t committed_episodes = 0;  // evals already in the database
-  std::vector<ReplayEntry> journal;     // to replay them
+  std::vector<ReplayEntry> journal;     // to replay them (or the shared prefix)
+  std::int64_t journal_episodes = 0;    // the episodes the journal regenerates
+  std::int64_t shared_episodes = 0;     // of them, taken from the run of seed shared_from_seed
+  int shared_from_seed = -1;
 };
 
 struct Provenance {
@@ -65,25 +69,34 @@ class Store {
 
   // Records the configs and marks the run 'running' (inserting or reusing its row). A run left
   // 'running' by an interrupted harness keeps its committed episodes and returns them with their
-  // journal; a 'failed' one starts again from nothing.
+  // journal; a 'failed' one starts again from nothing. With `share`, a run that starts from
+  // nothing takes the longest seed-free prefix of a done or running run of another seed of the
+  // same env, optimizer, budget, configs and version (sharing across seeds): its journal is
+  // copied into this run's and returned to be replayed, and the run row says from which seed.
   RunStart begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohmann::json& env_config,
-                     const nlohmann::json& opt_config);
+                     const nlohmann::json& opt_config, bool share = false);
 
   // Commits a running run's new episodes (episode numbers from evals[0].episode on) and journal
-  // entries (call indices from first_seq on) in one transaction.
+  // entries (call indices from first_seq on) in one transaction, with its seed-free prefix once
+  // the optimizer has drawn (while it has not, all it committed is seed-free).
   void append_progress(std::int64_t run_id, std::span<const EvalRecord> evals, std::int64_t first_seq,
-                       const std::vector<ReplayEntry>& journal);
+                       const std::vector<ReplayEntry>& journal, const SeedFreePrefix& seed_free = {});
 
-  // Forgets a running run's committed episodes and journal (a replay that diverged starts over).
+  // Forgets a running run's committed episodes, journal and sharing (a replay that diverged
+  // starts over).
   void reset_progress(std::int64_t run_id);
 
-  // Replaces the run's evals, sets its final status and diagnostics and drops its journal, in
-  // one transaction.
+  // Replaces the run's evals, sets its final status, diagnostics and seed-free prefix, and drops
+  // its journal, in one transaction. A done run keeps the journal of its seed-free episodes (in
+  // `prefix`, with result.journal_tail, the entries not committed yet) when no other done run of
+  // its group keeps as long a one; shorter ones of the group are dropped.
   void finish_run(std::int64_t run_id, const RunResult& result);
 
   Database& db() { return db_; }
 
  private:
+  void keep_seed_free_prefix(std::int64_t run_id, const RunResult& result);
+
   FileLock lock_;
   Database db_;
   Provenance provenance_;

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <span>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -71,9 +72,9 @@ TEST(ConfigHash, CanonicalJsonSortsKeysAndPrintsRoundTripDoubles) {
 TEST_F(StoreTest, CreatesTheSchemaInWalModeWithItsVersion) {
   Store store(path_, {"0.1.0", "abc", "host"});
   EXPECT_EQ(query("PRAGMA journal_mode"), "wal;");
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "3;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "4;");
   EXPECT_EQ(query("SELECT name FROM sqlite_master WHERE type='table' ORDER BY name"),
-            "configs;evals;meta;replay;runs;");
+            "configs;evals;meta;prefix;replay;runs;");
 }
 
 TEST_F(StoreTest, RunLifecycleCommitsEvalsWithTheStatus) {
@@ -120,14 +121,14 @@ TEST_F(StoreTest, AnUnfinishedRunIsNotDoneAfterReopening) {
 TEST_F(StoreTest, RefusesANewerSchemaVersionWithoutTouchingTheFile) {
   {
     Store store(path_, {"0.1.0", "abc", "host"});
-    store.db().exec("UPDATE meta SET value='4' WHERE key='schema_version'");
+    store.db().exec("UPDATE meta SET value='5' WHERE key='schema_version'");
   }
   const std::string before = testing::read_file(path_);
   try {
     Store again(path_, {"0.1.0", "abc", "host"});
-    FAIL() << "a schema_version 4 file was opened";
+    FAIL() << "a schema_version 5 file was opened";
   } catch (const StoreError& e) {
-    EXPECT_NE(std::string(e.what()).find("schema_version 4, newer than this harness (3)"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("schema_version 5, newer than this harness (4)"), std::string::npos)
         << e.what();
   }
   EXPECT_EQ(testing::read_file(path_), before);
@@ -271,19 +272,23 @@ TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
     // what was done stays done: the migrated file resumes like any other
     EXPECT_EQ(store.done_keys().size(), 1u);
   }
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "3;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "4;");
   EXPECT_EQ(exact_rows(path_, runs_sql), runs_before);
   EXPECT_EQ(exact_rows(path_, evals_sql), evals_before);
   EXPECT_EQ(exact_rows(path_, configs_sql), configs_before);
-  // the new columns, after the old ones, NULL in old rows
-  EXPECT_EQ(query("SELECT name FROM pragma_table_info('runs') WHERE cid >= 20"), "diagnostics;");
+  // the new columns, after the old ones, NULL in old rows (shared_episodes 0: nothing was shared)
+  EXPECT_EQ(query("SELECT name FROM pragma_table_info('runs') WHERE cid >= 20"),
+            "diagnostics;seed_free_episodes;seed_free_calls;shared_episodes;shared_from_seed;");
+  EXPECT_EQ(query("SELECT count(*) FROM runs WHERE seed_free_episodes IS NULL AND seed_free_calls IS NULL AND "
+                  "shared_episodes = 0 AND shared_from_seed IS NULL"),
+            "3;");
   EXPECT_EQ(query("SELECT name FROM pragma_table_info('evals') WHERE cid >= 7"), "metric;");
   EXPECT_EQ(query("SELECT count(*) FROM runs WHERE diagnostics IS NULL"), "3;");
   EXPECT_EQ(query("SELECT count(*) FROM evals WHERE metric IS NULL"), "5;");
   // a migrated file has the columns of a new one, in the same order
   const std::string fresh = (dir_ / "fresh.sqlite").string();
   { Store store(fresh, {}); }
-  for (const char* table : {"meta", "configs", "runs", "evals", "replay"}) {
+  for (const char* table : {"meta", "configs", "runs", "evals", "replay", "prefix"}) {
     const std::string cols = std::string("SELECT name, type, \"notnull\", pk FROM pragma_table_info('") + table + "')";
     EXPECT_EQ(exact_rows(path_, cols), exact_rows(fresh, cols)) << table;
   }
@@ -393,6 +398,51 @@ TEST_F(StoreTest, ARunningRunKeepsItsCommittedEpisodesAndJournalUntilItIsDone) {
   EXPECT_TRUE(redo.journal.empty());
 }
 
+TEST_F(StoreTest, ADoneRunKeepsItsSeedFreeEpisodesOnceAndAnotherSeedTakesThem) {
+  Store store(path_, {"0.1.0", "abc", "host"});
+  std::vector<ReplayEntry> journal;
+  for (int k = 0; k < 3; ++k) journal.push_back({ReplayKind::value, 100u + k, {0.1 * k, 0.0, 1e-3}});
+  // seed 0: two entries committed while running, the third still in the tail when it ends
+  const auto id0 = store.begin_run(key(0), 1, {}, {}, /*share=*/true).run_id;
+  store.append_progress(id0, std::span<const EvalRecord>(result().evals).first(2), 0,
+                        std::vector<ReplayEntry>(journal.begin(), journal.begin() + 2));
+  RunResult r0 = result();
+  r0.seed_free = {3, 3, false};
+  r0.journal_tail = {journal[2]};
+  r0.journal_tail_first_seq = 2;
+  store.finish_run(id0, r0);
+  EXPECT_EQ(query("SELECT run_id || ':' || seq || ':' || input_hash FROM prefix ORDER BY seq"),
+            std::to_string(id0) + ":0:100;" + std::to_string(id0) + ":1:101;" + std::to_string(id0) + ":2:102;");
+  EXPECT_EQ(query("SELECT seed_free_episodes || ',' || seed_free_calls FROM runs"), "3,3;");
+  // seed 1 takes them: copied into its own journal (a resume finds them there) and returned
+  const RunStart s1 = store.begin_run(key(1), 2, {}, {}, /*share=*/true);
+  EXPECT_EQ(s1.committed_episodes, 0);
+  EXPECT_EQ(s1.journal_episodes, 3);
+  EXPECT_EQ(s1.shared_episodes, 3);
+  EXPECT_EQ(s1.shared_from_seed, 0);
+  ASSERT_EQ(s1.journal.size(), 3u);
+  EXPECT_EQ(s1.journal[2].input_hash, 102u);
+  EXPECT_EQ(query("SELECT count(*) FROM replay WHERE run_id=" + std::to_string(s1.run_id)), "3;");
+  EXPECT_EQ(query("SELECT shared_episodes || ',' || shared_from_seed FROM runs WHERE seed=1"), "3,0;");
+  // done with the same prefix: kept once in the group
+  RunResult r1 = result();
+  r1.seed_free = {3, 3, false};
+  store.finish_run(s1.run_id, r1);
+  EXPECT_EQ(query("SELECT count(DISTINCT run_id) FROM prefix"), "1;");
+  EXPECT_EQ(query("SELECT count(*) FROM replay"), "0;");
+  // without share, or for a run of another group, nothing is taken
+  EXPECT_EQ(store.begin_run(key(2), 3, {}, {}).journal_episodes, 0);
+  RunKey other = key(3);
+  other.budget = 4;
+  EXPECT_EQ(store.begin_run(other, 4, {}, {}, true).journal_episodes, 0);
+  // a failed run keeps nothing; a diverged share is forgotten with the progress
+  const RunStart s4 = store.begin_run(key(4), 5, {}, {}, true);
+  EXPECT_EQ(s4.shared_episodes, 3);
+  store.reset_progress(s4.run_id);
+  EXPECT_EQ(query("SELECT shared_episodes || ',' || COALESCE(shared_from_seed, 'none') FROM runs WHERE seed=4"),
+            "0,none;");
+}
+
 TEST_F(StoreTest, RunsOfAnotherHarnessVersionAreOtherRuns) {
   Store store(path_, {"0.2.0", "abc", "host"});
   RunKey old_version = key(0), new_version = key(0);
@@ -434,7 +484,7 @@ TEST_F(StoreTest, ASqliteFileWithoutTablesIsNotStamped) {
 TEST_F(StoreTest, AnEmptyFileBecomesANewDatabase) {
   { std::ofstream touch(path_); }
   Store store(path_, {});
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "3;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "4;");
 }
 
 TEST_F(StoreTest, UnwritablePathThrowsNamingIt) {

@@ -10,15 +10,27 @@
 
 namespace dsb {
 
+// When an optimizer first draws from its run's Rng. Before that draw its episodes are the same
+// for every seed, so the harness simulates them once and replays them for the other seeds.
+enum class SeedUse {
+  at_start,  // draws before its first episode: every episode depends on the seed
+  late,      // a deterministic start (the box centre) until a random restart
+  never,     // never draws: every seed's run is the same run
+};
+
 struct OptimizerEntry {
   std::string name;
   std::string description;
-  bool needs_gradient;
+  bool needs_gradient = false;
   std::function<std::unique_ptr<Optimizer>()> make;
   bool needs_rl = false;  // drives the env's per-step view (Objective::rl_*): paired only with RL envs
   // made with knobs set (`--set NAME.KEY=VALUE`); empty for an optimizer without knobs
   std::function<std::unique_ptr<Optimizer>(const KnobSettings&)> make_with = {};
   std::vector<std::string> knobs = {};  // the keys make_with accepts
+  SeedUse seed_use = SeedUse::at_start;
+  // the median share of a 1,000-episode run's episodes before its first draw, measured (README
+  // "Sharing across seeds"): what `harness plan` counts as free for a group's later seeds
+  double typical_seed_free_share = 0.0;
 };
 
 const std::vector<OptimizerEntry>& optimizer_entries();
