@@ -27,7 +27,11 @@ BudgetedObjective::BudgetedObjective(const Env& env, std::int64_t budget,
 }
 
 Workspace& BudgetedObjective::workspace(std::size_t slot) {
-  if (!workspaces_[slot]) workspaces_[slot] = env_.make_workspace();
+  if (!workspaces_[slot]) {
+    workspaces_[slot] = env_.make_workspace();
+    // gradient rollouts use slot 0 only: it gets the run's tape memory
+    if (slot == 0) workspaces_[slot]->tape_memory_bytes = tape_memory_bytes_;
+  }
   return *workspaces_[slot];
 }
 

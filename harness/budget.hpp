@@ -89,6 +89,9 @@ class BudgetedObjective : public Objective {
   // episodes recorded before it, and the calls that produced them, are the run's seed-free
   // prefix (an open RL episode is not part of it)
   void watch_draws(const Rng* rng) { rng_ = rng; }
+  // the memory a gradient rollout may keep to spare recomputation (Workspace::tape_memory_bytes);
+  // before the first call
+  void set_tape_memory(std::size_t bytes) { tape_memory_bytes_ = bytes; }
   SeedFreePrefix seed_free_prefix() const;
   // When a stop was requested: marks the run interrupted and commits what it has, true. For an
   // optimizer that ended with an error the stop caused (an external optimizer killed by it).
@@ -138,6 +141,7 @@ class BudgetedObjective : public Objective {
   bool serving_ = false;  // the call being recorded was answered from the journal
   // the seed-free prefix
   const Rng* rng_ = nullptr;
+  std::size_t tape_memory_bytes_ = 0;
   std::optional<SeedFreePrefix> first_draw_;
   std::int64_t rl_episode_call_ = 0;  // calls before the open RL episode's reset
 };

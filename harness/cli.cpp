@@ -17,6 +17,7 @@
 
 #include "common/error.hpp"
 #include "common/usable_cpus.hpp"
+#include "common/usable_memory.hpp"
 #include "harness/commands.hpp"
 #include "harness/grid.hpp"
 #include "harness/interrupt.hpp"
@@ -51,7 +52,18 @@ struct RunArgs {
   std::vector<std::string> ext;    // --ext NAME=COMMAND, repeatable
   std::string ext_timeout;         // --ext-timeout SECONDS (empty: the default)
   bool no_sharing = false;         // --no-sharing: simulate every seed's every episode
+  std::string tape_memory;         // --tape-memory GB (empty: kTapeMemoryShare of the usable memory over --jobs)
 };
+
+// the default tape memory of a run: this share of the memory this process may use, over the
+// runs at once (a node running one run per core stays clear of swap: the rest is the runs'
+// models, checkpoints and the system)
+constexpr double kTapeMemoryShare = 0.4;
+
+std::size_t default_tape_memory_bytes(int jobs) {
+  return static_cast<std::size_t>(kTapeMemoryShare * static_cast<double>(usable_memory_bytes()) /
+                                  static_cast<double>(std::max(1, jobs)));
+}
 
 // --set's help: the knobs of every optimizer that has some
 std::string knob_help() {
@@ -90,6 +102,11 @@ void add_run_options(CLI::App& app, RunArgs& a) {
   app.add_option("--threads", a.threads, "threads inside one run's rollouts and batches (default 1; same results for any value)");
   app.add_option("--shard", a.shard, "run only shard I of N (I/N, 0-based): deterministic slices");
   app.add_flag("--quiet", a.quiet, "no progress lines");
+  app.add_option("--tape-memory", a.tape_memory,
+                 "GB each run's gradient rollouts may keep to spare recomputing the forward pass (the MPM envs' "
+                 "substep tapes; default 40% of the memory this process may use, over --jobs; 0: recompute; the "
+                 "same results for any value)")
+      ->type_name("GB");
   app.add_flag("--no-sharing", a.no_sharing,
                "simulate every episode of every seed (by default a run replays the episodes an earlier seed's run "
                "simulated before its optimizer's first random draw: the same bits)");
@@ -107,6 +124,7 @@ struct CheckedRun {
   std::vector<RunSpec> grid;
   Shard shard;
   int jobs = 1;
+  std::size_t tape_memory_bytes = 0;
 };
 
 // for_this_machine: the grid runs here, so --threads is capped at the CPUs this process may use
@@ -154,7 +172,16 @@ CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
     throw UsageError(fmt::format("--threads {} is more than the {} CPUs this process may use (the cap: more threads "
                                  "than CPUs only slow a rollout down; results are the same for any count)",
                                  a.threads, usable_cpus()));
-  return {expand_grid(req), shard, a.jobs > 0 ? a.jobs : std::max(1, usable_cpus() / a.threads)};
+  const int jobs = a.jobs > 0 ? a.jobs : std::max(1, usable_cpus() / a.threads);
+  std::size_t tape = default_tape_memory_bytes(jobs);
+  if (!a.tape_memory.empty()) {
+    char* end = nullptr;
+    const double gb = std::strtod(a.tape_memory.c_str(), &end);
+    if (end != a.tape_memory.c_str() + a.tape_memory.size() || !(gb >= 0.0 && gb <= 1e6))
+      throw UsageError("--tape-memory must be gigabytes from 0 to 1000000, got '" + a.tape_memory + "'");
+    tape = static_cast<std::size_t>(gb * 1e9);
+  }
+  return {expand_grid(req), shard, jobs, tape};
 }
 
 // the grid of `a` as flags, for commands the plan suggests (shard and db left out)
@@ -218,7 +245,7 @@ int command_calibrate(const RunArgs& a, bool force) {
     const bool measure = force || !c.measured;
     if (measure) {
       std::cerr << "harness: timing " << name << " ..." << std::endl;
-      c = costs.calibrate(name, config.hash);
+      c = costs.calibrate(name, config.hash, run.tape_memory_bytes);
       costs.save();  // after each env: an interrupted calibration keeps what it measured
     }
     std::cout << fmt::format("{:<26} {:>12.4g} {:>12.4g} {:>10}  {}\n", name, c.forward_s, c.gradient_s, c.decisions,
@@ -261,7 +288,7 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
   if (!report_dir.empty()) reports = std::make_unique<ReportRefresher>(a.db, report_dir);
   const auto s = run_grid(pending, pending_cost, plan.skipped, *store, run.jobs, a.threads, progress,
                           reports ? std::function<void()>([&] { reports->run_finished(); }) : std::function<void()>(),
-                          !a.no_sharing);
+                          !a.no_sharing, run.tape_memory_bytes);
   if (s.shared_runs > 0)
     std::fprintf(stderr,
                  "harness: %lld runs took %lld episodes from an earlier seed's run (the episodes before the "

@@ -119,15 +119,18 @@ double CostModel::run_seconds(const PlannedRun& run, double shared_share) const 
          optimizer_overhead_seconds(run.spec.optimizer, dim, run.spec.budget);
 }
 
-EpisodeCost CostModel::calibrate(const std::string& env_name, const std::string& env_config_hash) {
+EpisodeCost CostModel::calibrate(const std::string& env_name, const std::string& env_config_hash,
+                                 std::size_t tape_memory_bytes) {
   const auto env = shared_env(env_name);
   const auto ws = env->make_workspace();
+  ws->tape_memory_bytes = tape_memory_bytes;
   const std::vector<double> x(static_cast<std::size_t>(env->dim()), 0.0);
   std::vector<double> grad(x.size());
   EpisodeCost c;
   c.measured = true;
   env->loss(x, *ws, serial_team());  // builds the model and warms the workspace, untimed
   c.forward_s = median_seconds([&] { env->loss(x, *ws, serial_team()); }, 0.2);
+  if (env->differentiable()) env->loss_and_grad(x, grad, *ws, serial_team());  // sizes the tapes, untimed
   c.gradient_s = env->differentiable() ? median_seconds([&] { env->loss_and_grad(x, grad, *ws, serial_team()); }, 0.2)
                                        : c.forward_s;
   if (env->supports_rl()) {

@@ -52,8 +52,10 @@ class CostModel {
   double run_seconds(const PlannedRun& run, double shared_share = 0.0) const;
 
   // times one forward and one gradient episode of the env (repeated to at least 0.2 s for cheap
-  // envs: the median is kept) and its RL view's decisions, and records them
-  EpisodeCost calibrate(const std::string& env_name, const std::string& env_config_hash);
+  // envs: the median is kept; the gradient with `tape_memory_bytes` as a run has them) and its RL
+  // view's decisions, and records them
+  EpisodeCost calibrate(const std::string& env_name, const std::string& env_config_hash,
+                        std::size_t tape_memory_bytes = 0);
   // writes the cache (creating its folder); throws UsageError naming the file when it cannot
   void save() const;
 

@@ -24,6 +24,7 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
   const auto start = std::chrono::steady_clock::now();
   BudgetedObjective objective(env, spec.budget, episode_counter, team);
   if (control) {
+    objective.set_tape_memory(control->tape_memory_bytes);
     objective.set_listener(control->listener, control->stop);
     objective.set_replay(std::move(control->journal), control->journal_episodes);
   }
@@ -93,7 +94,7 @@ class CommitListener : public EpisodeListener {
 
 GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
                      std::int64_t skipped, Store& store, int jobs, int threads, std::FILE* progress_out,
-                     const std::function<void()>& on_run_finished, bool share) {
+                     const std::function<void()>& on_run_finished, bool share, std::size_t tape_memory_bytes) {
   GridSummary summary;
   summary.skipped = skipped;
   std::int64_t pending_episodes = 0;
@@ -170,7 +171,7 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
           // earlier one; one that diverged from it starts over without
           const auto opt = make_run_optimizer(p.spec);
           CommitListener listener(store, start.run_id, start.committed_episodes);
-          RunControl control{&listener, &stop, std::move(start.journal), start.journal_episodes};
+          RunControl control{&listener, &stop, std::move(start.journal), start.journal_episodes, tape_memory_bytes};
           r = execute_run(p.spec, *env, *opt, &progress.episodes_of(w), &team, &control);
           if (r.status != "diverged" || attempt > 0) break;
           if (progress_out)

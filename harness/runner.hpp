@@ -29,6 +29,7 @@ struct RunControl {
   const std::atomic<bool>* stop = nullptr;
   std::vector<ReplayEntry> journal;
   std::int64_t journal_episodes = 0;
+  std::size_t tape_memory_bytes = 0;  // Workspace::tape_memory_bytes of the run
 };
 RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
                       std::atomic<std::int64_t>* episode_counter = nullptr, ThreadTeam* team = nullptr,
@@ -55,8 +56,10 @@ struct GridSummary {
 // across seeds (Store::begin_run): a run of a sharing group waits until its lead (share_leads)
 // has ended, and a worker takes the first run in order that is free to start. Sharing changes
 // no result: a shared episode is the same bits as simulating it.
+// tape_memory_bytes: what each run's gradient rollouts may keep (Workspace::tape_memory_bytes).
 GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
                      std::int64_t skipped, Store& store, int jobs, int threads, std::FILE* progress_out,
-                     const std::function<void()>& on_run_finished = {}, bool share = true);
+                     const std::function<void()>& on_run_finished = {}, bool share = true,
+                     std::size_t tape_memory_bytes = 0);
 
 }  // namespace dsb

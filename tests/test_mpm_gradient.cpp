@@ -168,31 +168,36 @@ TEST(MpmGradient, InitialStateMatchesCentralDifferences) {
   }
 }
 
-TEST(MpmGradient, CheckpointedEqualsFullHistory) {
+TEST(MpmGradient, AnyTapeBudgetGivesTheSameBits) {
+  // the reverse pass recomputes the env steps it did not tape from their checkpoints; that
+  // repeats the forward pass exactly, so every budget gives the same loss, gradient and adjoints
   const int env_steps = 4;
   const auto m = every_primitive_scene(4);
   const testing::SmoothObjective objective;
   const auto a = random_actions(m, env_steps, 31);
   mpm::MpmWorkspace ws(m);
-  std::vector<double> g1(a.size()), g2(a.size());
-  const double l1 = mpm::run_episode_with_grad(m, ws, serial_team(), a, env_steps, objective, g1,
-                                               mpm::ReverseMode::checkpointed);
+  std::vector<double> g1(a.size()), g2(a.size()), g3(a.size());
+  const double l1 = mpm::run_episode_with_grad(m, ws, serial_team(), a, env_steps, objective, g1, 0);
+  EXPECT_EQ(ws.taped_env_steps, 0);
   const auto adj1 = ws.adj;
-  const double l2 = mpm::run_episode_with_grad(m, ws, serial_team(), a, env_steps, objective, g2,
-                                               mpm::ReverseMode::full_history);
+  const double l2 = mpm::run_episode_with_grad(m, ws, serial_team(), a, env_steps, objective, g2, mpm::kTapeEverything);
+  EXPECT_EQ(ws.taped_env_steps, env_steps);
+  // a budget of two and a half env steps' tapes keeps the first two
+  const std::size_t per_step = ws.step_tape_bytes;
+  ASSERT_GT(per_step, 0u);
+  const double l3 = mpm::run_episode_with_grad(m, ws, serial_team(), a, env_steps, objective, g3, per_step * 5 / 2);
+  EXPECT_EQ(ws.taped_env_steps, 2);
   EXPECT_EQ(l1, l2);
-  double worst = 0.0, scale = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    worst = std::max(worst, std::abs(g1[i] - g2[i]));
-    scale = std::max(scale, std::abs(g2[i]));
-  }
-  EXPECT_LE(worst, 1e-12 * scale);
-  double worst_state = 0.0;
-  for (int p = 0; p < m.particles(); ++p)
-    worst_state = std::max({worst_state, (adj1[p].x - ws.adj[p].x).norm(), (adj1[p].F - ws.adj[p].F).norm()});
-  EXPECT_LE(worst_state, 1e-12);
-  // recomputation repeats the forward pass bit for bit, so the two are in fact identical
+  EXPECT_EQ(l1, l3);
   EXPECT_EQ(g1, g2);
+  EXPECT_EQ(g1, g3);
+  for (int p = 0; p < m.particles(); ++p) {
+    EXPECT_EQ(adj1[p].x, ws.adj[p].x) << p;
+    EXPECT_EQ(adj1[p].F, ws.adj[p].F) << p;
+  }
+  // what one env step's tapes hold, as counted: at least the particles and their SVDs of S substeps
+  EXPECT_GE(per_step, static_cast<std::size_t>(m.config.substeps) * m.particles() *
+                          (sizeof(mpm::Particle) + sizeof(mpm::SvdRecord)));
 }
 
 TEST(MpmGradient, SameBitsForAnyNumberOfThreads) {

@@ -12,6 +12,7 @@
 // so a rollout allocates nothing in its hot loop. A rollout may use the threads of a ThreadTeam;
 // its loss and gradient are bit-identical for every team size (fixed reduction order,
 // common/parallel.hpp).
+#include <cstddef>
 #include <memory>
 #include <span>
 #include <string>
@@ -52,10 +53,14 @@ class RlEnv {
   virtual double final_loss() const = 0;
 };
 
-// The mutable buffers of one rollout. Envs derive their own; the base holds nothing.
+// The mutable buffers of one rollout. Envs derive their own.
 class Workspace {
  public:
   virtual ~Workspace() = default;
+  // The bytes a gradient rollout may keep from its forward pass to spare its reverse pass a
+  // recomputation (the MPM envs' substep tapes, envs/mpm/episode.hpp); 0: keep nothing beyond
+  // what the env needs. Changes no result, only time and memory; the harness sets it per run.
+  std::size_t tape_memory_bytes = 0;
 };
 
 class Env {

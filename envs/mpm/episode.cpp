@@ -50,60 +50,72 @@ double run_episode(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, st
   return loss;
 }
 
+std::size_t tape_bytes(const SubstepTape& t) {
+  const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+  std::size_t b = bytes(t.before) + bytes(t.svd) + bytes(t.poses) + bytes(t.bins.home) + bytes(t.bins.order) +
+                  bytes(t.bins.unit_begin) + bytes(t.bins.active) + bytes(t.bins.flag) + bytes(t.grid.active) +
+                  bytes(t.grid.mq) + bytes(t.grid.v);
+  for (const auto& c : t.bins.by_colour) b += bytes(c);
+  return b;
+}
+
 double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
                              std::span<const double> actions, int env_steps, const EpisodeObjective& objective,
-                             std::span<double> actions_bar, ReverseMode mode) {
+                             std::span<double> actions_bar, std::size_t tape_budget) {
   const int adim = model.action_dim();
   const int S = model.config.substeps;
-  const bool full = mode == ReverseMode::full_history;
-  ws.reserve_reverse(model, full ? 0 : env_steps);
-  if (full) {
-    const std::size_t total = static_cast<std::size_t>(env_steps) * S;
-    if (ws.tapes.size() < total) ws.tapes.resize(total);
-    for (auto& t : ws.tapes) {
-      t.before.resize(model.particles());
-      t.svd.resize(model.particles());
-      t.poses.resize(model.primitives.size());
-      t.bins.home.resize(model.particles());
-    }
-  }
+  ws.reserve_reverse(model, env_steps);
   std::fill(actions_bar.begin(), actions_bar.end(), 0.0);
   auto fail = [&] {
     std::fill(actions_bar.begin(), actions_bar.end(), kNaN);
     return kNaN;
   };
+  // one env step's tapes before any is measured: the particle buffers, and as much again for the
+  // bins and the grid snapshot
+  const std::size_t particle_bytes = static_cast<std::size_t>(model.particles()) * (sizeof(Particle) + sizeof(SvdRecord));
+  if (ws.step_tape_bytes == 0) ws.step_tape_bytes = 2 * particle_bytes * static_cast<std::size_t>(S);
 
-  // forward, keeping the state before every env step (or every substep's tape)
+  // forward, keeping the state before every env step and the tapes of the first env steps while
+  // they fit the budget
   ws.reset_state(model);
+  ws.taped_env_steps = 0;
+  std::size_t taped_bytes = 0;
   double loss = 0.0;
   for (int k = 0; k < env_steps; ++k) {
-    if (!full) {
+    {
       PhaseClock clock(ws.phase_times);
       copy_in_parts(team, ws.particles, ws.checkpoints[k].particles);
       ws.checkpoints[k].poses = ws.poses;
       clock.lap(&PhaseTimes::other);
     }
-    env_step(model, ws, team, actions.data() + static_cast<std::size_t>(k) * adim,
-             full ? &ws.tapes[static_cast<std::size_t>(k) * S] : nullptr);
+    const bool tape = ws.taped_env_steps == k && tape_budget > 0 &&
+                      (tape_budget == kTapeEverything || taped_bytes + ws.step_tape_bytes <= tape_budget);
+    SubstepTape* tapes = tape ? ws.forward_tapes(model, k) : nullptr;
+    env_step(model, ws, team, actions.data() + static_cast<std::size_t>(k) * adim, tapes);
+    if (tape) {
+      std::size_t bytes = 0;
+      for (int s = 0; s < S; ++s) bytes += tape_bytes(tapes[s]);
+      ws.step_tape_bytes = bytes;
+      taped_bytes += bytes;
+      ++ws.taped_env_steps;
+    }
     if (!state_is_finite(ws.particles, team)) return fail();
     loss += objective.step_loss(k, ws.particles, ws.poses, team);
   }
   if (!std::isfinite(loss)) return fail();
 
-  // reverse: env steps backwards; the state after env step k is the final state or checkpoint
-  // k + 1 (the start of tape (k + 1) S in full history)
+  // reverse: env steps backwards; the state after env step k is the final state or checkpoint k + 1
   zero_adjoints(ws);
   for (int k = env_steps - 1; k >= 0; --k) {
     const bool last = k == env_steps - 1;
-    const std::vector<Particle>& after =
-        last ? ws.particles : (full ? ws.tapes[static_cast<std::size_t>(k + 1) * S].before : ws.checkpoints[k + 1].particles);
-    const std::vector<Pose>& after_poses =
-        last ? ws.poses : (full ? ws.tapes[static_cast<std::size_t>(k + 1) * S].poses : ws.checkpoints[k + 1].poses);
+    const bool taped = k < ws.taped_env_steps;
+    const std::vector<Particle>& after = last ? ws.particles : ws.checkpoints[k + 1].particles;
+    const std::vector<Pose>& after_poses = last ? ws.poses : ws.checkpoints[k + 1].poses;
     objective.step_loss_adjoint(k, after, after_poses, ws.adj, ws.pose_adj, team);
     const double* a = actions.data() + static_cast<std::size_t>(k) * adim;
     double* a_bar = actions_bar.data() + static_cast<std::size_t>(k) * adim;
-    SubstepTape* tapes = full ? &ws.tapes[static_cast<std::size_t>(k) * S] : ws.tapes.data();
-    if (!full) {
+    SubstepTape* tapes = taped ? ws.step_tapes[static_cast<std::size_t>(k)].data() : ws.tapes.data();
+    if (!taped) {
       // recompute env step k from its checkpoint, recording its substeps
       PhaseClock clock(ws.phase_times);
       copy_in_parts(team, ws.checkpoints[k].particles, ws.particles);
@@ -112,9 +124,8 @@ double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam
       env_step(model, ws, team, a, tapes);
     }
     // the state each substep produced: the next substep's start, or the state after env step k
-    // (ws.particles: the end of the recomputation, or the final state in full history)
-    const std::vector<Particle>& end_of_step =
-        (full && !last) ? ws.tapes[static_cast<std::size_t>(k + 1) * S].before : ws.particles;
+    // (for a recomputed step, ws.particles: the end of the recomputation, that same state)
+    const std::vector<Particle>& end_of_step = taped ? after : ws.particles;
     for (int s = S - 1; s >= 0; --s)
       substep_adjoint(model, ws, team, a, tapes[s], s + 1 < S ? tapes[s + 1].before : end_of_step, a_bar);
   }

@@ -125,7 +125,8 @@ double FluidEnv::rollout_with_grad(std::span<const double> x, std::span<double> 
   actions(x, ws.actions);
   const FluidObjective objective(cfg_, model());
   const double loss =
-      run_episode_with_grad(model(), ws.mpm, team, ws.actions, cfg_.env_steps, objective, ws.actions_bar);
+      run_episode_with_grad(model(), ws.mpm, team, ws.actions, cfg_.env_steps, objective, ws.actions_bar,
+                            ws.tape_memory_bytes);
   ws.cube_height = objective.final_cube_height();
   // each param drives both primitives over its segment's env steps
   std::fill(grad.begin(), grad.end(), 0.0);

@@ -22,6 +22,28 @@ void MpmWorkspace::reset_state(const MpmModel& model) {
   poses = model.initial_poses;
 }
 
+namespace {
+
+void size_tape(const MpmModel& model, SubstepTape& t) {
+  const int n = model.particles();
+  t.before.resize(n);
+  t.svd.resize(n);
+  t.poses.resize(model.primitives.size());
+  t.bins.home.resize(n);
+}
+
+}  // namespace
+
+SubstepTape* MpmWorkspace::forward_tapes(const MpmModel& model, int k) {
+  if (static_cast<int>(step_tapes.size()) <= k) step_tapes.resize(static_cast<std::size_t>(k) + 1);
+  auto& step = step_tapes[static_cast<std::size_t>(k)];
+  if (step.empty()) {
+    step.resize(static_cast<std::size_t>(model.config.substeps));
+    for (auto& t : step) size_tape(model, t);
+  }
+  return step.data();
+}
+
 void MpmWorkspace::reserve_reverse(const MpmModel& model, int env_steps) {
   const int n = model.particles();
   if (static_cast<int>(checkpoints.size()) < env_steps) checkpoints.resize(env_steps);
@@ -31,12 +53,7 @@ void MpmWorkspace::reserve_reverse(const MpmModel& model, int env_steps) {
   }
   const int substeps = model.config.substeps;
   if (static_cast<int>(tapes.size()) < substeps) tapes.resize(substeps);
-  for (auto& t : tapes) {
-    t.before.resize(n);
-    t.svd.resize(n);
-    t.poses.resize(model.primitives.size());
-    t.bins.home.resize(n);
-  }
+  for (auto& t : tapes) size_tape(model, t);
   adj.resize(n);
   adj_prev.resize(n);
   advection.resize(n);

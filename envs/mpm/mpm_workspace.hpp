@@ -74,7 +74,12 @@ struct MpmWorkspace {
   ParticleBins bins;
   // reverse pass
   std::vector<Checkpoint> checkpoints;  // env steps (checkpoint k = state before env step k)
-  std::vector<SubstepTape> tapes;       // substeps of one env step
+  std::vector<SubstepTape> tapes;       // substeps of one env step, recomputed from its checkpoint
+  // the tapes the forward pass keeps (episode.hpp): env step k's substeps at step_tapes[k],
+  // allocated on first use and kept for the next rollouts; the first taped_env_steps are valid
+  std::vector<std::vector<SubstepTape>> step_tapes;
+  int taped_env_steps = 0;
+  std::size_t step_tape_bytes = 0;  // the bytes of one env step's tapes, as last measured
   std::vector<ParticleAdjoint> adj, adj_prev;
   std::vector<AdvectionAdjoint> advection;  // per particle, within one substep's reverse
   std::vector<PoseAdjoint> pose_adj;
@@ -83,7 +88,9 @@ struct MpmWorkspace {
   EpisodeObserver* observer = nullptr;  // not owned; run_episode calls it when set (render only)
 
   void reset_state(const MpmModel& model);  // particles and poses to the model's initial state
-  void reserve_reverse(const MpmModel& model, int env_steps);  // checkpoints and tapes
+  void reserve_reverse(const MpmModel& model, int env_steps);  // checkpoints and one env step's tapes
+  // env step k's tapes for the forward pass to record (allocated on first use)
+  SubstepTape* forward_tapes(const MpmModel& model, int k);
 };
 
 }  // namespace dsb::mpm

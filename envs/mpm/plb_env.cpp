@@ -142,7 +142,7 @@ double PlbEnv::rollout_with_grad(std::span<const double> x, std::span<double> gr
   ws.loss.final_iou = std::numeric_limits<double>::quiet_NaN();
   const PlbObjective objective(model(), cfg_, ws.loss);
   const double loss = run_episode_with_grad(model().mpm, ws.mpm, team, ws.actions, cfg_.env_steps, objective,
-                                            ws.actions_bar);
+                                            ws.actions_bar, ws.tape_memory_bytes);
   // each param drives its manipulator command over its segment's env steps
   std::fill(grad.begin(), grad.end(), 0.0);
   const int per = cfg_.steps_per_segment();

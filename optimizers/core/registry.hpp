@@ -28,7 +28,7 @@ struct OptimizerEntry {
   std::function<std::unique_ptr<Optimizer>(const KnobSettings&)> make_with = {};
   std::vector<std::string> knobs = {};  // the keys make_with accepts
   SeedUse seed_use = SeedUse::at_start;
-  // the median share of a 1,000-episode run's episodes before its first draw, measured (README
+  // the mean share of a 1,000-episode run's episodes before its first draw, measured (README
   // "Sharing across seeds"): what `harness plan` counts as free for a group's later seeds
   double typical_seed_free_share = 0.0;
 };

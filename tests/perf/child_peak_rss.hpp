@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "common/parallel.hpp"
 #include "envs/core/registry.hpp"
 
 namespace dsb::perf {
@@ -24,14 +25,18 @@ inline double child_peak_rss_mb(const std::function<bool()>& work) {
   return ru.ru_maxrss / 1024.0;
 }
 
-// the same for building env `env_name` and running one gradient episode at point(dim)
+// the same for building env `env_name` and running one gradient episode at point(dim), keeping
+// up to tape_memory_bytes of its forward pass (Workspace::tape_memory_bytes)
 inline double gradient_episode_peak_rss_mb(const std::string& env_name,
-                                           const std::function<std::vector<double>(int dim)>& point) {
+                                           const std::function<std::vector<double>(int dim)>& point,
+                                           std::size_t tape_memory_bytes = 0) {
   return child_peak_rss_mb([&] {
     const auto env = make_env(env_name);
     const auto x = point(env->dim());
     std::vector<double> g(x.size());
-    return std::isfinite(env->loss_and_grad(x, g));
+    const auto ws = env->make_workspace();
+    ws->tape_memory_bytes = tape_memory_bytes;
+    return std::isfinite(env->loss_and_grad(x, g, *ws, serial_team()));
   });
 }
 
