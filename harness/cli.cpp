@@ -22,6 +22,7 @@
 #include "harness/grid.hpp"
 #include "harness/interrupt.hpp"
 #include "harness/merge_command.hpp"
+#include "harness/output_path.hpp"
 #include "envs/core/lazy_model.hpp"
 #include "harness/plan.hpp"
 #include "harness/plan_report.hpp"
@@ -205,7 +206,7 @@ PlanContext plan_context(const RunArgs& a, const CheckedRun& run) {
   return {a.db, run.jobs, a.threads, grid_flags(a)};
 }
 
-int command_plan(const RunArgs& a) {
+int command_plan(const RunArgs& a, const std::string& runs_csv) {
   const auto start = std::chrono::steady_clock::now();
   const CheckedRun run = check_run_args(a, false);
   std::set<RunKey> done;
@@ -217,16 +218,16 @@ int command_plan(const RunArgs& a) {
     throw UsageError(std::string("--db: ") + e.what());
   }
   GridPlan plan = plan_grid(run.grid, done, kVersion, run.shard);
-  if (!a.no_sharing) {
-    try {
-      estimate_sharing(plan, kept_prefixes_of_file(a.db));
-    } catch (const StoreError& e) {
-      throw UsageError(std::string("--db: ") + e.what());
-    }
+  try {
+    if (!a.no_sharing) estimate_sharing(plan, kept_prefixes_of_file(a.db));
+    use_measured_walls(plan, measured_walls_of_file(a.db));
+  } catch (const StoreError& e) {
+    throw UsageError(std::string("--db: ") + e.what());
   }
   const CostModel costs;
   print_plan(std::cout, plan, costs, plan_context(a, run));
   print_failed_runs(std::cout, plan, failed);
+  if (!runs_csv.empty()) write_plan_runs_csv(runs_csv, plan, costs);
   const double planning_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cout << fmt::format("  planned in {:.3f} s; env models built: {} (nothing was written)\n", planning_s,
                            lazy_model_builds());
@@ -267,6 +268,7 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
   }
   GridPlan plan = plan_grid(run.grid, store->done_keys(), kVersion, run.shard);
   if (!a.no_sharing) estimate_sharing(plan, kept_prefixes_of_file(a.db));
+  use_measured_walls(plan, measured_walls_of_file(a.db));
   const CostModel costs;
   if (!a.quiet) {
     std::ostringstream text;
@@ -328,7 +330,26 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
     for (const PlannedRun& p : plan_grid(run.grid, {}, kVersion).pending) ++shard_runs[shard_of(p.key, options.shards)];
   }
   const SlurmGridFlags flags{a.all, a.envs, a.optimizers, a.seeds, a.budget, a.knobs, a.ext, a.ext_timeout};
-  return command_slurm(flags, run.grid.size(), shard_runs, options, running_binary_path(), std::cout);
+  SlurmOptions o = options;
+  if (o.time.empty() && !shard_runs.empty()) {
+    // each task's wall from the plan (its runs over its CPUs, at least its longest run)
+    GridPlan plan = plan_grid(run.grid, {}, kVersion);
+    estimate_sharing(plan, {});
+    const std::vector<double> cost = run_costs(plan, CostModel{});
+    std::vector<double> total(static_cast<std::size_t>(o.shards), 0.0), longest(total);
+    for (std::size_t i = 0; i < plan.pending.size(); ++i) {
+      const auto s = static_cast<std::size_t>(shard_of(plan.pending[i].key, o.shards));
+      total[s] += cost[i];
+      longest[s] = std::max(longest[s], cost[i]);
+    }
+    double worst = 0.0;
+    for (std::size_t s = 0; s < total.size(); ++s)
+      worst = std::max(worst, std::max(total[s] / std::max(1, o.cpus_per_task), longest[s]));
+    o.time = slurm_time_limit(worst);
+    o.time_note = fmt::format("the plan's longest task, {}, x {} + {} min; --time overrides", human_duration(worst),
+                              kSlurmTimeMargin, kSlurmTimeExtraS / 60);
+  }
+  return command_slurm(flags, run.grid.size(), shard_runs, o, running_binary_path(), std::cout);
 }
 
 std::string one_line(std::string s) {
@@ -364,6 +385,10 @@ int harness_main(int argc, char** argv) {
   RunArgs plan_args;
   auto* plan = app.add_subcommand("plan", "what a grid would run (runs, core-hours per env and family, wall, Slurm), writing nothing");
   add_run_options(*plan, plan_args);
+  std::string plan_runs_csv;
+  plan->add_option("--runs-csv", plan_runs_csv,
+                   "also write each run to run with its estimated seconds (CSV: env,optimizer,seed,budget,"
+                   "planned_s,source; a new file)");
 
   RunArgs calibrate_args;
   bool calibrate_force = false;
@@ -477,7 +502,7 @@ int harness_main(int argc, char** argv) {
 
   try {
     if (list->parsed()) return command_list();
-    if (plan->parsed()) return command_plan(plan_args);
+    if (plan->parsed()) return command_plan(plan_args, plan_runs_csv);
     if (calibrate->parsed()) return command_calibrate(calibrate_args, calibrate_force);
     if (slurm->parsed()) return command_slurm_scripts(slurm_args, slurm_opts);
     if (landscape->parsed())

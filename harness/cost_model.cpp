@@ -85,18 +85,7 @@ std::string CostModel::key(const std::string& env_name, const std::string& env_c
 EpisodeCost CostModel::episode(const std::string& env_name, const std::string& env_config_hash) const {
   if (const auto it = table_.find(key(env_name, env_config_hash)); it != table_.end()) return it->second;
   const EnvInfo& info = shared_env(env_name)->info();  // metadata: no model is built
-  return {info.cost_hint_s, info.cost_hint_s, 0, false};
-}
-
-double optimizer_overhead_seconds(const std::string& optimizer, int dim, std::int64_t budget) {
-  double at_10 = 0.0, at_400 = 0.0;
-  if (optimizer == "bo") at_10 = 53.8, at_400 = 290.0;
-  if (optimizer == "boleap") at_10 = 12.6, at_400 = 200.0;
-  if (at_10 == 0.0) return 0.0;
-  const double d = std::clamp(static_cast<double>(dim), 10.0, 400.0);
-  const double per_1000 = at_10 + (at_400 - at_10) * (d - 10.0) / 390.0;
-  const double scale = static_cast<double>(budget) / 1000.0;
-  return per_1000 * scale * scale;
+  return {info.cost_hint_forward_s > 0.0 ? info.cost_hint_forward_s : info.cost_hint_s, info.cost_hint_s, 0, false};
 }
 
 double CostModel::run_seconds(const PlannedRun& run, double shared_share) const {
@@ -111,12 +100,11 @@ double CostModel::run_seconds(const PlannedRun& run, double shared_share) const 
   if (opt.needs_rl) {
     // the hint alone knows no decision count: one per 5 env steps of a 50-step episode
     const int decisions = c.decisions > 0 ? c.decisions : 10;
-    per_episode += decisions * (run.spec.optimizer == "sac" ? kSacLearnerSecondsPerDecision
-                                                              : kPpoLearnerSecondsPerDecision);
+    per_episode += decisions * opt.costs.learner_s_per_decision;
   }
   const int dim = shared_env(run.spec.env)->info().dim;  // metadata
   return per_episode * static_cast<double>(run.spec.budget) * (1.0 - shared_share) +
-         optimizer_overhead_seconds(run.spec.optimizer, dim, run.spec.budget);
+         (opt.costs.own_seconds ? opt.costs.own_seconds(dim, run.spec.budget) : 0.0);
 }
 
 EpisodeCost CostModel::calibrate(const std::string& env_name, const std::string& env_config_hash,

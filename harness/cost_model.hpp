@@ -27,19 +27,6 @@ struct EpisodeCost {
   bool measured = false;    // false: from the env's cost hint
 };
 
-// the RL learners' own seconds per decision on the reference machine (tests/perf/bench_rl on
-// cartpole3: ppo 241 us acting + amortised update; sac 7.3 ms per gradient step, one per decision)
-inline constexpr double kPpoLearnerSecondsPerDecision = 2.41e-4;
-inline constexpr double kSacLearnerSecondsPerDecision = 7.3e-3;
-
-// the GP optimizers' own seconds per 1,000-episode run on the reference machine (README
-// "Performance", bench_bo and whole runs): bo 53.8 s on a 10-D env and about 290 s on the 400-D
-// cartpole3, boleap 12.6 s and about 200 s; in between linear in the dimension, and scaled by
-// (budget / 1,000)^2 for other budgets (refits grow with the points the GP holds). A rough model:
-// it orders the grid (bo's runs are not cheap even where the env is) and keeps the plan honest
-// about where the hours go.
-double optimizer_overhead_seconds(const std::string& optimizer, int dim, std::int64_t budget);
-
 class CostModel {
  public:
   // loads the cache (a missing or unreadable cache is empty)

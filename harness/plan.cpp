@@ -1,6 +1,8 @@
 #include "harness/plan.hpp"
 
+#include <algorithm>
 #include <filesystem>
+#include <limits>
 
 #include "common/config_hash.hpp"
 #include "common/rng.hpp"
@@ -104,6 +106,36 @@ void estimate_sharing(GridPlan& plan, const std::map<std::string, std::int64_t>&
     else if (lead[i] >= 0)
       plan.shared_share[i] = optimizer_entry(p.spec.optimizer).typical_seed_free_share;
   }
+}
+
+void use_measured_walls(GridPlan& plan, const std::map<std::string, double>& walls) {
+  plan.measured_wall_s.assign(plan.pending.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t i = 0; i < plan.pending.size(); ++i)
+    if (const auto w = walls.find(seed_group_of(plan.pending[i].key)); w != walls.end())
+      plan.measured_wall_s[i] = w->second;
+}
+
+std::map<std::string, double> measured_walls_of_file(const std::string& path) {
+  std::map<std::string, std::vector<double>> by_group;
+  if (!std::filesystem::exists(path)) return {};
+  Database db(path, Database::Mode::read_only);
+  const int version = check_schema(db);
+  if (version == 0) return {};
+  Statement q(db.handle(), std::string("SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, "
+                                       "harness_version, wall_s FROM runs WHERE status='done' AND wall_s > 0") +
+                               (version >= 4 ? " AND shared_episodes = 0" : ""));
+  while (q.step()) {
+    const RunKey key{q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
+                     q.column_text(4), q.column_text(5), q.column_text(6)};
+    by_group[seed_group_of(key)].push_back(q.column_double(7));
+  }
+  std::map<std::string, double> walls;
+  for (auto& [group, w] : by_group) {
+    std::sort(w.begin(), w.end());
+    const std::size_t m = w.size() / 2;
+    walls[group] = w.size() % 2 ? w[m] : 0.5 * (w[m - 1] + w[m]);
+  }
+  return walls;
 }
 
 std::map<std::string, std::int64_t> kept_prefixes_of_file(const std::string& path) {

@@ -37,6 +37,9 @@ struct GridPlan {
   // per pending run: the share of its episodes expected to come from another seed's run
   // (estimate_sharing); empty when nothing is shared
   std::vector<double> shared_share;
+  // per pending run: the median wall seconds of its group's done runs in the database, when it
+  // has some that simulated every episode (use_measured_walls); NaN otherwise; empty: none
+  std::vector<double> measured_wall_s;
 };
 
 // A shard I/N of the grid: the runs whose key hashes to I mod N (shard_of), so adding an env or an
@@ -68,6 +71,13 @@ std::vector<std::ptrdiff_t> share_leads(const std::vector<PlannedRun>& runs);
 // group's longest prefix kept in the database (`kept`: seed_group_of -> episodes), else, when an
 // earlier seed of its group is in the grid, its optimizer's typical seed-free share.
 void estimate_sharing(GridPlan& plan, const std::map<std::string, std::int64_t>& kept);
+// Fills plan.measured_wall_s from `walls` (seed_group_of -> median wall seconds).
+void use_measured_walls(GridPlan& plan, const std::map<std::string, double>& walls);
+// the median wall seconds of a database's done runs by group, of the runs that simulated every
+// episode (none shared: a shared run's wall is not what its group costs); read-only; nothing
+// when the file does not exist
+std::map<std::string, double> measured_walls_of_file(const std::string& path);
+
 // the seed-free episodes that done runs of a database keep for other seeds, by group
 // (read-only; nothing when the file does not exist or predates sharing)
 std::map<std::string, std::int64_t> kept_prefixes_of_file(const std::string& path);

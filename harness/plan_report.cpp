@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <set>
 
 #include <fmt/format.h>
 
+#include "harness/output_path.hpp"
 #include "optimizers/core/registry.hpp"
 
 namespace dsb {
@@ -20,8 +22,7 @@ constexpr double kShardTargetSeconds = 6.0 * 3600.0;
 std::string family_of(const std::string& optimizer) {
   if (optimizer.rfind("ext:", 0) == 0) return "external (gradient episodes; own time unknown)";
   const OptimizerEntry& e = optimizer_entry(optimizer);
-  if (e.needs_rl) return "rl (learner per decision)";
-  if (optimizer == "bo" || optimizer == "boleap") return "gp (episodes + GP time)";
+  if (!e.costs.family.empty()) return e.costs.family;
   if (e.needs_gradient) return "gradient episodes";
   return "forward episodes";
 }
@@ -33,6 +34,19 @@ struct Tally {
 };
 
 }  // namespace
+
+void write_plan_runs_csv(const std::string& path, const GridPlan& plan, const CostModel& costs) {
+  const std::vector<double> cost = run_costs(plan, costs);
+  OutputFile file("--runs-csv", path, false);
+  file.stream() << "env,optimizer,seed,budget,planned_s,source\n";
+  for (std::size_t i = 0; i < plan.pending.size(); ++i) {
+    const PlannedRun& p = plan.pending[i];
+    const bool measured = !plan.measured_wall_s.empty() && std::isfinite(plan.measured_wall_s[i]);
+    file.stream() << fmt::format("{},{},{},{},{:.6g},{}\n", p.spec.env, p.spec.optimizer, p.spec.seed, p.spec.budget,
+                                 cost[i], measured ? "measured" : "model");
+  }
+  file.commit();
+}
 
 void print_failed_runs(std::ostream& out, const GridPlan& plan, const std::map<RunKey, std::string>& failed) {
   std::vector<const PlannedRun*> runs;
@@ -49,8 +63,13 @@ void print_failed_runs(std::ostream& out, const GridPlan& plan, const std::map<R
 std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs) {
   std::vector<double> c;
   c.reserve(plan.pending.size());
-  for (std::size_t i = 0; i < plan.pending.size(); ++i)
-    c.push_back(costs.run_seconds(plan.pending[i], plan.shared_share.empty() ? 0.0 : plan.shared_share[i]));
+  for (std::size_t i = 0; i < plan.pending.size(); ++i) {
+    const double share = plan.shared_share.empty() ? 0.0 : plan.shared_share[i];
+    const double measured = plan.measured_wall_s.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                                         : plan.measured_wall_s[i];
+    // a group's done runs in the database measure it; the cost model estimates the rest
+    c.push_back(std::isfinite(measured) ? measured * (1.0 - share) : costs.run_seconds(plan.pending[i], share));
+  }
   return c;
 }
 
@@ -115,12 +134,19 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
   // what sharing across seeds saves
   double unshared = 0.0, shared_episodes = 0.0;
   std::int64_t sharing_runs = 0;
+  std::int64_t measured_runs = 0;
   for (std::size_t i = 0; i < plan.pending.size(); ++i) {
-    unshared += costs.run_seconds(plan.pending[i]);
+    const bool measured = !plan.measured_wall_s.empty() && std::isfinite(plan.measured_wall_s[i]);
+    measured_runs += measured;
+    unshared += measured ? plan.measured_wall_s[i] : costs.run_seconds(plan.pending[i]);
     const double share = plan.shared_share.empty() ? 0.0 : plan.shared_share[i];
     shared_episodes += share * static_cast<double>(plan.pending[i].spec.budget);
     sharing_runs += share > 0.0;
   }
+  if (measured_runs > 0)
+    out << fmt::format("  {} runs costed from the median wall time of their group's done runs in {} (the same env, "
+                       "optimizer, budget and configs)\n",
+                       measured_runs, ctx.db);
   if (sharing_runs > 0)
     out << fmt::format("  sharing across seeds: {} runs take about {:.0f} episodes from an earlier seed's run of "
                        "their group (the episodes before the optimizer's first draw, replayed: counted as free), "

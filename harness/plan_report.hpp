@@ -31,6 +31,11 @@ std::vector<std::size_t> run_order(const std::vector<PlannedRun>& pending, const
 
 void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& context);
 
+// `harness plan --runs-csv`: one line per pending run, env,optimizer,seed,budget,planned_s,source
+// (source: measured when the database's done runs of its group gave it, else model), written
+// whole to a new file (output_path.hpp)
+void write_plan_runs_csv(const std::string& path, const GridPlan& plan, const CostModel& costs);
+
 // the grid's runs that the database holds as 'failed' (`failed`: key -> error, runs_of_file),
 // each with its error, at most kFailedRunsShown of them; nothing when there are none
 void print_failed_runs(std::ostream& out, const GridPlan& plan, const std::map<RunKey, std::string>& failed);

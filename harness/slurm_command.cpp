@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -277,6 +278,11 @@ void write_script(const fs::path& path, const std::string& text) {
 
 std::string shell_word(const std::string& s) { return shell_quote(s); }
 
+std::string slurm_time_limit(double longest_task_s) {
+  const auto s = static_cast<long long>(std::ceil(longest_task_s * kSlurmTimeMargin + kSlurmTimeExtraS));
+  return fmt::format("{}-{:02}:{:02}:{:02}", s / 86400, s % 86400 / 3600, s % 3600 / 60, s % 60);
+}
+
 std::string running_binary_path() {
   std::error_code ec;
   const fs::path p = fs::read_symlink("/proc/self/exe", ec);
@@ -314,7 +320,8 @@ int command_slurm(const SlurmGridFlags& grid, std::size_t grid_runs, const std::
   const std::string d = dir.string();
   out << fmt::format("harness slurm: {} runs in {} shards (a job array), {} CPU(s) per task{}{}\n", grid_runs,
                      options.shards, options.cpus_per_task,
-                     options.time.empty() ? "" : ", time limit " + options.time,
+                     options.time.empty() ? "" : ", time limit " + options.time +
+                                                     (options.time_note.empty() ? "" : " (" + options.time_note + ")"),
                      options.partition.empty() ? "" : ", partition " + options.partition);
   if (!shard_runs.empty()) {
     const auto [lo, hi] = std::minmax_element(shard_runs.begin(), shard_runs.end());

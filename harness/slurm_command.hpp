@@ -31,6 +31,7 @@ struct SlurmOptions {
   std::string dir;         // where the scripts, logs, shards and the merged database go
   int cpus_per_task = 1;   // each task's --jobs
   std::string time;        // Slurm time limit per task ([D-]HH:MM:SS etc.); empty = the cluster's default
+  std::string time_note;   // where `time` came from, when the harness chose it (printed)
   std::string partition;   // empty = the cluster's default
 };
 
@@ -40,6 +41,13 @@ struct SlurmOptions {
 // (absolute). Returns 0.
 int command_slurm(const SlurmGridFlags& grid, std::size_t grid_runs, const std::vector<std::int64_t>& shard_runs,
                   const SlurmOptions& options, const std::string& harness_path, std::ostream& out);
+
+// The time limit of an array task from the plan: the longest task's estimated wall (its runs'
+// seconds over its CPUs, never less than its longest run) times kSlurmTimeMargin plus
+// kSlurmTimeExtraS (start-up, copying the database back, a slower node), as Slurm's D-HH:MM:SS.
+inline constexpr double kSlurmTimeMargin = 1.5;
+inline constexpr double kSlurmTimeExtraS = 15 * 60;
+std::string slurm_time_limit(double longest_task_s);
 
 // s as one word that bash reads back unchanged (quoted only when it must be)
 std::string shell_word(const std::string& s);

@@ -11,6 +11,7 @@
 #include "harness/runner.hpp"
 #include "optimizers/bo/acquisition.hpp"
 #include "optimizers/bo/bo.hpp"
+#include "optimizers/bo/gp_cost.hpp"
 #include "optimizers/core/registry.hpp"
 #include "tests/support/function_objective.hpp"
 
@@ -143,6 +144,29 @@ TEST(Bo, ExactBudgetAndBitIdenticalReruns) {
   EXPECT_EQ(a.used(), 33);
   EXPECT_EQ(a.losses(), b.losses());
   EXPECT_LT(a.best(), 1e-3);
+}
+
+TEST(BoCost, ThePlansFitScheduleIsTheOneARunFollowsAndItsWorkIsCounted) {
+  // a bo run's own diagnostics: its fits as the plan's model counts them, and every likelihood
+  // evaluation with the n^3 of its factorization
+  auto f = [](std::span<const double> x) { return std::pow(x[0] - 0.2, 2) + std::pow(x[1] + 0.4, 2); };
+  for (const int budget : {9, 60, 120}) {
+    testing::FunctionObjective obj(2, budget, f);
+    auto bo = make_bo();
+    Rng rng(3);
+    EXPECT_THROW(bo->minimize(obj, rng), BudgetExhausted);
+    const auto d = bo->diagnostics();
+    EXPECT_EQ(d.at("gp_fits").get<int>(), bo_fits(2, budget)) << budget;
+    const auto evals = d.at("likelihood_evaluations").get<std::int64_t>();
+    EXPECT_GE(evals, d.at("gp_fits").get<std::int64_t>()) << budget;
+    // every evaluation costs between the first fit's n^3 and the last one's
+    const double n3 = d.at("likelihood_n3").get<double>();
+    EXPECT_GE(n3, static_cast<double>(evals) * 5 * 5 * 5) << budget;
+    EXPECT_LE(n3, static_cast<double>(evals) * budget * budget * budget) << budget;
+  }
+  // the model grows as the fits do, and with the dimension
+  EXPECT_GT(bo_own_seconds(10, 1000), 30.0 * bo_own_seconds(10, 300) / 10.0);
+  EXPECT_GT(bo_own_seconds(200, 300), bo_own_seconds(10, 300));
 }
 
 TEST(BoConfigTest, ValidationNamesTheField) {

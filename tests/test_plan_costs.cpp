@@ -1,9 +1,13 @@
 // The grid's cost model and its uses: the progress line's share of the estimated work and ETA,
-// cheapest-first order, shards cut from run keys, durations as the plan prints them.
+// cheapest-first order, shards cut from run keys, durations as the plan prints them; a plan that
+// takes a database's measured walls, Slurm time limits from the plan, and no optimizer's name in
+// the harness (its costs come from the registry).
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -13,6 +17,11 @@
 #include "harness/plan.hpp"
 #include "harness/plan_report.hpp"
 #include "harness/progress.hpp"
+#include "harness/slurm_command.hpp"
+#include "optimizers/core/registry.hpp"
+#include "support/harness_process.hpp"
+#include "support/sqlite_rows.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace dsb {
 namespace {
@@ -88,6 +97,64 @@ TEST(Plan, DurationsReadAsTheyShould) {
   EXPECT_EQ(human_duration(600.0), "10 min");
   EXPECT_EQ(human_duration(3.0 * 3600.0), "3.0 h");
   EXPECT_EQ(human_duration(3.0 * 86400.0), "3.0 days");
+}
+
+}  // namespace
+}  // namespace dsb
+
+namespace dsb {
+namespace {
+
+class PlanFromDatabase : public testing::TempDirTest {
+ protected:
+  testing::HarnessResult harness(const std::string& args) { return testing::run_harness(dir_, args); }
+};
+
+TEST_F(PlanFromDatabase, DoneRunsOfAGroupCostItsPendingRunsByTheirMedianWall) {
+  ASSERT_EQ(harness("--env cartpole1 --optimizer cmaes,random --seeds 2 --budget 30 --quiet --db " + path("m.sqlite")).code, 0);
+  const auto p = harness("plan --env cartpole1 --optimizer cmaes,gd --seeds 4 --budget 30 --db " + path("m.sqlite") +
+                         " --runs-csv " + path("runs.csv"));
+  ASSERT_EQ(p.code, 0) << p.err;
+  EXPECT_NE(p.out.find("2 runs costed from the median wall time of their group's done runs"), std::string::npos)
+      << p.out;
+  const std::string csv = testing::read_file(path("runs.csv"));
+  EXPECT_EQ(csv.rfind("env,optimizer,seed,budget,planned_s,source\n", 0), 0u) << csv;
+  // cmaes seeds 2 and 3 at the median of seeds 0 and 1 (their mean), gd from the model
+  const double median = std::stod(testing::scalar(
+      path("m.sqlite"), "SELECT printf('%.17g', avg(wall_s)) FROM runs WHERE optimizer='cmaes'"));
+  const auto at = csv.find("cartpole1,cmaes,2,30,");
+  ASSERT_NE(at, std::string::npos) << csv;
+  EXPECT_NEAR(std::stod(csv.substr(at + 21)), median, 1e-5 * median) << csv;
+  EXPECT_NE(csv.find("cartpole1,cmaes,3,30,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",measured\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("cartpole1,gd,0,30,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",model\n"), std::string::npos) << csv;
+}
+
+TEST_F(PlanFromDatabase, SlurmTakesItsTimeLimitFromThePlanUnlessGivenOne) {
+  const auto s = harness("slurm --env cartpole1 --optimizer cmaes --seeds 2 --budget 30 --shards 2 --dir " + path("c"));
+  ASSERT_EQ(s.code, 0) << s.err;
+  const std::string array = testing::read_file(path("c/array.sbatch"));
+  EXPECT_NE(array.find("#SBATCH --time=0-00:15:"), std::string::npos) << array;  // a short grid: the 15 min extra
+  EXPECT_NE(s.out.find("the plan's longest task"), std::string::npos) << s.out;
+  const auto t = harness("slurm --env cartpole1 --optimizer cmaes --seeds 2 --budget 30 --shards 2 --time 2:00:00 --dir " +
+                         path("d"));
+  ASSERT_EQ(t.code, 0) << t.err;
+  EXPECT_NE(testing::read_file(path("d/array.sbatch")).find("#SBATCH --time=2:00:00"), std::string::npos);
+  EXPECT_EQ(slurm_time_limit(3600.0), "0-01:45:00");  // 1.5 h + 15 min
+}
+
+TEST(PlanCosts, NoOptimizerIsNamedInTheHarness) {
+  // their costs, families and seed use come from the registry: harness/ code names none of them
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(DSB_SOURCE_DIR) + "/harness")) {
+    // the code without its comments (a comment may give an example)
+    std::string text;
+    std::istringstream lines(testing::read_file(entry.path()));
+    for (std::string line; std::getline(lines, line);) text += line.substr(0, line.find("//")) + "\n";
+    for (const auto& opt : optimizer_entries())
+      EXPECT_EQ(text.find("\"" + opt.name + "\""), std::string::npos)
+          << entry.path().filename() << " names optimizer '" << opt.name << "'";
+  }
 }
 
 }  // namespace

@@ -80,6 +80,8 @@ nlohmann::json BoSurrogate::diagnostics() const {
           {"failed_points", failed_.size()},
           {"gp_fits", fits_},
           {"gp_fit_failures", gp_.fit_failures()},
+          {"likelihood_evaluations", gp_.likelihood_evaluations()},
+          {"likelihood_n3", gp_.likelihood_n3()},
           {"jitter", gp_.jitter()},
           {"hyperparameters", std::move(hyper)}};
 }

@@ -436,6 +436,8 @@ double GaussianProcess::fit_objective(const Eigen::VectorXd& theta, Eigen::Vecto
     throw std::invalid_argument("gp: fit_objective needs theta of size d + 3 = " + std::to_string(d + 3));
   const GpHyperparameters h = hyper_of(theta);
   const double s = h.outputscale, noise = h.noise, m = h.mean;
+  ++likelihood_evaluations_;
+  likelihood_n3_ += static_cast<double>(n) * n * n;
 
   // log priors on the constrained values, gradients in theta coordinates
   Eigen::VectorXd g = Eigen::VectorXd::Zero(d + 3);

@@ -62,6 +62,10 @@ class GaussianProcess {
   void fit(Rng& rng);
   // fit() calls so far in which no start reached a finite objective (the hyperparameters were kept)
   int fit_failures() const { return fit_failures_; }
+  // what the fits cost: their likelihood evaluations (fit_objective calls), and the sum of n^3
+  // over them (n the points at each: a Cholesky factorization and an inverse each)
+  std::int64_t likelihood_evaluations() const { return likelihood_evaluations_; }
+  double likelihood_n3() const { return likelihood_n3_; }
   // diagonal jitter of the current factor (0 when the plain Cholesky factorization worked)
   double jitter() const { return jitter_; }
 
@@ -104,6 +108,8 @@ class GaussianProcess {
   double jitter_ = 0.0;    // diagonal jitter of the current factor (0 when the plain one worked)
   int n_ = 0;
   int fit_failures_ = 0;
+  mutable std::int64_t likelihood_evaluations_ = 0;
+  mutable double likelihood_n3_ = 0.0;
   void standardize();   // y_mean_, y_scale_, y_std_ from y_raw_
   void rescale_inputs();  // Xs_ from X_ and the lengthscales
   void refactor();      // factor, jitter_, z_, alpha_ from Xs_, y_std_ and hyper_ (jitter ladder)

@@ -2,6 +2,7 @@
 
 #include "common/error.hpp"
 #include "optimizers/bo/bo.hpp"
+#include "optimizers/bo/gp_cost.hpp"
 #include "optimizers/boleap.hpp"
 #include "optimizers/cmaes.hpp"
 #include "optimizers/gd.hpp"
@@ -40,11 +41,14 @@ const std::vector<OptimizerEntry>& optimizer_entries() {
       {.name = "cmaes", .description = "CMA-ES (cmaes library rules) with IPOP restarts, sigma0 0.5",
        .make = [] { return make_cmaes(); }, .make_with = make_cmaes_with, .knobs = knob_keys(cmaes_knobs, CmaesConfig{})},
       {.name = "bo", .description = "exact-GP Bayesian optimization (Matern-5/2 ARD, BoTorch-2022 priors), LCB beta 1",
-       .make = [] { return make_bo(); }},
+       .make = [] { return make_bo(); },
+       .costs = {.family = "gp (episodes + GP time)",
+                 .own_seconds = [](int dim, std::int64_t budget) { return bo_own_seconds(dim, budget); }}},
       {.name = "boleap",
        .description = "BO-Leap (Alg. 1): LCB start, K=10 population (sigma 0.3), Adam descents (lr 0.03), CMA-ES update",
        .needs_gradient = true, .make = [] { return make_boleap(); }, .make_with = make_boleap_with,
-       .knobs = knob_keys(boleap_knobs, BoLeapConfig{})},
+       .knobs = knob_keys(boleap_knobs, BoLeapConfig{}),
+       .costs = {.family = "gp (episodes + GP time)", .own_seconds = boleap_own_seconds}},
       {.name = "nlopt-lbfgs", .description = "NLopt LD_LBFGS (Luksan) from the centre, then random restarts",
        .needs_gradient = true, .make = [] { return make_nlopt_lbfgs(); }, .seed_use = SeedUse::late,
        .typical_seed_free_share = 0.12},
@@ -54,10 +58,14 @@ const std::vector<OptimizerEntry>& optimizer_entries() {
        .make = [] { return make_nlopt_direct_l(); }, .seed_use = SeedUse::late, .typical_seed_free_share = 0.91},
       {.name = "nlopt-crs2", .description = "NLopt GN_CRS2_LM, restarts with a new random population",
        .make = [] { return make_nlopt_crs2(); }},
+      // the learners' own seconds per decision: tests/perf/bench_rl on cartpole3 (ppo 241 us acting
+      // and its amortised update, sac one 7.3 ms gradient step per decision)
       {.name = "ppo", .description = "PPO (Stable-Baselines3 defaults, 3 x 64 tanh MLPs), sparse reward -loss; RL envs only",
-       .make = [] { return make_ppo(); }, .needs_rl = true},
+       .make = [] { return make_ppo(); }, .needs_rl = true,
+       .costs = {.family = "rl (learner per decision)", .learner_s_per_decision = 2.41e-4}},
       {.name = "sac", .description = "SB3 SAC defaults, 3x64 ReLU MLPs, sparse reward -loss at the last decision",
-       .make = [] { return make_sac(); }, .needs_rl = true},
+       .make = [] { return make_sac(); }, .needs_rl = true,
+       .costs = {.family = "rl (learner per decision)", .learner_s_per_decision = 7.3e-3}},
   };
   return entries;
 }

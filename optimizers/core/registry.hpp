@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "optimizers/core/knobs.hpp"
+#include "optimizers/core/optimizer_costs.hpp"
 #include "optimizers/core/optimizer.hpp"
 
 namespace dsb {
@@ -31,6 +32,7 @@ struct OptimizerEntry {
   // the mean share of a 1,000-episode run's episodes before its first draw, measured (README
   // "Sharing across seeds"): what `harness plan` counts as free for a group's later seeds
   double typical_seed_free_share = 0.0;
+  OptimizerCosts costs = {};  // its own work beyond its episodes
 };
 
 const std::vector<OptimizerEntry>& optimizer_entries();

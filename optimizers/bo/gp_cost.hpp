@@ -1,0 +1,31 @@
+#pragma once
+// The GP optimizers' own seconds per run, for `harness plan` (optimizers/core/optimizer_costs.hpp),
+// on one core of the reference machine (README "Performance").
+#include <cstdint>
+
+#include "optimizers/bo/bo.hpp"
+
+namespace dsb {
+
+// bo: its fits follow BoConfig's schedule (after every point up to refit_every_until, then at
+// every refit_growth of growth); a fit evaluates the likelihood kBoEvaluationsPerFit times (L-BFGS
+// from fit_attempts starts), each a Cholesky factorization and an inverse, O(n^3), and gradients
+// O(n^2 d). Seconds = evaluations x (kBoSecondsPerN3 n^3 + kBoSecondsPerN2D n^2 d) summed over the
+// fits, which also covers the acquisitions between them. The constants come from 300-episode runs
+// on sphere-10, ackley-10, rastrigin-10 and cartpole1 (likelihood_evaluations and likelihood_n3 in
+// the runs' diagnostics: 3,151 to 4,661 evaluations, 6 to 30 s). How many evaluations a fit takes
+// depends on the loss (a smooth one takes more): the model is a typical run's, within a factor of
+// about 2; a database's own done runs make `harness plan` exact (measured walls).
+inline constexpr double kBoEvaluationsPerFit = 80.0;
+inline constexpr double kBoSecondsPerN3 = 1.09e-9;
+inline constexpr double kBoSecondsPerN2D = 1.7e-9;
+double bo_own_seconds(int dim, std::int64_t budget, const BoConfig& cfg = {});
+// the fits of that schedule over a run (a run's diagnostics count the same as gp_fits)
+int bo_fits(int dim, std::int64_t budget, const BoConfig& cfg = {});
+
+// boleap: its GP is fitted once per leap (about every 100 episodes); the runs' own time measured at
+// 1,000 episodes (12.6 s at 10-D, about 200 s at 400-D, linear in between), scaled by
+// (budget / 1,000)^2 (the fits grow with the points the GP holds).
+double boleap_own_seconds(int dim, std::int64_t budget);
+
+}  // namespace dsb
