@@ -14,11 +14,13 @@
 namespace dsb {
 
 void BoLeapConfig::validate() const {
-  if (population < 2) throw ConfigError("boleap", "population", "must be >= 2");
+  if (population < 1) throw ConfigError("boleap", "population", "must be >= 1 (1: the ablation without samples)");
   if (!(sigma0 > 0.0 && std::isfinite(sigma0))) throw ConfigError("boleap", "sigma0", "must be finite and > 0");
   if (max_descent_steps < 1) throw ConfigError("boleap", "max_descent_steps", "must be >= 1");
   if (patience < 1) throw ConfigError("boleap", "patience", "must be >= 1");
   if (episodes_per_leap < 1) throw ConfigError("boleap", "episodes_per_leap", "must be >= 1");
+  if (leap_iterations < 0) throw ConfigError("boleap", "leap_iterations", "must be >= 0 (0: the leap counts episodes)");
+  if (!(step_size > 0.0 && std::isfinite(step_size))) throw ConfigError("boleap", "step_size", "must be finite and > 0");
   if (elite < 0 || elite > population)
     throw ConfigError("boleap", "elite", "must be in [0, population] (0 = population / 2), got " + std::to_string(elite));
   adam.validate("boleap");
@@ -31,8 +33,13 @@ nlohmann::json BoLeapConfig::to_json() const {
           {"max_descent_steps", max_descent_steps},
           {"patience", patience},
           {"episodes_per_leap", episodes_per_leap},
+          {"leap_iterations", leap_iterations},
           {"elite", elite_count()},
+          {"descent_step", plain_steps ? "plain clipped gradient" : "adam"},
+          {"step_size", step_size},
           {"adam", adam.to_json()},
+          {"adam_per_leap", adam_per_leap},
+          {"stop_after_non_improving_steps_over", patience},
           {"bo", bo.to_json()}};
 }
 
@@ -66,6 +73,42 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
     simulate((2.0 * sobol.next().array() - 1.0).matrix());
 
   const int K = cfg_.population;
+  // one descent from s, at most J gradient episodes within the leap's episode cap; a step is Adam's
+  // or a plain clipped gradient step
+  auto descend = [&](Eigen::VectorXd& s, Adam& adam, int& spent) {
+    double best = std::numeric_limits<double>::infinity();
+    int stale = 0;
+    stats_.descent_lengths.push_back(0);
+    stats_.stale_stops.push_back(0);
+    stats_.descent_leap.push_back(stats_.leaps - 1);
+    stats_.descent_first_loss.push_back(std::numeric_limits<double>::quiet_NaN());
+    stats_.descent_best_loss.push_back(std::numeric_limits<double>::quiet_NaN());
+    int& steps = stats_.descent_lengths.back();
+    const bool capped = cfg_.leap_iterations == 0;
+    while (steps < cfg_.max_descent_steps && (!capped || spent < cfg_.episodes_per_leap)) {
+      const double loss = simulate_with_grad(s);
+      ++spent;
+      ++steps;
+      if (steps == 1) stats_.descent_first_loss.back() = loss;
+      if (loss < best) {
+        best = loss;
+        stats_.descent_best_loss.back() = best;
+        stale = 0;
+      } else if (++stale > cfg_.patience) {  // stagnated or increased for more than `patience` steps
+        stats_.stale_stops.back() = 1;
+        break;
+      }
+      if (!std::isfinite(loss)) break;  // failed episode: the descent ends here
+      std::span<double> sx(s.data(), d);
+      if (cfg_.plain_steps) {
+        // x <- clip(x - alpha g, -1, 1): the paper's gradient step, clipped to stay in the box
+        for (int i = 0; i < d; ++i) s[i] = std::clamp(s[i] - cfg_.step_size * grad[i], -1.0, 1.0);
+      } else {
+        adam.step(sx, grad);
+      }
+    }
+  };
+
   for (;;) {
     // global level: BO picks the start of the next leap
     model.refit(rng);
@@ -75,12 +118,24 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
     ++stats_.leaps;
     stats_.leap_episodes.push_back(0);
     int& spent = stats_.leap_episodes.back();
+    Adam leap_adam(cfg_.adam, d);  // one Adam state for the whole leap (adam_per_leap)
+
+    if (K == 1) {
+      // the ablation: no search distribution, one descent from BO's proposal
+      Eigen::VectorXd s = start;
+      descend(s, leap_adam, spent);
+      stats_.leap_stops.push_back(CmaStop::none);
+      continue;
+    }
 
     CmaesConfig cma_cfg;
     cma_cfg.sigma0 = cfg_.sigma0;
     CmaState cma(start, cfg_.sigma0, K, cma_cfg);
-    // a local step needs room for K samples and at least one descent step within the leap's cap
-    while (spent + K < cfg_.episodes_per_leap) {
+    // a local iteration needs room for K samples and at least one descent step within the leap's
+    // cap (in episodes), or the leap has its count of local iterations
+    for (int iteration = 0; cfg_.leap_iterations > 0 ? iteration < cfg_.leap_iterations
+                                                     : spent + K < cfg_.episodes_per_leap;
+         ++iteration) {
       // 1. K candidates from N(mu, sigma^2 C), simulated
       std::vector<Eigen::VectorXd> xs(K);
       std::vector<double> fs(K), flat(static_cast<std::size_t>(K) * d);
@@ -115,33 +170,8 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
       const int elite = cfg_.elite_count();
       for (int i = 0; i < elite; ++i) s += xs[order[i]];
       s /= elite;
-      // Adam steps, each one episode with a gradient; stop after `patience` non-improving steps
-      Adam adam(cfg_.adam, d);
-      double best = std::numeric_limits<double>::infinity();
-      int stale = 0;
-      stats_.descent_lengths.push_back(0);
-      stats_.stale_stops.push_back(0);
-      stats_.descent_leap.push_back(stats_.leaps - 1);
-      stats_.descent_first_loss.push_back(std::numeric_limits<double>::quiet_NaN());
-      stats_.descent_best_loss.push_back(std::numeric_limits<double>::quiet_NaN());
-      int& steps = stats_.descent_lengths.back();
-      while (steps < cfg_.max_descent_steps && spent < cfg_.episodes_per_leap) {
-        const double loss = simulate_with_grad(s);
-        ++spent;
-        ++steps;
-        if (steps == 1) stats_.descent_first_loss.back() = loss;
-        if (loss < best) {
-          best = loss;
-          stats_.descent_best_loss.back() = best;
-          stale = 0;
-        } else if (++stale >= cfg_.patience) {
-          stats_.stale_stops.back() = 1;
-          break;
-        }
-        if (!std::isfinite(loss)) break;  // failed episode: the descent ends here
-        std::span<double> sx(s.data(), d);
-        adam.step(sx, grad);
-      }
+      Adam descent_adam(cfg_.adam, d);
+      descend(s, cfg_.adam_per_leap ? leap_adam : descent_adam, spent);
       // 3. mu <- end of the descent; sigma and C by the CMA-ES update driven by that step
       cma.tell(xs, fs, &s);
       if (cma.should_stop()) break;  // the search distribution collapsed: back to BO early
@@ -182,7 +212,10 @@ nlohmann::json BoLeap::diagnostics() const {
     const auto l = static_cast<std::size_t>(leap);
     std::string ended = "budget";
     if (l < s.leap_stops.size())
-      ended = s.leap_stops[l] == CmaStop::none ? "episode_cap" : std::string("cma:") + to_string(s.leap_stops[l]);
+      ended = s.leap_stops[l] != CmaStop::none ? std::string("cma:") + to_string(s.leap_stops[l])
+              : cfg_.population == 1     ? "descent"
+              : cfg_.leap_iterations > 0 ? "iterations"
+                                         : "episode_cap";
     return nlohmann::json{{"episodes", s.leap_episodes[l]}, {"descents", descents},
                           {"descent_steps", steps},         {"stale_stops", stale_in_leap},
                           {"first_loss", first},            {"best_loss", best},
@@ -199,7 +232,9 @@ KnobTable boleap_knobs(BoLeapConfig& cfg) {
   KnobTable t("boleap");
   t.add("population", &cfg.population).add("sigma0", &cfg.sigma0);
   t.add("max_descent_steps", &cfg.max_descent_steps).add("patience", &cfg.patience);
-  t.add("episodes_per_leap", &cfg.episodes_per_leap).add("elite", &cfg.elite).add("lr", &cfg.adam.lr);
+  t.add("episodes_per_leap", &cfg.episodes_per_leap).add("leap_iterations", &cfg.leap_iterations);
+  t.add("elite", &cfg.elite).add("lr", &cfg.adam.lr);
+  t.add("plain_steps", &cfg.plain_steps).add("step_size", &cfg.step_size).add("adam_per_leap", &cfg.adam_per_leap);
   return t;
 }
 

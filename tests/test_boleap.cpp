@@ -1,11 +1,13 @@
-// `boleap` mechanics: every simulated point reaches the GP, the stagnation stop, the per-leap
-// episode cap, exact budget use, determinism, refusal without gradients, and the CMA-ES update
-// driven by the descent's end.
+// `boleap` mechanics: every simulated point reaches the GP, the paper's stagnation stop, the
+// per-leap episode cap, the knobs for what the paper leaves open (leap length in local iterations,
+// plain clipped gradient steps, Adam's state per leap, the ablation without samples), exact budget
+// use, determinism, refusal without gradients, and the CMA-ES update driven by the descent's end.
 #include <cmath>
 #include <numeric>
 
 #include <gtest/gtest.h>
 
+#include "common/error.hpp"
 #include "optimizers/boleap.hpp"
 #include "optimizers/cmaes.hpp"
 #include "tests/support/function_objective.hpp"
@@ -57,8 +59,9 @@ TEST(BoLeap, LeapsRespectTheEpisodeCap) {
   }
 }
 
-TEST(BoLeap, DescentStopsAfterThreeNonImprovingSteps) {
-  // constant loss: the first step sets the best, the next three fail to improve -> 4 steps
+TEST(BoLeap, DescentStopsAfterMoreThanThreeNonImprovingSteps) {
+  // constant loss: the first step sets the best, the next four fail to improve: the paper halts a
+  // descent when the loss "stagnates or increases for more than three steps" -> 5 steps
   FunctionObjective f(
       2, 300, [](std::span<const double>) { return 1.0; },
       [](std::span<const double>, std::span<double> g) {
@@ -68,8 +71,64 @@ TEST(BoLeap, DescentStopsAfterThreeNonImprovingSteps) {
   const BoLeapStats s = run(f, 3);
   ASSERT_GE(s.descent_lengths.size(), 3u);
   for (std::size_t i = 0; i + 1 < s.descent_lengths.size(); ++i) {
-    EXPECT_EQ(s.descent_lengths[i], 4);
+    EXPECT_EQ(s.descent_lengths[i], 5);
     EXPECT_EQ(s.stale_stops[i], 1);
+  }
+}
+
+TEST(BoLeap, TheKnobsForWhatThePaperLeavesOpen) {
+  // leap length in local iterations: 2 iterations of K samples and one descent each per leap
+  {
+    auto f = bowl_objective(3, 400);
+    BoLeapConfig cfg;
+    cfg.leap_iterations = 2;
+    const BoLeapStats s = run(f, 1, cfg);
+    for (std::size_t i = 0; i + 1 < s.leap_episodes.size(); ++i) {
+      int descents = 0, steps = 0;
+      for (std::size_t k = 0; k < s.descent_leap.size(); ++k)
+        if (s.descent_leap[k] == static_cast<int>(i)) ++descents, steps += s.descent_lengths[k];
+      if (s.leap_stops[i] != CmaStop::none) continue;  // a leap CMA-ES ended early
+      EXPECT_EQ(descents, 2) << i;
+      EXPECT_EQ(s.leap_episodes[i], 2 * cfg.population + steps) << i;
+    }
+  }
+  // plain clipped gradient steps: x <- clip(x - alpha g); on f = |x|^2 / 2 from the descent's
+  // start the second iterate is (1 - alpha) times the first
+  {
+    std::vector<std::vector<double>> seen;
+    FunctionObjective f(
+        2, 60, [](std::span<const double> x) { return 0.5 * (x[0] * x[0] + x[1] * x[1]); },
+        [&](std::span<const double> x, std::span<double> g) {
+          seen.emplace_back(x.begin(), x.end());
+          g[0] = x[0];
+          g[1] = x[1];
+          return 0.5 * (x[0] * x[0] + x[1] * x[1]);
+        });
+    BoLeapConfig cfg;
+    cfg.plain_steps = true;
+    cfg.step_size = 0.25;
+    run(f, 2, cfg);
+    ASSERT_GE(seen.size(), 2u);
+    EXPECT_DOUBLE_EQ(seen[1][0], 0.75 * seen[0][0]);
+    EXPECT_DOUBLE_EQ(seen[1][1], 0.75 * seen[0][1]);
+  }
+  // the ablation: population 1, every leap one descent from BO's proposal, no samples
+  {
+    auto f = bowl_objective(3, 300);
+    BoLeapConfig cfg;
+    cfg.population = 1;
+    const BoLeapStats s = run(f, 4, cfg);
+    EXPECT_EQ(static_cast<int>(s.descent_lengths.size()), s.leaps);
+    EXPECT_EQ(f.gradient_episodes(), f.used() - cfg.bo.initial_points_for(3));
+  }
+  // Adam's state across one leap's descents changes the trajectory (same seed)
+  {
+    auto a = bowl_objective(3, 300), b = bowl_objective(3, 300);
+    BoLeapConfig per_leap;
+    per_leap.adam_per_leap = true;
+    run(a, 5);
+    run(b, 5, per_leap);
+    EXPECT_NE(a.losses(), b.losses());
   }
 }
 
@@ -141,13 +200,19 @@ TEST(BoLeapCma, MovedMeanDrivesThePathsAndTheMean) {
 
 TEST(BoLeapConfigTest, ValidationNamesTheField) {
   BoLeapConfig cfg;
-  cfg.population = 1;
+  cfg.population = 0;
   try {
     BoLeap opt(cfg);
     FAIL();
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("population"), std::string::npos) << e.what();
   }
+  cfg = {};
+  cfg.step_size = -0.1;
+  EXPECT_THROW(BoLeap{cfg}, ConfigError);
+  cfg = {};
+  cfg.leap_iterations = -1;
+  EXPECT_THROW(BoLeap{cfg}, ConfigError);
 }
 
 }  // namespace

@@ -51,8 +51,9 @@ TEST(KnobTable, SetsNumbersIntegersAndFlags) {
 }
 
 TEST(KnobTable, ErrorsNameTheKnobAndTheValue) {
-  EXPECT_EQ(error_of("boleap", {{"sigma", "1"}}).find("boleap: unknown knob 'sigma' (knobs: elite, episodes_per_leap, lr, "
-                                                     "max_descent_steps, patience, population, sigma0)"),
+  EXPECT_EQ(error_of("boleap", {{"sigma", "1"}}).find("boleap: unknown knob 'sigma' (knobs: adam_per_leap, elite, episodes_per_leap, "
+                                                     "leap_iterations, lr, max_descent_steps, patience, plain_steps, "
+                                                     "population, sigma0, step_size)"),
             0u);
   EXPECT_NE(error_of("boleap", {{"patience", "2.5"}}).find("wants an integer, got '2.5'"), std::string::npos);
   EXPECT_NE(error_of("boleap", {{"sigma0", "nan"}}).find("wants a finite number, got 'nan'"), std::string::npos);
