@@ -5,12 +5,10 @@
 #
 #   scripts/knob-study.sh OUTDIR [--envs E1,E2] [--seeds N] [--only REGEX] [--jobs J] [BUILD_DIR]
 #
-# Each (env, variant) runs into OUTDIR/parts/ENV__VARIANT.sqlite (one writer per file, J at once,
-# cheapest first), then `harness merge` joins them into OUTDIR/knob-study.sqlite (runs keep their
-# resolved configs: variants differ by opt_config_hash; OUTDIR/variants.csv names each config hash
-# by its variant) and scripts/knob_study_table.py writes
-# OUTDIR/knob_study.csv (median, quartiles, wins against the default per env and variant).
-# Interrupted? Run the same command again: every part resumes.
+# Each (env, variant) runs into OUTDIR/parts/ENV__VARIANT.sqlite (scripts/lib/variant-study.sh: one
+# writer per file, J at once, cheapest first), merged into OUTDIR/knob-study.sqlite, and
+# scripts/knob_study_table.py writes OUTDIR/knob_study.csv (median, quartiles, wins against the
+# default per env and variant). Interrupted? Run the same command again: every part resumes.
 #
 # Envs and budgets (chosen here): cartpole1, cartpole3, rastrigin-10 at 1,000 episodes; the
 # particle task is fluid-h10 (fluid at 10 env steps, 80 substeps, all 10 parameters active) at
@@ -27,26 +25,8 @@
 # plus the pair the study chose as BO-Leap's default (sigma0 0.3 and lr 0.03; RandDescents' chosen
 # default is its lr=0.03 variant).
 set -euo pipefail
-root=$(cd "$(dirname "$0")/.." && pwd)
-out=${1:?usage: knob-study.sh OUTDIR [--envs E1,E2] [--seeds N] [--only REGEX] [--jobs J] [BUILD_DIR]}
-shift
+study=knob-study
 envs="rastrigin-10,cartpole1,cartpole3,fluid-h10"
-seeds=5
-only='.'
-jobs=2
-build=$root/build
-while (($#)); do
-  case $1 in
-    --envs) envs=$2; shift 2 ;;
-    --seeds) seeds=$2; shift 2 ;;
-    --only) only=$2; shift 2 ;;
-    --jobs) jobs=$2; shift 2 ;;
-    *) build=$1; shift ;;
-  esac
-done
-harness=$build/bin/harness
-[[ -x $harness ]] || { echo "knob-study: no harness at $harness" >&2; exit 2; }
-mkdir -p "$out/parts"
 
 budget_of() { case $1 in fluid-h*) echo 200 ;; *) echo 1000 ;; esac; }
 
@@ -74,8 +54,8 @@ variants=(
   "boleap.sigma0=0.3+lr=0.03|boleap|--set boleap.sigma0=0.3 --set boleap.lr=0.03"
 )
 
-# one line per part, cheapest first: the cheap envs, then the particle task, then the 400-D and
-# 200-D cartpoles' BO-Leap variants (their GP refits are most of the study's time)
+# cheapest first: the cheap envs, then the particle task, then the 400-D and 200-D cartpoles'
+# BO-Leap variants (their GP refits are most of the study's time)
 cost_rank() {
   case $1:$2 in
     rastrigin-10:*) echo 0 ;;
@@ -84,42 +64,7 @@ cost_rank() {
     *) echo 2 ;;
   esac
 }
-parts=()
-IFS=, read -ra env_list <<<"$envs"
-for env in "${env_list[@]}"; do
-  for v in "${variants[@]}"; do
-    IFS='|' read -r label opt flags <<<"$v"
-    [[ $label =~ $only ]] || continue
-    parts+=("$(cost_rank "$env" "$label")|$env|$label|$opt|$flags")
-  done
-done
-mapfile -t parts < <(printf '%s\n' "${parts[@]}" | sort -t'|' -k1,1n -s)
-echo "knob-study: ${#parts[@]} parts (env x variant), $seeds seeds, $jobs at once, into $out"
 
-run_part() {
-  IFS='|' read -r _ env label opt flags <<<"$1"
-  # shellcheck disable=SC2086
-  # exit 3: some runs failed, which are results (stored with their errors), not a crash
-  "$harness" --env "$env" --optimizer "$opt" $flags --seeds "$seeds" --budget "$(budget_of "$env")" \
-    --jobs 1 --quiet --db "$out/parts/${env}__${label}.sqlite" || (($? == 3)) && echo "  done: $env $label"
-}
-# the variants' names by config hash, for the table
-label_parts() {
-  for v in "${variants[@]}"; do
-    IFS='|' read -r label opt _ <<<"$v"
-    [[ $label == reference ]] && continue
-    for f in "$out"/parts/*__"$label".sqlite; do
-      [[ -e $f ]] || continue
-      sqlite3 -readonly "$f" "SELECT DISTINCT opt_config_hash FROM runs" | sed "s/\$/,$label/"
-    done
-  done | sort -u
-}
-export -f run_part budget_of
-export harness seeds out
-printf '%s\n' "${parts[@]}" | xargs -d '\n' -P "$jobs" -I{} bash -c 'run_part "$@"' _ {}
-
-rm -f "$out/knob-study.sqlite"
-"$harness" merge --into "$out/knob-study.sqlite" "$out"/parts/*.sqlite
-{ echo "opt_config_hash,variant"; label_parts; } >"$out/variants.csv"
-/usr/bin/python3 "$root/scripts/knob_study_table.py" "$out/knob-study.sqlite" --variants "$out/variants.csv" \
-  --out "$out/knob_study.csv"
+# shellcheck source=scripts/lib/variant-study.sh
+source "$(dirname "$0")/lib/variant-study.sh"
+variant_study "$@"
