@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "envs/mpm/grid.hpp"
+#include "envs/mpm/lane_path.hpp"
 #include "envs/mpm/mpm_model.hpp"
 #include "envs/mpm/primitive.hpp"
 
@@ -79,6 +80,7 @@ struct MpmWorkspace {
   std::vector<AdvectionAdjoint> advection;  // per particle, within one substep's reverse
   std::vector<PoseAdjoint> pose_adj;
   GridAdjoint grid_adj;
+  LanePath lanes = default_lane_path();  // the code of the per-particle phases (same bits on every path)
   PhaseTimes* phase_times = nullptr;  // not owned
   EpisodeObserver* observer = nullptr;  // not owned; run_episode calls it when set (render only)
 
