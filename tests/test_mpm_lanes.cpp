@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include "common/parallel.hpp"
@@ -21,6 +22,8 @@ namespace dsb {
 namespace {
 
 using mpm::LanePath;
+using mpm::Mat3;
+using mpm::Vec3;
 
 // What an episode leaves: the final particles and loss of a forward episode, and the loss and
 // every gradient of a gradient episode.
@@ -39,29 +42,78 @@ const mpm::MpmModel& scene() {
   return m;
 }
 
-std::vector<double> actions() {
+// F of a random state: near the identity, stretched and rotated (plastic flow), a singular
+// value below the return mapping's floor of 0.05, inverted (det < 0), or zero
+Mat3 random_deformation(Rng& rng) {
+  Mat3 n;
+  for (int i = 0; i < 9; ++i) n(i) = rng.normal();
+  const Eigen::Quaterniond q(rng.normal(), rng.normal(), rng.normal(), rng.normal());
+  const Mat3 R = q.normalized().toRotationMatrix();
+  switch (rng.below(5)) {
+    case 0: return Mat3::Identity() + 0.01 * n;
+    case 1: return R * Vec3(rng.uniform(0.3, 3.0), rng.uniform(0.3, 3.0), rng.uniform(0.3, 3.0)).asDiagonal() * n;
+    case 2: return R * Vec3(rng.uniform(0.5, 1.5), rng.uniform(0.001, 0.06), rng.uniform(0.5, 1.5)).asDiagonal();
+    case 3: return R * Vec3(1.1, 0.9, -rng.uniform(0.5, 1.2)).asDiagonal();
+    default: return Mat3::Zero();
+  }
+}
+
+// Random states: 3,000 particles in bodies of 1 to 11 that cycle through a plastic material that
+// flows at small strains, one that hardly flows, an elastic one and a fluid, so that every chunk
+// of lanes mixes materials; random v, C, F (random_deformation) and J.
+const mpm::MpmModel& random_scene() {
+  static const mpm::MpmModel m = [] {
+    auto m = testing::empty_model(32, 1.0 / 32, 4e-4, 2, Vec3(0.0, -5.0, 0.0));
+    m.materials = {testing::plastic(400.0, 0.2, 4.0), testing::plastic(5e3, 0.2, 500.0), testing::elastic(300.0, 0.3),
+                   testing::fluid(200.0, 0.05)};
+    Rng rng(17);
+    for (int begin = 0; begin < 3000;) {
+      const int size = 1 + static_cast<int>(rng.below(11));
+      for (int i = 0; i < size; ++i) {
+        mpm::Particle p;
+        p.x = Vec3(rng.uniform(0.3, 0.7), rng.uniform(0.3, 0.7), rng.uniform(0.3, 0.7));
+        m.initial.push_back(p);
+      }
+      const int material = static_cast<int>(m.bodies.size() % m.materials.size());
+      m.bodies.push_back({"body", material, begin, begin + size, 1.0 / (64.0 * 64.0 * 64.0)});
+      begin += size;
+    }
+    m.finalize("test");
+    for (auto& p : m.initial) {
+      p.v = Vec3(rng.normal(), rng.normal(), rng.normal());
+      for (int i = 0; i < 9; ++i) p.C(i) = 2.0 * rng.normal();
+      p.F = random_deformation(rng);
+      p.J = rng.uniform(0.8, 1.2);
+    }
+    return m;
+  }();
+  return m;
+}
+
+std::vector<double> actions(const mpm::MpmModel& m, int env_steps) {
   Rng rng(43);
-  std::vector<double> a(static_cast<std::size_t>(kEnvSteps) * scene().action_dim());
+  std::vector<double> a(static_cast<std::size_t>(env_steps) * m.action_dim());
   for (auto& v : a) v = rng.uniform(-1.0, 1.0);
   return a;
 }
 
-EpisodeBits run(LanePath path, int threads) {
-  const auto& m = scene();
+EpisodeBits run(const mpm::MpmModel& m, int env_steps, LanePath path, int threads) {
   const testing::SmoothObjective objective;
   ThreadTeam team(threads);
   mpm::MpmWorkspace ws(m);
   ws.lanes = path;
-  const auto a = actions();
+  const auto a = actions(m, env_steps);
   EpisodeBits r;
-  r.loss = mpm::run_episode(m, ws, team, a, kEnvSteps, objective);
+  r.loss = mpm::run_episode(m, ws, team, a, env_steps, objective);
   r.particles = ws.particles;
   r.action_grad.resize(a.size());
-  r.grad_loss = mpm::run_episode_with_grad(m, ws, team, a, kEnvSteps, objective, r.action_grad);
+  r.grad_loss = mpm::run_episode_with_grad(m, ws, team, a, env_steps, objective, r.action_grad);
   r.state_grad = ws.adj;
   r.pose_grad = ws.pose_adj;
   return r;
 }
+
+EpisodeBits run(LanePath path, int threads) { return run(scene(), kEnvSteps, path, threads); }
 
 template <class T>
 std::string_view bytes(const std::vector<T>& v) {
@@ -117,6 +169,15 @@ TEST(MpmLanes, Avx2PathGivesTheScalarBits) {
   if (!mpm::lane_path_available(LanePath::avx2)) GTEST_SKIP() << "this CPU has no AVX2: only the SSE2 lanes run here";
   expect_same_bits(run(LanePath::avx2, 1), scalar_bits(), "avx2, 1 thread");
   expect_same_bits(run(LanePath::avx2, 2), scalar_bits(), "avx2, 2 threads");
+}
+
+// Each path from random states: one env step of two substeps, forward and gradient.
+TEST(MpmLanes, EveryPathGivesTheScalarBitsFromRandomStates) {
+  const EpisodeBits want = run(random_scene(), 1, LanePath::scalar, 1);
+  ASSERT_TRUE(std::isfinite(want.loss));
+  ASSERT_TRUE(std::isfinite(want.grad_loss));
+  expect_same_bits(run(random_scene(), 1, LanePath::sse2, 1), want, "sse2");
+  if (mpm::lane_path_available(LanePath::avx2)) expect_same_bits(run(random_scene(), 1, LanePath::avx2, 1), want, "avx2");
 }
 
 TEST(MpmLanes, PathsByName) {

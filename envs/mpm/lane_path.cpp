@@ -1,5 +1,7 @@
 #include "envs/mpm/lane_path.hpp"
 
+#include "envs/mpm/lane_chunks.hpp"
+
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -49,6 +51,15 @@ std::optional<LanePath> parse_lane_path(std::string_view name) {
 bool lane_path_available(LanePath path) { return path != LanePath::avx2 || cpu_has_avx2(); }
 
 LanePath best_lane_path() { return cpu_has_avx2() ? LanePath::avx2 : LanePath::sse2; }
+
+const LaneKernels* lane_kernels(LanePath path) {
+  switch (path) {
+    case LanePath::scalar: return nullptr;
+    case LanePath::sse2: return &sse2_lane_kernels();
+    case LanePath::avx2: return cpu_has_avx2() ? &avx2_lane_kernels() : nullptr;
+  }
+  return nullptr;
+}
 
 LanePath default_lane_path() {
   static const LanePath path = read_environment();

@@ -6,6 +6,7 @@
 
 #include "common/parallel.hpp"
 #include "envs/mpm/kernel.hpp"
+#include "envs/mpm/substep_lanes.hpp"
 
 namespace dsb::mpm {
 
@@ -267,7 +268,11 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
   }
   bin_particles(model, bins, team, ws.particles);
   clock.lap(&PhaseTimes::bin);
-  stress_phase(model, ws, team, tape);
+  const LaneKernels* lanes = lane_kernels(ws.lanes);
+  if (lanes)
+    stress_phase_lanes(model, ws, team, tape, *lanes);
+  else
+    stress_phase(model, ws, team, tape);
   clock.lap(&PhaseTimes::stress);
   clear_blocks(model.layout, bins.active, ws.grid, team);
   clock.lap(&PhaseTimes::bin);

@@ -1,0 +1,17 @@
+#pragma once
+// The phases of a substep (substep.hpp) on the lanes path (lane_path.hpp): the same work as the
+// scalar phases of substep.cpp and substep_adjoint.cpp, with the per-particle arithmetic in the
+// kernels of lane_chunks.hpp, and the same bits.
+#include "common/thread_team.hpp"
+#include "envs/mpm/lane_chunks.hpp"
+#include "envs/mpm/mpm_model.hpp"
+#include "envs/mpm/mpm_workspace.hpp"
+
+namespace dsb::mpm {
+
+// substep.cpp's stress phase: A_p and the new F (solids, in chunks of kLaneChunk) or J (fluids,
+// one at a time as on the scalar path) of every particle; the SVD records when tape is given.
+void stress_phase_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, SubstepTape* tape,
+                        const LaneKernels& kernels);
+
+}  // namespace dsb::mpm
