@@ -109,17 +109,23 @@ void particle_balanced_part(const ParticleBins& bins, const std::vector<int>& un
 // fn(p) for every particle, colour by colour; within a colour each thread takes its particle-
 // balanced part of the units, each unit's particles in ascending order. The one loop of every
 // scatter into the grid (P2G, G2P^T): fn may add to the nodes of p's stencil without atomics.
-template <class Fn>
-void for_each_particle_by_colour(const ParticleBins& bins, ThreadTeam& team, Fn&& fn) {
+// done(t) runs on thread t after its part of each colour (the lanes path finishes a chunk there).
+template <class Fn, class Done>
+void for_each_particle_by_colour(const ParticleBins& bins, ThreadTeam& team, Fn&& fn, Done&& done) {
   for (int c = 0; c < kColours; ++c) {
     const std::vector<int>& units = bins.by_colour[c];
     team.run_per_thread([&](int t) {
       std::int64_t first, last;
       particle_balanced_part(bins, units, t, team.size(), first, last);
       for (std::int64_t uu = first; uu < last; ++uu)
-        for (int o = bins.unit_begin[units[uu]]; o < bins.unit_begin[units[uu] + 1]; ++o) fn(bins.order[o]);
+        for (int o = bins.unit_begin[units[uu]]; o < bins.unit_begin[units[uu] + 1]; ++o) fn(bins.order[o], t);
+      done(t);
     });
   }
+}
+template <class Fn>
+void for_each_particle_by_colour(const ParticleBins& bins, ThreadTeam& team, Fn&& fn) {
+  for_each_particle_by_colour(bins, team, [&](int p, int) { fn(p); }, [](int) {});
 }
 
 // Zeroes mq (GridFields) or v (GridAdjoint) on the nodes of the given blocks.

@@ -33,10 +33,38 @@ struct SolidChunk {
   double args[3][kLaneChunk], values[3][kLaneChunk], flow[kLaneChunk];
 };
 
+// The grid as the transfers see it (kernel.hpp's make_stencil, substep.cpp's P2G and G2P).
+struct TransferGrid {
+  double dx = 0.0, inv_dx = 0.0, dt = 0.0;
+  double stencil_low[3] = {}, stencil_top[3] = {};  // the base's clamp, in position units (-pad, n - 3 - pad)
+  int pad = 0;
+  int n1 = 0, n2 = 0;  // nodes along y and z: node (i, j, k) is (i n1 + j) n2 + k
+  double clamp_low = 0.0, clamp_high[3] = {};  // the particles' positions after advection
+};
+
+// The particles of one P2G or G2P chunk (in the order the scalar loop takes them) and their
+// quadratic B-spline stencils.
+struct TransferChunk {
+  int count = 0;
+  // in: position, and for P2G velocity, affine momentum A and mass
+  double x[3][kLaneChunk], v[3][kLaneChunk], A[9][kLaneChunk], mass[kLaneChunk];
+  // the stencil: base node in position units (node index = base + pad), x / dx - base, weights
+  // w[axis][offset] and their derivatives
+  double base[3][kLaneChunk], fx[3][kLaneChunk], w[3][3][kLaneChunk], dw[3][3][kLaneChunk];
+  // P2G: m v - dx A fx, and dx A
+  double base_term[3][kLaneChunk], dxA[9][kLaneChunk];
+  // G2P out: velocity, C and the advected, clamped position
+  double v_new[3][kLaneChunk], C_new[9][kLaneChunk], x_new[3][kLaneChunk];
+};
+
 struct LaneKernels {
   // the solid update of every lane: F_tmp = (I + dt C) F, its SVD, the return mapping, F_new,
   // the Kirchhoff stress and A
   void (*solid_stress)(SolidChunk& chunk, double dt);
+  // P2G of the chunk's particles, one after another into the grid's (q, m) (4 doubles a node)
+  void (*p2g)(TransferChunk& chunk, const TransferGrid& grid, double* mq);
+  // G2P of the chunk's particles from the grid's velocities (3 doubles a node)
+  void (*g2p)(TransferChunk& chunk, const TransferGrid& grid, const double* v);
 };
 
 // the table of an instruction set; LanePath::scalar has none (nullptr)

@@ -21,13 +21,15 @@
 #endif
 #define DSB_LANES_AVX2 1
 #include "envs/mpm/lanes.hpp"
+#include "envs/mpm/eigen_order.hpp"
 #include "envs/mpm/svd3_kernel.hpp"
 #include "envs/mpm/stress_lanes.hpp"
+#include "envs/mpm/transfer_lanes.hpp"
 
 namespace dsb::mpm {
 
 const LaneKernels& avx2_lane_kernels() {
-  static const LaneKernels kernels{&solid_stress_chunk<Pack<F4>>};
+  static const LaneKernels kernels{&solid_stress_chunk<Pack<F4>>, &p2g_chunk<Pack<F4>>, &g2p_chunk<Pack<F4>>};
   return kernels;
 }
 

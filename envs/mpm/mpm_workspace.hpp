@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "envs/mpm/grid.hpp"
+#include "envs/mpm/lane_chunks.hpp"
 #include "envs/mpm/lane_path.hpp"
 #include "envs/mpm/mpm_model.hpp"
 #include "envs/mpm/primitive.hpp"
@@ -81,6 +82,7 @@ struct MpmWorkspace {
   std::vector<PoseAdjoint> pose_adj;
   GridAdjoint grid_adj;
   LanePath lanes = default_lane_path();  // the code of the per-particle phases (same bits on every path)
+  std::vector<TransferChunk> lane_chunks;  // the lanes path's P2G chunks, one per thread
   PhaseTimes* phase_times = nullptr;  // not owned
   EpisodeObserver* observer = nullptr;  // not owned; run_episode calls it when set (render only)
 

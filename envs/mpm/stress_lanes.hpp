@@ -4,11 +4,12 @@
 // (material.cpp) and A = -(4 dt V / dx^2) tau + m C. It follows that scalar code operation for
 // operation, in the same order, so each lane gives the bits of the scalar path on its particle
 // (tests/test_mpm_lanes.cpp compares them on random states and on whole episodes). Where the
-// scalar code is an Eigen expression, the order is Eigen's, as eigen_product_sum says.
+// scalar code is an Eigen expression, the order is Eigen's (eigen_order.hpp).
 //
 // Include only inside a lanes translation unit (lanes_sse2.cpp, lanes_avx2.cpp), after the
 // headers below have been included outside any target pragma.
 #include "common/det_math.hpp"
+#include "envs/mpm/eigen_order.hpp"
 #include "envs/mpm/lane_chunks.hpp"
 #include "envs/mpm/lanes.hpp"
 #include "envs/mpm/material.hpp"
@@ -16,24 +17,6 @@
 
 namespace dsb::mpm {
 namespace {
-
-// The entry (row, .) of a 3x3 product as Eigen 3.4 evaluates it in the portable (SSE2) build,
-// t_k = lhs(row, k) rhs(k, .). Where the product initialises a matrix (construction, return
-// value) or is part of a larger expression: rows 0 and 1 are one SSE2 packet accumulated left to
-// right, (t0 + t1) + t2, and row 2 a scalar reduction, which Eigen's unroller splits in halves,
-// t0 + (t1 + t2) (eigen_product_sum). Where it is assigned to an existing matrix (operator=,
-// which assumes aliasing and goes through a temporary), every row is a scalar reduction,
-// t0 + (t1 + t2) (eigen_assigned_product_sum). Eigen folds a scalar factor of a product into its
-// left operand: s * (X * Y) is computed as (s X) * Y. (Measured against Eigen on random
-// matrices; the tests compare every use with the scalar code.)
-template <class T>
-DSB_LANE_INLINE T eigen_product_sum(int row, const T& t0, const T& t1, const T& t2) {
-  return row < 2 ? (t0 + t1) + t2 : t0 + (t1 + t2);
-}
-template <class T>
-DSB_LANE_INLINE T eigen_assigned_product_sum(const T& t0, const T& t1, const T& t2) {
-  return t0 + (t1 + t2);
-}
 
 // std::max(x, floor) as the scalar code computes it: x < floor ? floor : x
 template <class T>

@@ -276,7 +276,10 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
   clock.lap(&PhaseTimes::stress);
   clear_blocks(model.layout, bins.active, ws.grid, team);
   clock.lap(&PhaseTimes::bin);
-  p2g(model, ws, bins, team);
+  if (lanes)
+    p2g_lanes(model, ws, bins, team, *lanes);
+  else
+    p2g(model, ws, bins, team);
   clock.lap(&PhaseTimes::p2g);
   // 4. kinematics pose f -> f + 1 and the contact frames
   const int np = static_cast<int>(model.primitives.size());
@@ -291,7 +294,10 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
     tape->grid.save(model.layout, bins.active, ws.grid, team);
     clock.lap(&PhaseTimes::other);
   }
-  g2p(model, ws, team);
+  if (lanes)
+    g2p_lanes(model, ws, team, *lanes);
+  else
+    g2p(model, ws, team);
   for (int pr = 0; pr < np; ++pr) ws.poses[pr] = ws.next_poses[pr];
   clock.lap(&PhaseTimes::g2p);
 }

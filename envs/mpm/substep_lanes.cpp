@@ -1,6 +1,7 @@
 #include "envs/mpm/substep_lanes.hpp"
 
 #include <array>
+#include <vector>
 
 #include "common/parallel.hpp"
 #include "envs/mpm/material.hpp"
@@ -101,6 +102,97 @@ void stress_phase_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& tea
       if (++chunk.count == kLaneChunk) flush();
     }
     if (chunk.count > 0) flush();
+  });
+}
+
+TransferGrid transfer_grid(const MpmModel& model) {
+  const MpmConfig& cfg = model.config;
+  const GridLayout& L = model.layout;
+  TransferGrid g;
+  g.dx = cfg.dx;
+  g.inv_dx = 1.0 / cfg.dx;
+  g.dt = cfg.dt;
+  for (int a = 0; a < 3; ++a) {
+    // as make_stencil (kernel.hpp)
+    g.stencil_low[a] = -static_cast<double>(L.pad);
+    g.stencil_top[a] = static_cast<double>(L.n[a] - 3 - L.pad);
+    g.clamp_high[a] = cfg.clamp_high(a);
+  }
+  g.pad = L.pad;
+  g.n1 = L.n[1];
+  g.n2 = L.n[2];
+  g.clamp_low = cfg.clamp_low();
+  return g;
+}
+
+namespace {
+
+// lanes past the chunk's particles repeat its first particle (finite; their results are not read)
+void pad_transfer(TransferChunk& c, bool with_momentum) {
+  for (int l = c.count; l < kLaneChunk; ++l) {
+    for (int a = 0; a < 3; ++a) c.x[a][l] = c.x[a][0];
+    if (!with_momentum) continue;
+    for (int a = 0; a < 3; ++a) c.v[a][l] = c.v[a][0];
+    for (int e = 0; e < 9; ++e) c.A[e][l] = c.A[e][0];
+    c.mass[l] = c.mass[0];
+  }
+}
+
+}  // namespace
+
+void p2g_lanes(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins, ThreadTeam& team,
+               const LaneKernels& kernels) {
+  const TransferGrid g = transfer_grid(model);
+  double* mq = ws.grid.mq.data()->data();
+  // one chunk per thread, finished at the end of the thread's part of each colour
+  std::vector<TransferChunk>& chunks = ws.lane_chunks;
+  if (chunks.size() < static_cast<std::size_t>(team.size())) chunks.resize(team.size());
+  for (TransferChunk& c : chunks) c.count = 0;
+  auto finish = [&](int t) {
+    TransferChunk& c = chunks[t];
+    if (c.count == 0) return;
+    pad_transfer(c, true);
+    kernels.p2g(c, g, mq);
+    c.count = 0;
+  };
+  for_each_particle_by_colour(
+      bins, team,
+      [&](int p, int t) {
+        TransferChunk& c = chunks[t];
+        const int l = c.count;
+        const Particle& P = ws.particles[p];
+        const Mat3& A = ws.affine[p];
+        for (int a = 0; a < 3; ++a) {
+          c.x[a][l] = P.x[a];
+          c.v[a][l] = P.v[a];
+        }
+        for (int e = 0; e < 9; ++e) c.A[e][l] = A.data()[e];
+        c.mass[l] = model.mass[p];
+        if (++c.count == kLaneChunk) finish(t);
+      },
+      finish);
+}
+
+void g2p_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const LaneKernels& kernels) {
+  const TransferGrid g = transfer_grid(model);
+  const double* gv = ws.grid.v.data()->data();
+  parallel_for_per_thread(team, model.particles(), [&](std::int64_t begin, std::int64_t end) {
+    TransferChunk c;
+    for (std::int64_t first = begin; first < end; first += kLaneChunk) {
+      c.count = static_cast<int>(std::min<std::int64_t>(kLaneChunk, end - first));
+      for (int l = 0; l < c.count; ++l)
+        for (int a = 0; a < 3; ++a) c.x[a][l] = ws.particles[first + l].x[a];
+      pad_transfer(c, false);
+      kernels.g2p(c, g, gv);
+      for (int l = 0; l < c.count; ++l) {
+        Particle& P = ws.particles[first + l];
+        for (int a = 0; a < 3; ++a) {
+          P.v[a] = c.v_new[a][l];
+          P.x[a] = c.x_new[a][l];
+        }
+        for (int e = 0; e < 9; ++e) P.C.data()[e] = c.C_new[e][l];
+      }
+    }
   });
 }
 

@@ -14,4 +14,14 @@ namespace dsb::mpm {
 void stress_phase_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, SubstepTape* tape,
                         const LaneKernels& kernels);
 
+// substep.cpp's P2G (colour by colour, each thread's particles in the scalar order, in chunks)
+void p2g_lanes(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins, ThreadTeam& team,
+               const LaneKernels& kernels);
+
+// substep.cpp's G2P and advection
+void g2p_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const LaneKernels& kernels);
+
+// The grid constants of the transfers, as the scalar code computes them
+TransferGrid transfer_grid(const MpmModel& model);
+
 }  // namespace dsb::mpm
