@@ -46,6 +46,7 @@ struct TransferGrid {
 // quadratic B-spline stencils.
 struct TransferChunk {
   int count = 0;
+  int index[kLaneChunk];  // the particle of each lane, where the caller needs it
   // in: position, and for P2G velocity, affine momentum A and mass
   double x[3][kLaneChunk], v[3][kLaneChunk], A[9][kLaneChunk], mass[kLaneChunk];
   // the stencil: base node in position units (node index = base + pad), x / dx - base, weights
@@ -53,8 +54,26 @@ struct TransferChunk {
   double base[3][kLaneChunk], fx[3][kLaneChunk], w[3][3][kLaneChunk], dw[3][3][kLaneChunk];
   // P2G: m v - dx A fx, and dx A
   double base_term[3][kLaneChunk], dxA[9][kLaneChunk];
-  // G2P out: velocity, C and the advected, clamped position
+  // G2P out: velocity, C and the advected, clamped position (G2P^T in: v_new = the G2P velocity)
   double v_new[3][kLaneChunk], C_new[9][kLaneChunk], x_new[3][kLaneChunk];
+  // G2P^T in: dL/d(x', v', C'); out: the advection's adjoint (x_bar, v_bar), and (4 / dx) C'_bar
+  double adj_x[3][kLaneChunk], adj_v[3][kLaneChunk], adj_C[9][kLaneChunk];
+  double x_bar[3][kLaneChunk], v_bar[3][kLaneChunk], Cs[9][kLaneChunk];
+};
+
+// One particle of the reverse pass's P2G^T gather (substep_adjoint.cpp's particle_adjoint): its
+// stencil, the node terms t = (m v - dx A fx, m) + dx A o and u = v'_bar - dx C_s fx + dx C_s o
+// (o the node offset), and the sums over its 27 nodes.
+struct GatherTerms {
+  int corner = 0;           // node index of offset (0, 0, 0)
+  double w[3][3], dw[3][3];  // the stencil's weights and derivatives, [axis][offset]
+  double t0[4], ad[3][4];   // t at o = 0 and dx A e_k (with a 0 for the mass)
+  double u0[3], cd[3][3];   // u at o = 0 and dx C_s e_k
+};
+struct GatherSums {
+  double x_bar[3];   // sum over nodes of grad w times (q_bar . t + m_bar m + v_n . u)
+  double sum_wq[3];  // sum w q_bar
+  double Mq[9];      // sum w q_bar o^T (column-major)
 };
 
 struct LaneKernels {
@@ -65,6 +84,13 @@ struct LaneKernels {
   void (*p2g)(TransferChunk& chunk, const TransferGrid& grid, double* mq);
   // G2P of the chunk's particles from the grid's velocities (3 doubles a node)
   void (*g2p)(TransferChunk& chunk, const TransferGrid& grid, const double* v);
+  // G2P^T: the advection's adjoint of the chunk's particles and their scatter into the grid's
+  // velocity adjoints (3 doubles a node), one after another
+  void (*g2p_adjoint)(TransferChunk& chunk, const TransferGrid& grid, double* v_bar);
+  // P2G^T: one particle's sums over its nodes from the grid's (q_bar, m_bar) (4 doubles a node)
+  // and velocities (3)
+  void (*p2g_adjoint_gather)(const GatherTerms& terms, const TransferGrid& grid, const double* qm_bar,
+                             const double* v, GatherSums& sums);
 };
 
 // the table of an instruction set; LanePath::scalar has none (nullptr)

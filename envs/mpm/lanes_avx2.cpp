@@ -25,11 +25,13 @@
 #include "envs/mpm/svd3_kernel.hpp"
 #include "envs/mpm/stress_lanes.hpp"
 #include "envs/mpm/transfer_lanes.hpp"
+#include "envs/mpm/adjoint_lanes.hpp"
 
 namespace dsb::mpm {
 
 const LaneKernels& avx2_lane_kernels() {
-  static const LaneKernels kernels{&solid_stress_chunk<Pack<F4>>, &p2g_chunk<Pack<F4>>, &g2p_chunk<Pack<F4>>};
+  static const LaneKernels kernels{&solid_stress_chunk<Pack<F4>>, &p2g_chunk<Pack<F4>>, &g2p_chunk<Pack<F4>>,
+                                   &g2p_adjoint_chunk<Pack<F4>>, &p2g_adjoint_gather<F4>};
   return kernels;
 }
 

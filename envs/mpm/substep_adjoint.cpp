@@ -8,6 +8,7 @@
 #include "common/parallel.hpp"
 #include "envs/mpm/kernel.hpp"
 #include "envs/mpm/substep.hpp"
+#include "envs/mpm/substep_lanes.hpp"
 
 namespace dsb::mpm {
 
@@ -119,6 +120,8 @@ void particle_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
   const GridLayout& L = model.layout;
   const std::vector<Vec3>& gv = ws.grid.v;   // node velocities after the grid update
   const std::vector<Vec4>& qmb = ws.grid.mq;  // now (dL/dq, dL/dm)
+  const LaneKernels* lanes = lane_kernels(ws.lanes);
+  const TransferGrid lane_grid = transfer_grid(model);
   parallel_for_per_thread(team, model.particles(), [&](std::int64_t begin, std::int64_t end) {
     std::array<SolidTape, kSolidBatch> tapes;
     std::array<Mat3, kSolidBatch> F, tau_solid;
@@ -169,7 +172,32 @@ void particle_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
         Vec3 x_bar = Vec3::Zero();
         Vec3 sum_wq = Vec3::Zero();  // sum w q_bar
         Mat3 Mq = Mat3::Zero();      // sum w q_bar o^T
-        for (int i = 0; i < 3; ++i) {
+        if (lanes) {
+          // the same sums on the lanes path (adjoint_lanes.hpp)
+          GatherTerms terms;
+          terms.corner = L.node(s.base[0], s.base[1], s.base[2]);
+          for (int a = 0; a < 3; ++a)
+            for (int o = 0; o < 3; ++o) {
+              terms.w[a][o] = s.w[a][o];
+              terms.dw[a][o] = s.dw[a][o];
+            }
+          const Vec4* ad[3] = {&ad0, &ad1, &ad2};
+          const Vec3* cd[3] = {&cd0, &cd1, &cd2};
+          for (int e = 0; e < 4; ++e) {
+            terms.t0[e] = t0[e];
+            for (int k = 0; k < 3; ++k) terms.ad[k][e] = (*ad[k])[e];
+          }
+          for (int e = 0; e < 3; ++e) {
+            terms.u0[e] = u0[e];
+            for (int k = 0; k < 3; ++k) terms.cd[k][e] = (*cd[k])[e];
+          }
+          GatherSums sums;
+          lanes->p2g_adjoint_gather(terms, lane_grid, qmb.data()->data(), gv.data()->data(), sums);
+          x_bar = Vec3(sums.x_bar[0], sums.x_bar[1], sums.x_bar[2]);
+          sum_wq = Vec3(sums.sum_wq[0], sums.sum_wq[1], sums.sum_wq[2]);
+          for (int e = 0; e < 9; ++e) Mq.data()[e] = sums.Mq[e];
+        }
+        for (int i = 0; i < 3 && !lanes; ++i) {
           const Vec4 ti = t0 + static_cast<double>(i) * ad0;
           const Vec3 ui = u0 + static_cast<double>(i) * cd0;
           for (int j = 0; j < 3; ++j) {
@@ -232,7 +260,10 @@ void substep_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, 
     ws.frames[pr] = contact_frame(spec, tape.poses[pr], ws.next_poses[pr], cfg.dt);
   }
   clock.lap(&PhaseTimes::reverse_grid);
-  g2p_adjoint(model, ws, team, tape, after);
+  if (const LaneKernels* lanes = lane_kernels(ws.lanes))
+    g2p_adjoint_lanes(model, ws, team, tape, after, *lanes);
+  else
+    g2p_adjoint(model, ws, team, tape, after);
   clock.lap(&PhaseTimes::reverse_g2p);
   const ContactAdjointSum contact = grid_update_adjoint(model, ws, tape.bins, team);
   // C. kinematics: pose f+1's adjoint (later substeps + this contact) back to pose f

@@ -173,6 +173,54 @@ void p2g_lanes(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins
       finish);
 }
 
+void g2p_adjoint_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const SubstepTape& tape,
+                       const std::vector<Particle>& after, const LaneKernels& kernels) {
+  const TransferGrid g = transfer_grid(model);
+  double* vb = ws.grid_adj.v.data()->data();
+  std::vector<TransferChunk>& chunks = ws.lane_chunks;
+  if (chunks.size() < static_cast<std::size_t>(team.size())) chunks.resize(team.size());
+  for (TransferChunk& c : chunks) c.count = 0;
+  auto finish = [&](int t) {
+    TransferChunk& c = chunks[t];
+    if (c.count == 0) return;
+    for (int l = c.count; l < kLaneChunk; ++l) {
+      for (int a = 0; a < 3; ++a) {
+        c.x[a][l] = c.x[a][0];
+        c.v_new[a][l] = c.v_new[a][0];
+        c.adj_x[a][l] = c.adj_x[a][0];
+        c.adj_v[a][l] = c.adj_v[a][0];
+      }
+      for (int e = 0; e < 9; ++e) c.adj_C[e][l] = c.adj_C[e][0];
+    }
+    kernels.g2p_adjoint(c, g, vb);
+    for (int l = 0; l < c.count; ++l) {
+      AdvectionAdjoint& adv = ws.advection[c.index[l]];
+      for (int a = 0; a < 3; ++a) {
+        adv.x_bar[a] = c.x_bar[a][l];
+        adv.v_bar[a] = c.v_bar[a][l];
+      }
+    }
+    c.count = 0;
+  };
+  for_each_particle_by_colour(
+      tape.bins, team,
+      [&](int p, int t) {
+        TransferChunk& c = chunks[t];
+        const int l = c.count;
+        c.index[l] = p;
+        const ParticleAdjoint& a = ws.adj[p];
+        for (int d = 0; d < 3; ++d) {
+          c.x[d][l] = tape.before[p].x[d];
+          c.v_new[d][l] = after[p].v[d];
+          c.adj_x[d][l] = a.x[d];
+          c.adj_v[d][l] = a.v[d];
+        }
+        for (int e = 0; e < 9; ++e) c.adj_C[e][l] = a.C.data()[e];
+        if (++c.count == kLaneChunk) finish(t);
+      },
+      finish);
+}
+
 void g2p_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const LaneKernels& kernels) {
   const TransferGrid g = transfer_grid(model);
   const double* gv = ws.grid.v.data()->data();

@@ -21,6 +21,11 @@ void p2g_lanes(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins
 // substep.cpp's G2P and advection
 void g2p_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const LaneKernels& kernels);
 
+// substep_adjoint.cpp's G2P^T: the advection's adjoint of every particle (ws.advection) and the
+// coloured scatter into ws.grid_adj
+void g2p_adjoint_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const SubstepTape& tape,
+                       const std::vector<Particle>& after, const LaneKernels& kernels);
+
 // The grid constants of the transfers, as the scalar code computes them
 TransferGrid transfer_grid(const MpmModel& model);
 
