@@ -7,13 +7,16 @@
 //     history's size (950 states of every particle).
 //   - heap allocations per `fluid` rollout with a reused workspace (fluid-h5, forward and gradient).
 //   - the lanes path (envs/mpm/lane_path.hpp: the best the CPU has, or DSB_MPM_LANES) against the
-//     scalar path, measured in the same run (*Scalar* benchmarks force it), 1 thread.
+//     scalar path, measured in the same run (*Scalar* benchmarks force it), 1 thread; and within
+//     one forward episode whose env steps alternate between the paths, and gradient episodes of
+//     5 env steps taking turns (both paths under the same load: the machine is shared).
 // Benchmarks named *Full* run the whole episode once; the smoke test (filter -Full) runs 1 env
 // step. Ratios print at the end.
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -116,6 +119,69 @@ void BM_ForwardEpisodeScalarFull(benchmark::State& s) {
 void BM_GradientEpisodeScalarFull(benchmark::State& s) {
   run(s, kEnvSteps, true, &gradient_scalar_phases, LanePath::scalar);
 }
+// Alternates the lanes and the scalar path env step by env step within forward episodes (the paths
+// give the same bits, so the trajectory is the one of either) and times each env step: both paths
+// then run under the same load, which matters on a shared machine. Seconds per path in `seconds`.
+class AlternatingPaths : public EpisodeObserver {
+ public:
+  AlternatingPaths(MpmWorkspace& ws, LanePath lanes) : ws_(ws), paths_{lanes, LanePath::scalar} {}
+  void at_step(int step, const std::vector<Particle>&, const std::vector<Pose>&) override {
+    const auto now = std::chrono::steady_clock::now();
+    if (step > 0) seconds[current_] += std::chrono::duration<double>(now - last_).count();
+    current_ = step % 2;
+    ws_.lanes = paths_[current_];
+    last_ = std::chrono::steady_clock::now();
+  }
+  double seconds[2] = {0.0, 0.0};  // lanes, scalar
+
+ private:
+  MpmWorkspace& ws_;
+  LanePath paths_[2];
+  int current_ = 0;
+  std::chrono::steady_clock::time_point last_;
+};
+
+double alternating_lanes_seconds = 0.0, alternating_scalar_seconds = 0.0;
+
+void BM_ForwardAlternatingPathsFull(benchmark::State& state) {
+  const MpmModel& m = scene();
+  const testing::SmoothObjective objective;
+  MpmWorkspace ws(m);
+  AlternatingPaths paths(ws, default_lane_path());
+  ws.observer = &paths;
+  const auto a = actions(kEnvSteps);
+  for (auto _ : state) benchmark::DoNotOptimize(run_episode(m, ws, serial_team(), a, kEnvSteps, objective));
+  const double n = static_cast<double>(state.iterations());
+  alternating_lanes_seconds = paths.seconds[0] / n;
+  alternating_scalar_seconds = paths.seconds[1] / n;
+}
+BENCHMARK(BM_ForwardAlternatingPathsFull)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
+// The same for gradients: gradient episodes of 5 env steps, the paths taking turns, 3 each.
+double alternating_gradient_lanes_seconds = 0.0, alternating_gradient_scalar_seconds = 0.0;
+
+void BM_GradientAlternatingPathsFull(benchmark::State& state) {
+  constexpr int kSteps = 5, kRounds = 3;
+  const MpmModel& m = scene();
+  const testing::SmoothObjective objective;
+  MpmWorkspace ws(m);
+  const auto a = actions(kSteps);
+  std::vector<double> g(a.size());
+  run_episode_with_grad(m, ws, serial_team(), a, kSteps, objective, g);  // size the buffers
+  double seconds[2] = {0.0, 0.0};
+  for (auto _ : state)
+    for (int r = 0; r < 2 * kRounds; ++r) {
+      ws.lanes = r % 2 == 0 ? default_lane_path() : LanePath::scalar;
+      const auto start = std::chrono::steady_clock::now();
+      benchmark::DoNotOptimize(run_episode_with_grad(m, ws, serial_team(), a, kSteps, objective, g));
+      seconds[r % 2] += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+  const double n = static_cast<double>(state.iterations()) * kRounds;
+  alternating_gradient_lanes_seconds = seconds[0] / n;
+  alternating_gradient_scalar_seconds = seconds[1] / n;
+}
+BENCHMARK(BM_GradientAlternatingPathsFull)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
 void BM_ForwardOneEnvStep(benchmark::State& s) { run(s, 1, false, nullptr); }
 void BM_ForwardOneEnvStepScalar(benchmark::State& s) { run(s, 1, false, nullptr, LanePath::scalar); }
 void BM_GradientOneEnvStep(benchmark::State& s) { run(s, 1, true, nullptr); }
@@ -211,6 +277,16 @@ int main(int argc, char** argv) {
     const double substeps = static_cast<double>(kEnvSteps) * scene().config.substeps;
     const char* lanes = lane_path_name(default_lane_path());
     std::printf("\nCPU: %s; lanes path: %s (scalar forced by the *Scalar* benchmarks)\n", cpu_model().c_str(), lanes);
+    if (alternating_lanes_seconds > 0.0)
+      std::printf("forward episode alternating the paths env step by env step (25 each, same load): %s %.2f s, "
+                  "scalar %.2f s: %.2fx\n",
+                  lanes, alternating_lanes_seconds, alternating_scalar_seconds,
+                  alternating_scalar_seconds / alternating_lanes_seconds);
+    if (alternating_gradient_lanes_seconds > 0.0)
+      std::printf("gradient episodes of 5 env steps, the paths taking turns (3 each): %s %.2f s, scalar %.2f s: "
+                  "%.2fx\n",
+                  lanes, alternating_gradient_lanes_seconds, alternating_gradient_scalar_seconds,
+                  alternating_gradient_scalar_seconds / alternating_gradient_lanes_seconds);
     if (step > 0.0 && step_scalar > 0.0)
       std::printf("one env step, %s lanes against scalar: forward %.2fx", lanes, step_scalar / step);
     if (gstep > 0.0 && gstep_scalar > 0.0) std::printf(", gradient %.2fx", gstep_scalar / gstep);
