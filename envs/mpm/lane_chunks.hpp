@@ -28,9 +28,11 @@ struct SolidChunk {
   // out: F_new, A = stress_scale tau + m C, and the SVD of F_tmp (for the tape)
   double F_new[9][kLaneChunk], A[9][kLaneChunk];
   double U[9][kLaneChunk], sigma[3][kLaneChunk], V[9][kLaneChunk];
-  // scratch of the return mapping: the arguments and values of the logarithms and exponentials,
-  // and which lanes flow (1) or not (0)
+  // scratch of the return mapping: the arguments and values of the logarithms and exponentials;
+  // and what the reverse pass needs (material.hpp SolidTape): which lanes flow (1) or not (0),
+  // eps^, |eps^|, k (1 without flow) and the singular values f of F_new
   double args[3][kLaneChunk], values[3][kLaneChunk], flow[kLaneChunk];
+  double hat[3][kLaneChunk], norm[kLaneChunk], k[kLaneChunk], f[3][kLaneChunk];
 };
 
 // The grid as the transfers see it (kernel.hpp's make_stencil, substep.cpp's P2G and G2P).
@@ -76,6 +78,26 @@ struct GatherSums {
   double Mq[9];      // sum w q_bar o^T (column-major)
 };
 
+// The reverse of one substep for the solids of one chunk (substep_adjoint.cpp's particle_adjoint):
+// the stress again from the restored SVD, the P2G^T gather, G2P's position terms and the stress
+// adjoint (material.cpp's solid_update_adjoint).
+struct SolidAdjointChunk {
+  int count = 0;
+  // in: the particles before the substep (C, F, material, scales in `stress`, with U, sigma, V
+  // from restore_svd), their G2P velocities, the advection's adjoint (x_bar, v_bar), dL/dC',
+  // dL/dF'
+  SolidChunk stress;
+  double x[3][kLaneChunk], v[3][kLaneChunk], v_new[3][kLaneChunk];
+  double adv_x[3][kLaneChunk], adv_v[3][kLaneChunk], adj_C[9][kLaneChunk], adj_F[9][kLaneChunk];
+  // scratch: the stencil, the gather's terms (t0 = m v - dx A fx, dx A, u0 = v_bar - dx C_s fx,
+  // dx C_s, C_s = (4 / dx^2) dL/dC') and its sums
+  double base[3][kLaneChunk], fx[3][kLaneChunk], w[3][3][kLaneChunk], dw[3][3][kLaneChunk];
+  double t0[3][kLaneChunk], dxA[9][kLaneChunk], u0[3][kLaneChunk], dxCs[9][kLaneChunk], Cs[9][kLaneChunk];
+  double xg[3][kLaneChunk], sum_wq[3][kLaneChunk], Mq[9][kLaneChunk];
+  // out: dL/d(x, v, C, F) before the substep
+  double out_x[3][kLaneChunk], out_v[3][kLaneChunk], out_C[9][kLaneChunk], out_F[9][kLaneChunk];
+};
+
 struct LaneKernels {
   // the solid update of every lane: F_tmp = (I + dt C) F, its SVD, the return mapping, F_new,
   // the Kirchhoff stress and A
@@ -91,6 +113,8 @@ struct LaneKernels {
   // and velocities (3)
   void (*p2g_adjoint_gather)(const GatherTerms& terms, const TransferGrid& grid, const double* qm_bar,
                              const double* v, GatherSums& sums);
+  // the reverse of the chunk's solids from the grid's (q_bar, m_bar) and velocities
+  void (*solid_adjoint)(SolidAdjointChunk& chunk, const TransferGrid& grid, const double* qm_bar, const double* v);
 };
 
 // the table of an instruction set; LanePath::scalar has none (nullptr)

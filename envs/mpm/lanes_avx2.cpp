@@ -13,6 +13,7 @@
 #include "common/det_math.hpp"
 #include "envs/mpm/lane_chunks.hpp"
 #include "envs/mpm/material.hpp"
+#include "envs/mpm/svd3.hpp"
 
 #pragma GCC push_options
 #pragma GCC target("avx2")
@@ -26,12 +27,14 @@
 #include "envs/mpm/stress_lanes.hpp"
 #include "envs/mpm/transfer_lanes.hpp"
 #include "envs/mpm/adjoint_lanes.hpp"
+#include "envs/mpm/solid_adjoint_lanes.hpp"
 
 namespace dsb::mpm {
 
 const LaneKernels& avx2_lane_kernels() {
   static const LaneKernels kernels{&solid_stress_chunk<Pack<F4>>, &p2g_chunk<Pack<F4>>, &g2p_chunk<Pack<F4>>,
-                                   &g2p_adjoint_chunk<Pack<F4>>, &p2g_adjoint_gather<F4>};
+                                   &g2p_adjoint_chunk<Pack<F4>>, &p2g_adjoint_gather<F4>,
+                                   &solid_adjoint_chunk<Pack<F4>>};
   return kernels;
 }
 

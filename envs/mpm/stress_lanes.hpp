@@ -71,18 +71,24 @@ DSB_LANE_INLINE bool flow_targets(SolidChunk& c, int o) {
   const T dgamma = norm - load<T>(&c.threshold[o]);
   const T flow = sel_gt(dgamma, zero, load<T>(&c.plastic[o]), zero);
   const T k = load<T>(&c.yield[o]) / (load<T>(&c.two_mu[o]) * norm);
-  for (int a = 0; a < 3; ++a) store(&c.args[a][o], mean + k * hat[a]);
+  for (int a = 0; a < 3; ++a) {
+    store(&c.args[a][o], mean + k * hat[a]);
+    store(&c.hat[a][o], hat[a]);
+  }
   store(&c.flow[o], flow);
+  // the tape's k (SolidTape): 1 without flow
+  store(&c.k[o], sel_gt(flow, zero, k, T(1.0)));
+  store(&c.norm[o], norm);
   return any_gt(flow, zero);
 }
 
 // f = exp(target) (flow), max(sigma, 0.05) (plastic, no flow) or sigma (elastic); F_new =
-// U diag(f) V^T (plastic; assigned to F in solid_update_batch); the fixed-corotated g_i = 2 mu (f_i - 1) f_i + lam J (J - 1),
-// tau = U diag(g) U^T, and A = stress_scale tau + m C.
+// U diag(f) V^T (plastic; assigned to F in solid_update_batch); the fixed-corotated
+// g_i = 2 mu (f_i - 1) f_i + lam J (J - 1), tau = U diag(g) U^T, and A = stress_scale tau + m C.
 // (c.values holds the exponentials where some lane of the chunk flows, else the logarithms, which
-// no lane then reads.)
+// no lane then reads.) Without with_F_new (the reverse pass's recomputation) F_new is not formed.
 template <class T>
-DSB_LANE_INLINE void stress_affine(SolidChunk& c, int o) {
+DSB_LANE_INLINE void stress_affine(SolidChunk& c, int o, bool with_F_new) {
   const T zero(0.0), one(1.0), floor(kSigmaFloor);
   const T plastic = load<T>(&c.plastic[o]);
   const T flow = load<T>(&c.flow[o]);
@@ -91,6 +97,7 @@ DSB_LANE_INLINE void stress_affine(SolidChunk& c, int o) {
     const T sigma = load<T>(&c.sigma[a][o]);
     const T held = sel_gt(flow, zero, load<T>(&c.values[a][o]), max_floor(sigma, floor));
     f[a] = sel_gt(plastic, zero, held, sigma);
+    store(&c.f[a][o], f[a]);
   }
   T U[3][3];
   for (int i = 0; i < 3; ++i)
@@ -99,7 +106,7 @@ DSB_LANE_INLINE void stress_affine(SolidChunk& c, int o) {
   T Uf[3][3];
   for (int i = 0; i < 3; ++i)
     for (int k = 0; k < 3; ++k) Uf[i][k] = U[i][k] * f[k];
-  for (int j = 0; j < 3; ++j) {
+  for (int j = 0; j < 3 && with_F_new; ++j) {
     const T v0 = load<T>(&c.V[j][o]), v1 = load<T>(&c.V[j + 3][o]), v2 = load<T>(&c.V[j + 6][o]);
     for (int i = 0; i < 3; ++i) {
       const T x = eigen_assigned_product_sum(Uf[i][0] * v0, Uf[i][1] * v1, Uf[i][2] * v2);
@@ -127,16 +134,35 @@ DSB_LANE_INLINE void stress_affine(SolidChunk& c, int o) {
 
 // The whole update of a chunk, T = Pack<F2> or Pack<F4>. The logarithms and exponentials of the
 // chunk's 24 values go through dm::log_batch / dm::exp_batch (the scalar functions' bits).
+// the return mapping and the stress once c.args holds max(sigma, 0.05)
+template <class T>
+DSB_LANE_INLINE void return_mapping_stress(SolidChunk& c, bool with_F_new) {
+  constexpr int W = T::kLanes;
+  dm::log_batch(&c.args[0][0], &c.values[0][0], 3 * kLaneChunk);
+  bool any_flow = false;
+  for (int o = 0; o < kLaneChunk; o += W) any_flow |= flow_targets<T>(c, o);
+  if (any_flow) dm::exp_batch(&c.args[0][0], &c.values[0][0], 3 * kLaneChunk);
+  for (int o = 0; o < kLaneChunk; o += W) stress_affine<T>(c, o, with_F_new);
+}
+
 template <class T>
 void solid_stress_chunk(SolidChunk& c, double dt) {
   constexpr int W = T::kLanes;
   static_assert(kLaneChunk % W == 0, "whole packs per chunk");
   for (int o = 0; o < kLaneChunk; o += W) trial_svd<T>(c, dt, o);
-  dm::log_batch(&c.args[0][0], &c.values[0][0], 3 * kLaneChunk);
-  bool any_flow = false;
-  for (int o = 0; o < kLaneChunk; o += W) any_flow |= flow_targets<T>(c, o);
-  if (any_flow) dm::exp_batch(&c.args[0][0], &c.values[0][0], 3 * kLaneChunk);
-  for (int o = 0; o < kLaneChunk; o += W) stress_affine<T>(c, o);
+  return_mapping_stress<T>(c, true);
+}
+
+// The reverse pass's recomputation (substep_adjoint.cpp: solid_update_batch on the SVD that
+// restore_svd rebuilt from the tape): from c.U, c.sigma, c.V, the return mapping, f, the tape's
+// eps^, |eps^|, k and flow, and A; F_new is not formed.
+template <class T>
+DSB_LANE_INLINE void solid_stress_restored(SolidChunk& c) {
+  constexpr int W = T::kLanes;
+  const T floor(kSigmaFloor);
+  for (int o = 0; o < kLaneChunk; o += W)
+    for (int a = 0; a < 3; ++a) store(&c.args[a][o], max_floor(load<T>(&c.sigma[a][o]), floor));
+  return_mapping_stress<T>(c, false);
 }
 
 }  // namespace

@@ -9,14 +9,6 @@
 
 namespace dsb::mpm {
 
-namespace {
-
-// A solid material's constants as the scalar code computes them (material.cpp)
-struct SolidConstants {
-  int material = -1;
-  double two_mu = 0.0, lambda = 0.0, yield = 0.0, threshold = 0.0, plastic = 0.0;
-};
-
 SolidConstants solid_constants(const MpmModel& model, int material) {
   const Material& mat = model.materials[material];
   SolidConstants k;
@@ -30,7 +22,6 @@ SolidConstants solid_constants(const MpmModel& model, int material) {
   return k;
 }
 
-// lane l of the chunk: particle P with its material's constants and its scales
 void gather_solid(SolidChunk& c, int l, const Particle& P, const SolidConstants& k, double stress_scale,
                   double mass) {
   for (int e = 0; e < 9; ++e) {
@@ -45,6 +36,8 @@ void gather_solid(SolidChunk& c, int l, const Particle& P, const SolidConstants&
   c.stress_scale[l] = stress_scale;
   c.mass[l] = mass;
 }
+
+namespace {
 
 // lanes past the chunk's particles: an elastic particle at rest (finite, no flow)
 void pad_solids(SolidChunk& c) {
@@ -103,6 +96,35 @@ void stress_phase_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& tea
     }
     if (chunk.count > 0) flush();
   });
+}
+
+void pad_solid_adjoint(SolidAdjointChunk& c) {
+  SolidChunk& s = c.stress;
+  for (int l = c.count; l < kLaneChunk; ++l) {
+    for (int e = 0; e < 9; ++e) {
+      s.C[e][l] = s.C[e][0];
+      s.F[e][l] = s.F[e][0];
+      s.U[e][l] = s.U[e][0];
+      s.V[e][l] = s.V[e][0];
+      c.adj_C[e][l] = c.adj_C[e][0];
+      c.adj_F[e][l] = c.adj_F[e][0];
+    }
+    for (int a = 0; a < 3; ++a) {
+      s.sigma[a][l] = s.sigma[a][0];
+      c.x[a][l] = c.x[a][0];
+      c.v[a][l] = c.v[a][0];
+      c.v_new[a][l] = c.v_new[a][0];
+      c.adv_x[a][l] = c.adv_x[a][0];
+      c.adv_v[a][l] = c.adv_v[a][0];
+    }
+    s.two_mu[l] = s.two_mu[0];
+    s.lambda[l] = s.lambda[0];
+    s.yield[l] = s.yield[0];
+    s.threshold[l] = s.threshold[0];
+    s.plastic[l] = s.plastic[0];
+    s.stress_scale[l] = s.stress_scale[0];
+    s.mass[l] = s.mass[0];
+  }
 }
 
 TransferGrid transfer_grid(const MpmModel& model) {
@@ -170,7 +192,12 @@ void p2g_lanes(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins
         c.mass[l] = model.mass[p];
         if (++c.count == kLaneChunk) finish(t);
       },
-      finish);
+      finish,
+      [&](int q) {
+        __builtin_prefetch(&ws.particles[q]);
+        __builtin_prefetch(&ws.affine[q]);
+        __builtin_prefetch(reinterpret_cast<const char*>(&ws.affine[q]) + 64);
+      });
 }
 
 void g2p_adjoint_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const SubstepTape& tape,
@@ -218,7 +245,13 @@ void g2p_adjoint_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team
         for (int e = 0; e < 9; ++e) c.adj_C[e][l] = a.C.data()[e];
         if (++c.count == kLaneChunk) finish(t);
       },
-      finish);
+      finish,
+      [&](int q) {
+        __builtin_prefetch(&tape.before[q]);
+        __builtin_prefetch(&after[q]);
+        __builtin_prefetch(&ws.adj[q]);
+        __builtin_prefetch(reinterpret_cast<const char*>(&ws.adj[q]) + 64);
+      });
 }
 
 void g2p_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const LaneKernels& kernels) {

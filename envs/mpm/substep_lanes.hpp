@@ -9,6 +9,20 @@
 
 namespace dsb::mpm {
 
+// A solid material's constants as the scalar code computes them (material.cpp)
+struct SolidConstants {
+  int material = -1;
+  double two_mu = 0.0, lambda = 0.0, yield = 0.0, threshold = 0.0, plastic = 0.0;
+};
+SolidConstants solid_constants(const MpmModel& model, int material);
+
+// lane l of a solid chunk: particle P's C and F, its material's constants and its scales
+void gather_solid(SolidChunk& c, int l, const Particle& P, const SolidConstants& k, double stress_scale,
+                  double mass);
+
+// lanes past the chunk's particles repeat its first particle (finite; their results are not read)
+void pad_solid_adjoint(SolidAdjointChunk& c);
+
 // substep.cpp's stress phase: A_p and the new F (solids, in chunks of kLaneChunk) or J (fluids,
 // one at a time as on the scalar path) of every particle; the SVD records when tape is given.
 void stress_phase_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, SubstepTape* tape,

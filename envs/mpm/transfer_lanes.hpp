@@ -83,8 +83,8 @@ DSB_LANE_INLINE Pack<R> floor_(const Pack<R>& x) {
 // [-pad, n - 3 - pad] (NaN to -pad), f = x / dx - b, the weights and their derivatives. floor
 // runs on x / dx - 1/2 clamped to [low - 1, top + 1] first, which changes no clamped b and keeps
 // it within the range of a 32-bit truncation.
-template <class T>
-DSB_LANE_INLINE void stencil_lanes(TransferChunk& c, const TransferGrid& g, int o) {
+template <class T, class Chunk>
+DSB_LANE_INLINE void stencil_lanes(Chunk& c, const TransferGrid& g, int o) {
   const T inv_dx(g.inv_dx), one(1.0), half(0.5);
   for (int a = 0; a < 3; ++a) {
     const T scaled = load<T>(&c.x[a][o]) * inv_dx;
@@ -108,7 +108,8 @@ DSB_LANE_INLINE void stencil_lanes(TransferChunk& c, const TransferGrid& g, int 
 }
 
 // the node index of a particle's stencil corner (offsets 0, 0, 0)
-DSB_LANE_INLINE int corner_node(const TransferChunk& c, const TransferGrid& g, int l, int& b2) {
+template <class Chunk>
+DSB_LANE_INLINE int corner_node(const Chunk& c, const TransferGrid& g, int l, int& b2) {
   const int b0 = static_cast<int>(c.base[0][l]) + g.pad, b1 = static_cast<int>(c.base[1][l]) + g.pad;
   b2 = static_cast<int>(c.base[2][l]) + g.pad;
   return (b0 * g.n1 + b1) * g.n2 + b2;
