@@ -17,63 +17,7 @@ namespace {
 
 using mpm::Mat3;
 using mpm::Vec3;
-using testing::add_block;
-
-mpm::PrimitiveSpec primitive(const char* name, mpm::ShapeKind kind, const Vec3& at) {
-  mpm::PrimitiveSpec p;
-  p.name = name;
-  p.shape.kind = kind;
-  p.position = at;
-  p.softness = 300.0;  // contact band ln 10 / 300 = 0.25 dx
-  p.friction = 0.5;
-  p.motion = mpm::PrimitiveMotion::translate;
-  p.action_axes = {0, 1, 2};
-  p.action_scale = {0.02, 0.02, 0.02};
-  return p;
-}
-
-// three bodies (plastic, elastic, fluid) on a 32^3 grid and the seven primitives, each touching
-// a body: sphere, capsule, cylinder, torus, box, bowl, rolling pin
-mpm::MpmModel every_primitive_scene(int substeps) {
-  auto m = testing::empty_model(32, 1.0 / 32, 4e-4, substeps, Vec3(0.0, -5.0, 0.0));
-  const double floor = 3.0 / 32;
-  add_block(m, "plastic", testing::plastic(400.0, 0.2, 4.0), Vec3(0.15, floor, 0.2), Vec3(0.35, 0.25, 0.4), 2);
-  add_block(m, "elastic", testing::elastic(300.0, 0.3), Vec3(0.45, floor, 0.2), Vec3(0.6, 0.22, 0.4), 2);
-  add_block(m, "fluid", testing::fluid(200.0, 0.05), Vec3(0.65, floor, 0.55), Vec3(0.85, 0.2, 0.8), 2);
-  auto sphere = primitive("sphere", mpm::ShapeKind::sphere, Vec3(0.22, 0.29, 0.3));
-  sphere.shape.radius = 0.05;
-  auto capsule = primitive("capsule", mpm::ShapeKind::capsule, Vec3(0.5, 0.3, 0.3));
-  capsule.shape.radius = 0.03;
-  capsule.shape.half_height = 0.06;
-  auto cylinder = primitive("cylinder", mpm::ShapeKind::cylinder, Vec3(0.75, 0.22, 0.7));
-  cylinder.shape.radius = 0.05;
-  cylinder.shape.half_height = 0.03;
-  auto torus = primitive("torus", mpm::ShapeKind::torus, Vec3(0.3, 0.27, 0.25));
-  torus.shape.major_radius = 0.05;
-  torus.shape.radius = 0.02;
-  torus.rotation = {0.9238795325112867, 0.3826834323650898, 0.0, 0.0};  // tilted 45 deg about x
-  auto box = primitive("box", mpm::ShapeKind::box, Vec3(0.56, 0.245, 0.33));
-  box.shape.half_extents = Vec3(0.03, 0.03, 0.04);
-  box.rotation = {0.9659258262890683, 0.0, 0.25881904510234, 0.0};  // 30 deg about y
-  auto bowl = primitive("bowl", mpm::ShapeKind::bowl, Vec3(0.72, 0.25, 0.62));
-  bowl.shape.radius = 0.06;
-  bowl.shape.thickness = 0.02;
-  bowl.rotation = {0.9238795325112867, 0.0, 0.0, -0.3826834323650898};
-  auto pin = primitive("rolling_pin", mpm::ShapeKind::capsule, Vec3(0.27, 0.275, 0.33));
-  pin.shape.radius = 0.03;
-  pin.shape.half_height = 0.08;
-  pin.rotation = {0.7071067811865476, 0.7071067811865476, 0.0, 0.0};  // axis along z
-  pin.motion = mpm::PrimitiveMotion::rolling_pin;
-  pin.action_axes.clear();
-  pin.action_scale = {0.6, 0.2, 0.01};  // roll, yaw, vertical per env step
-  m.primitives = {sphere, capsule, cylinder, torus, box, bowl, pin};
-  for (auto& p : m.primitives) {
-    p.lower_bound = Vec3::Zero();
-    p.upper_bound = Vec3::Ones();
-  }
-  m.finalize("test");
-  return m;
-}
+using testing::every_primitive_scene;
 
 std::vector<double> random_actions(const mpm::MpmModel& m, int env_steps, std::uint64_t seed) {
   Rng rng(seed);

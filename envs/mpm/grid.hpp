@@ -109,6 +109,43 @@ void particle_balanced_part(const ParticleBins& bins, const std::vector<int>& un
 // fn(p) for every particle, colour by colour; within a colour each thread takes its particle-
 // balanced part of the units, each unit's particles in ascending order. The one loop of every
 // scatter into the grid (P2G, G2P^T): fn may add to the nodes of p's stencil without atomics.
+// The lanes path's form (the same order) calls fn(p, t) with the thread t, done(t) after thread
+// t's part of each colour (it finishes a chunk there), and ahead(q) with the particle kAhead
+// places later in the thread's order while fn(p) runs (it prefetches q's data: the order jumps
+// through memory).
+constexpr int kAhead = 8;
+template <class Fn, class Done, class Ahead>
+void for_each_particle_by_colour(const ParticleBins& bins, ThreadTeam& team, Fn&& fn, Done&& done, Ahead&& ahead) {
+  for (int c = 0; c < kColours; ++c) {
+    const std::vector<int>& units = bins.by_colour[c];
+    team.run_per_thread([&](int t) {
+      std::int64_t first, last;
+      particle_balanced_part(bins, units, t, team.size(), first, last);
+      if (first < last) {
+        // the thread's particles are order[o] for o in [unit_begin[units[first]], end) minus the
+        // units of other colours in between: look ahead within its units only
+        std::int64_t uu_ahead = first;
+        int o_ahead = bins.unit_begin[units[first]];
+        auto advance_ahead = [&] {
+          while (uu_ahead < last && o_ahead >= bins.unit_begin[units[uu_ahead] + 1]) {
+            if (++uu_ahead < last) o_ahead = bins.unit_begin[units[uu_ahead]];
+          }
+        };
+        for (int k = 0; k < kAhead; ++k) {
+          advance_ahead();
+          if (uu_ahead < last) ++o_ahead;
+        }
+        for (std::int64_t uu = first; uu < last; ++uu)
+          for (int o = bins.unit_begin[units[uu]]; o < bins.unit_begin[units[uu] + 1]; ++o) {
+            advance_ahead();
+            if (uu_ahead < last) ahead(bins.order[o_ahead++]);
+            fn(bins.order[o], t);
+          }
+      }
+      done(t);
+    });
+  }
+}
 template <class Fn>
 void for_each_particle_by_colour(const ParticleBins& bins, ThreadTeam& team, Fn&& fn) {
   for (int c = 0; c < kColours; ++c) {

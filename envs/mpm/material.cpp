@@ -12,8 +12,6 @@ namespace dsb::mpm {
 
 namespace {
 
-constexpr double kSigmaFloor = 0.05;     // PlasticineLab's guard before the logarithm
-constexpr double kNormEpsilon = 1e-8;    // PlasticineLab: |eps^| = sqrt(eps^.eps^ + 1e-8)
 constexpr double kSeriesRadius = 1e-3;   // below this relative gap, divided differences by series
 
 // ((1 + r)^k - 1) / r for |r| <= kSeriesRadius: the binomial series to r^5 (truncation < 1e-18)

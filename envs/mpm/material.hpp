@@ -34,6 +34,11 @@ namespace dsb::mpm {
 
 enum class MaterialKind { elastic, plastic, fluid };
 
+// The return mapping's constants (PlasticineLab's): the guard on sigma before the logarithm, and
+// the epsilon of |eps^| = sqrt(eps^.eps^ + epsilon).
+inline constexpr double kSigmaFloor = 0.05;
+inline constexpr double kNormEpsilon = 1e-8;
+
 struct Material {
   MaterialKind kind = MaterialKind::plastic;
   double youngs_modulus = 5e3;  // E (PlasticineLab default)

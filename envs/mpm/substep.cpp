@@ -6,6 +6,7 @@
 
 #include "common/parallel.hpp"
 #include "envs/mpm/kernel.hpp"
+#include "envs/mpm/substep_lanes.hpp"
 
 namespace dsb::mpm {
 
@@ -267,11 +268,18 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
   }
   bin_particles(model, bins, team, ws.particles);
   clock.lap(&PhaseTimes::bin);
-  stress_phase(model, ws, team, tape);
+  const LaneKernels* lanes = lane_kernels(ws.lanes);
+  if (lanes)
+    stress_phase_lanes(model, ws, team, tape, *lanes);
+  else
+    stress_phase(model, ws, team, tape);
   clock.lap(&PhaseTimes::stress);
   clear_blocks(model.layout, bins.active, ws.grid, team);
   clock.lap(&PhaseTimes::bin);
-  p2g(model, ws, bins, team);
+  if (lanes)
+    p2g_lanes(model, ws, bins, team, *lanes);
+  else
+    p2g(model, ws, bins, team);
   clock.lap(&PhaseTimes::p2g);
   // 4. kinematics pose f -> f + 1 and the contact frames
   const int np = static_cast<int>(model.primitives.size());
@@ -286,7 +294,10 @@ void substep(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const do
     tape->grid.save(model.layout, bins.active, ws.grid, team);
     clock.lap(&PhaseTimes::other);
   }
-  g2p(model, ws, team);
+  if (lanes)
+    g2p_lanes(model, ws, team, *lanes);
+  else
+    g2p(model, ws, team);
   for (int pr = 0; pr < np; ++pr) ws.poses[pr] = ws.next_poses[pr];
   clock.lap(&PhaseTimes::g2p);
 }

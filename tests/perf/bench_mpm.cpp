@@ -6,14 +6,20 @@
 //   - peak resident memory of a process that runs one gradient episode, against the full
 //     history's size (950 states of every particle).
 //   - heap allocations per `fluid` rollout with a reused workspace (fluid-h5, forward and gradient).
+//   - the lanes path (envs/mpm/lane_path.hpp: the best the CPU has, or DSB_MPM_LANES) against the
+//     scalar path, measured in the same run (*Scalar* benchmarks force it), 1 thread; and within
+//     one forward episode whose env steps alternate between the paths, and gradient episodes of
+//     5 env steps taking turns (both paths under the same load: the machine is shared).
 // Benchmarks named *Full* run the whole episode once; the smoke test (filter -Full) runs 1 env
 // step. Ratios print at the end.
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <string>
 #include <memory>
 #include <vector>
@@ -75,13 +81,15 @@ std::vector<double> actions(int env_steps) {
   return a;
 }
 
-PhaseTimes forward_phases, gradient_phases;
+PhaseTimes forward_phases, gradient_phases, forward_scalar_phases, gradient_scalar_phases;
 
-void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phases) {
+void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phases,
+         LanePath path = default_lane_path()) {
   const MpmModel& m = scene();
   const testing::SmoothObjective objective;
   ThreadTeam team(static_cast<int>(state.range(0)));
   MpmWorkspace ws(m);
+  ws.lanes = path;
   const auto a = actions(env_steps);
   std::vector<double> g(a.size());
   if (gradient) run_episode_with_grad(m, ws, team, a, env_steps, objective, g);  // size the buffers
@@ -105,11 +113,85 @@ void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phas
 
 void BM_ForwardEpisodeFull(benchmark::State& s) { run(s, kEnvSteps, false, &forward_phases); }
 void BM_GradientEpisodeFull(benchmark::State& s) { run(s, kEnvSteps, true, &gradient_phases); }
+void BM_ForwardEpisodeScalarFull(benchmark::State& s) {
+  run(s, kEnvSteps, false, &forward_scalar_phases, LanePath::scalar);
+}
+void BM_GradientEpisodeScalarFull(benchmark::State& s) {
+  run(s, kEnvSteps, true, &gradient_scalar_phases, LanePath::scalar);
+}
+// Alternates the lanes and the scalar path env step by env step within forward episodes (the paths
+// give the same bits, so the trajectory is the one of either) and times each env step: both paths
+// then run under the same load, which matters on a shared machine. Seconds per path in `seconds`.
+class AlternatingPaths : public EpisodeObserver {
+ public:
+  AlternatingPaths(MpmWorkspace& ws, LanePath lanes) : ws_(ws), paths_{lanes, LanePath::scalar} {}
+  void at_step(int step, const std::vector<Particle>&, const std::vector<Pose>&) override {
+    const auto now = std::chrono::steady_clock::now();
+    if (step > 0) seconds[current_] += std::chrono::duration<double>(now - last_).count();
+    current_ = step % 2;
+    ws_.lanes = paths_[current_];
+    last_ = std::chrono::steady_clock::now();
+  }
+  double seconds[2] = {0.0, 0.0};  // lanes, scalar
+
+ private:
+  MpmWorkspace& ws_;
+  LanePath paths_[2];
+  int current_ = 0;
+  std::chrono::steady_clock::time_point last_;
+};
+
+double alternating_lanes_seconds = 0.0, alternating_scalar_seconds = 0.0;
+
+void BM_ForwardAlternatingPathsFull(benchmark::State& state) {
+  const MpmModel& m = scene();
+  const testing::SmoothObjective objective;
+  MpmWorkspace ws(m);
+  AlternatingPaths paths(ws, default_lane_path());
+  ws.observer = &paths;
+  const auto a = actions(kEnvSteps);
+  for (auto _ : state) benchmark::DoNotOptimize(run_episode(m, ws, serial_team(), a, kEnvSteps, objective));
+  const double n = static_cast<double>(state.iterations());
+  alternating_lanes_seconds = paths.seconds[0] / n;
+  alternating_scalar_seconds = paths.seconds[1] / n;
+}
+BENCHMARK(BM_ForwardAlternatingPathsFull)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
+// The same for gradients: gradient episodes of 5 env steps, the paths taking turns, 3 each.
+double alternating_gradient_lanes_seconds = 0.0, alternating_gradient_scalar_seconds = 0.0;
+
+void BM_GradientAlternatingPathsFull(benchmark::State& state) {
+  constexpr int kSteps = 5, kRounds = 3;
+  const MpmModel& m = scene();
+  const testing::SmoothObjective objective;
+  MpmWorkspace ws(m);
+  const auto a = actions(kSteps);
+  std::vector<double> g(a.size());
+  run_episode_with_grad(m, ws, serial_team(), a, kSteps, objective, g);  // size the buffers
+  double seconds[2] = {0.0, 0.0};
+  for (auto _ : state)
+    for (int r = 0; r < 2 * kRounds; ++r) {
+      ws.lanes = r % 2 == 0 ? default_lane_path() : LanePath::scalar;
+      const auto start = std::chrono::steady_clock::now();
+      benchmark::DoNotOptimize(run_episode_with_grad(m, ws, serial_team(), a, kSteps, objective, g));
+      seconds[r % 2] += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+  const double n = static_cast<double>(state.iterations()) * kRounds;
+  alternating_gradient_lanes_seconds = seconds[0] / n;
+  alternating_gradient_scalar_seconds = seconds[1] / n;
+}
+BENCHMARK(BM_GradientAlternatingPathsFull)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
 void BM_ForwardOneEnvStep(benchmark::State& s) { run(s, 1, false, nullptr); }
+void BM_ForwardOneEnvStepScalar(benchmark::State& s) { run(s, 1, false, nullptr, LanePath::scalar); }
 void BM_GradientOneEnvStep(benchmark::State& s) { run(s, 1, true, nullptr); }
+void BM_GradientOneEnvStepScalar(benchmark::State& s) { run(s, 1, true, nullptr, LanePath::scalar); }
 BENCHMARK(BM_ForwardEpisodeFull)->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_GradientEpisodeFull)->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK(BM_ForwardEpisodeScalarFull)->Arg(1)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK(BM_GradientEpisodeScalarFull)->Arg(1)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_ForwardOneEnvStep)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ForwardOneEnvStepScalar)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void fluid_rollouts(benchmark::State& state, bool gradient) {
   const auto env = make_env("fluid-h5");
@@ -127,6 +209,7 @@ void BM_FluidH5Gradient(benchmark::State& s) { fluid_rollouts(s, true); }
 BENCHMARK(BM_FluidH5Forward)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FluidH5Gradient)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GradientOneEnvStep)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GradientOneEnvStepScalar)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // peak RSS (MB) of a child process that builds the scene and runs one episode
 double child_peak_rss_mb(bool gradient) {
@@ -145,6 +228,17 @@ double child_peak_rss_mb(bool gradient) {
   struct rusage ru {};
   wait4(pid, &status, 0, &ru);
   return ru.ru_maxrss / 1024.0;
+}
+
+// the CPU's model name (/proc/cpuinfo), "?" where there is none
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) return line.substr(line.find_first_not_of(' ', colon + 1));
+    }
+  return "?";
 }
 
 void print_phases(const char* what, const PhaseTimes& t) {
@@ -174,15 +268,45 @@ int main(int argc, char** argv) {
     const double f2 = reporter.seconds("BM_ForwardEpisodeFull/2/iterations:1/real_time");
     const double g1 = reporter.seconds("BM_GradientEpisodeFull/1/iterations:1/real_time");
     const double g2 = reporter.seconds("BM_GradientEpisodeFull/2/iterations:1/real_time");
+    const double fs = reporter.seconds("BM_ForwardEpisodeScalarFull/1/iterations:1/real_time");
+    const double gs = reporter.seconds("BM_GradientEpisodeScalarFull/1/iterations:1/real_time");
+    const double step = reporter.seconds("BM_ForwardOneEnvStep/1/real_time");
+    const double step_scalar = reporter.seconds("BM_ForwardOneEnvStepScalar/1/real_time");
+    const double gstep = reporter.seconds("BM_GradientOneEnvStep/1/real_time");
+    const double gstep_scalar = reporter.seconds("BM_GradientOneEnvStepScalar/1/real_time");
     const double substeps = static_cast<double>(kEnvSteps) * scene().config.substeps;
+    const char* lanes = lane_path_name(default_lane_path());
+    std::printf("\nCPU: %s; lanes path: %s (scalar forced by the *Scalar* benchmarks)\n", cpu_model().c_str(), lanes);
+    if (alternating_lanes_seconds > 0.0)
+      std::printf("forward episode alternating the paths env step by env step (25 each, same load): %s %.2f s, "
+                  "scalar %.2f s: %.2fx\n",
+                  lanes, alternating_lanes_seconds, alternating_scalar_seconds,
+                  alternating_scalar_seconds / alternating_lanes_seconds);
+    if (alternating_gradient_lanes_seconds > 0.0)
+      std::printf("gradient episodes of 5 env steps, the paths taking turns (3 each): %s %.2f s, scalar %.2f s: "
+                  "%.2fx\n",
+                  lanes, alternating_gradient_lanes_seconds, alternating_gradient_scalar_seconds,
+                  alternating_gradient_scalar_seconds / alternating_gradient_lanes_seconds);
+    if (step > 0.0 && step_scalar > 0.0)
+      std::printf("one env step, %s lanes against scalar: forward %.2fx", lanes, step_scalar / step);
+    if (gstep > 0.0 && gstep_scalar > 0.0) std::printf(", gradient %.2fx", gstep_scalar / gstep);
+    if (step > 0.0 && step_scalar > 0.0) std::printf("\n");
     if (f1 > 0.0) {
       std::printf("\nscene: %d particles, %dx%dx%d grid, dt %g, %.0f substeps\n", kParticles, scene().config.grid[0],
                   scene().config.grid[1], scene().config.grid[2], scene().config.dt, substeps);
       std::printf("forward: %.2f s = %.2f M particle-substeps/s (1 thread)\n", f1, kParticles * substeps / f1 / 1e6);
       if (g1 > 0.0) std::printf("gradient episode: %.2f s = %.2fx the forward (1 thread)\n", g1, g1 / f1);
       if (f2 > 0.0) std::printf("2 threads: forward %.2fx, gradient %.2fx one thread\n", f1 / f2, g2 > 0 ? g1 / g2 : 0.0);
+      if (fs > 0.0)
+        std::printf("scalar path: forward %.2f s = %.2f M particle-substeps/s, gradient %.2f s (1 thread)\n", fs,
+                    kParticles * substeps / fs / 1e6, gs);
+      if (fs > 0.0) std::printf("%s lanes against scalar, 1 thread: forward %.2fx", lanes, fs / f1);
+      if (fs > 0.0 && gs > 0.0 && g1 > 0.0) std::printf(", gradient %.2fx", gs / g1);
+      if (fs > 0.0) std::printf("\n");
       print_phases("forward", forward_phases);
       print_phases("gradient", gradient_phases);
+      print_phases("forward, scalar path,", forward_scalar_phases);
+      print_phases("gradient, scalar path,", gradient_scalar_phases);
     }
     if (full)
       std::printf("peak RSS of a process running one episode: forward %.0f MB, gradient %.0f MB (full history of "
