@@ -7,7 +7,9 @@ optimizer's centre config (the one every other config of that optimizer differs 
 one field); the reference optimizers keep their names. Columns: env, optimizer, variant, budget,
 seeds, median, q25, q75 of the runs' final best loss (runs.best_loss; none finite = inf), ratio
 (median / the default variant's median), p (two-sided Mann-Whitney U against the default
-variant's runs), wins (seeds where the variant ends below the default on the same seed index).
+variant's runs), wins (seeds where the variant ends below the default on the same seed index);
+with --reference OPT, p_ref (the same test against OPT's default runs on that env); for boleap, the
+medians over its runs of its diagnostics: leaps, descents, descent steps and stale stops per run.
 
     /usr/bin/python3 scripts/knob_study_table.py knob-study.sqlite --out knob_study.csv [--markdown]
 """
@@ -69,7 +71,8 @@ def variant_names(configs):
 def load(path, labels=None):
     con = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
     runs = pd.read_sql_query(
-        "SELECT r.env, r.optimizer, r.seed, r.budget, r.best_loss, r.opt_config_hash, c.json AS config "
+        "SELECT r.env, r.optimizer, r.seed, r.budget, r.best_loss, r.opt_config_hash, c.json AS config, "
+        "r.diagnostics "
         "FROM runs r JOIN configs c ON c.hash = r.opt_config_hash WHERE r.status = 'done'", con)
     con.close()
     runs["best_loss"] = runs["best_loss"].fillna(math.inf)
@@ -87,7 +90,16 @@ def load(path, labels=None):
     return runs
 
 
-def summarise(runs):
+def boleap_diagnostics(text):
+    """leaps, descents, descent steps (total) and stale stops of one boleap run's diagnostics"""
+    d = json.loads(text or "{}").get("optimizer", {})
+    steps = sum(leap.get("descent_steps", 0) for leap in d.get("leap_list", []))
+    return {"leaps": d.get("leaps", math.nan), "descents": d.get("descents", math.nan),
+            "descent_steps": steps if not d.get("leap_list_truncated") else math.nan,
+            "stale_stops": d.get("stale_stops", math.nan)}
+
+
+def summarise(runs, reference=None):
     rows = []
     for (env, opt, variant, budget), g in runs.groupby(["env", "optimizer", "variant", "budget"], sort=True):
         base = runs[(runs.env == env) & (runs.optimizer == opt) & (runs.variant == "default") &
@@ -102,18 +114,38 @@ def summarise(runs):
             row["p"] = mannwhitneyu(loss, b, alternative="two-sided").pvalue
             common = loss.index.intersection(b.index)
             row["wins"] = f"{int((loss[common] < b[common]).sum())}/{len(common)}"
+        if reference:
+            ref = runs[(runs.env == env) & (runs.optimizer == reference) & (runs.variant == "default") &
+                       (runs.budget == budget)]
+            row["p_ref"] = (mannwhitneyu(loss, ref["best_loss"], alternative="two-sided").pvalue
+                            if len(ref) > 0 and not (opt == reference and variant == "default") else math.nan)
+        if opt == "boleap":
+            diag = pd.DataFrame([boleap_diagnostics(t) for t in g["diagnostics"]])
+            for k in diag.columns:
+                row[k] = diag[k].median()
         rows.append(row)
     return pd.DataFrame(rows)
 
 
-def markdown(table):
-    lines = ["| env | optimizer | variant | seeds | median | q25 - q75 | / default | p | wins |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for r in table.itertuples():
-        ratio = "" if math.isnan(r.ratio) else f"{r.ratio:.2f}"
-        p = "" if math.isnan(r.p) else f"{r.p:.3f}"
-        lines.append(f"| {r.env} | {r.optimizer} | {r.variant} | {r.seeds} | {r.median:.4g} | "
-                     f"{r.q25:.3g} - {r.q75:.3g} | {ratio} | {p} | {r.wins} |")
+def markdown(table, reference=None):
+    def num(v, fmt):
+        return "" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
+
+    diag = "leaps" in table.columns
+    head = "| env | optimizer | variant | seeds | median | q25 - q75 | / default | p | wins |"
+    if reference:
+        head += f" p vs {reference} |"
+    if diag:
+        head += " leaps | descents | descent steps | stale stops |"
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for r in table.to_dict("records"):
+        line = (f"| {r['env']} | {r['optimizer']} | {r['variant']} | {r['seeds']} | {r['median']:.4g} | "
+                f"{r['q25']:.3g} - {r['q75']:.3g} | {num(r['ratio'], '.2f')} | {num(r['p'], '.3f')} | {r['wins']} |")
+        if reference:
+            line += f" {num(r.get('p_ref'), '.3f')} |"
+        if diag:
+            line += "".join(f" {num(r.get(k), '.0f')} |" for k in ("leaps", "descents", "descent_steps", "stale_stops"))
+        lines.append(line)
     return "\n".join(lines)
 
 
@@ -122,6 +154,7 @@ def main():
     ap.add_argument("db")
     ap.add_argument("--out", help="CSV to write")
     ap.add_argument("--variants", help="CSV opt_config_hash,variant naming the configs")
+    ap.add_argument("--reference", help="optimizer whose default runs each row is also tested against (p_ref)")
     ap.add_argument("--markdown", action="store_true", help="also print a Markdown table")
     a = ap.parse_args()
     try:
@@ -132,11 +165,11 @@ def main():
     except (sqlite3.Error, pd.errors.DatabaseError, OSError, KeyError) as e:
         sys.stderr.write(f"knob_study_table: cannot read '{a.db}': {e}\n")
         sys.exit(2)
-    table = summarise(runs)
+    table = summarise(runs, a.reference)
     if a.out:
         table.to_csv(a.out, index=False, float_format="%.17g")
     if a.markdown or not a.out:
-        print(markdown(table))
+        print(markdown(table, a.reference))
 
 
 if __name__ == "__main__":
