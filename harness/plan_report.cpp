@@ -117,8 +117,8 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
   out << fmt::format("  episode costs: measured on this machine for {} of {} envs (cache {}){}\n", measured.size(),
                      measured.size() + hinted.size(), costs.path(),
                      hinted.empty() ? std::string()
-                                    : "; the others from their cost hints (a gradient episode on the reference "
-                                      "machine, for every kind): `harness calibrate " + ctx.grid_flags +
+                                    : "; the others from their cost hints (forward and gradient episodes on the "
+                                      "2-core machine the project measures on): `harness calibrate " + ctx.grid_flags +
                                           "` measures them, one episode each");
   out << fmt::format("  {:<26} {:>6} {:>11} {:>12}\n", "env", "runs", "core-hours", "longest run");
   std::vector<std::pair<std::string, Tally>> envs(by_env.begin(), by_env.end());

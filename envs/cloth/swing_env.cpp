@@ -130,8 +130,10 @@ EnvInfo swing_info(std::string name, SwingParams params, const SwingConfig& cfg)
   info.dim = param_dim(params);
   info.differentiable = true;
   info.rl = true;
-  // bench_cloth: a gradient episode of 81 vertices x 1,600 steps, 12-14 ms on one core (forward 4.5 ms)
-  info.cost_hint_s = 0.013;
+  // `harness calibrate` on the 2-core EPYC (binary f21b88f), the six swing envs: a gradient episode
+  // 21-44 ms on one core, a forward one 8.3-13 ms
+  info.cost_hint_s = 0.03;
+  info.cost_hint_forward_s = 0.011;
   return info;
 }
 

@@ -32,8 +32,8 @@ struct EnvInfo {
   bool differentiable = false;
   bool rl = false;             // has a per-step interface (make_rl)
   bool threaded = false;       // a rollout uses the threads of its team
-  // seconds of one gradient episode (with the default tape memory) on one core of the reference
-  // machine, for plans before `harness calibrate` measures this one
+  // seconds of one gradient episode (with the default tape memory) on one core of the machine the
+  // project calibrates on (a 2-core AMD EPYC), for plans before `harness calibrate` measures this one
   double cost_hint_s = 0.0;
   std::string metric;          // name of an optional second per-episode metric ("" for none)
   double cost_hint_forward_s = 0.0;  // the same of a forward episode (0: cost_hint_s)

@@ -16,7 +16,10 @@ EnvInfo cartpole_info(std::string name, const CartpoleConfig& cfg) {
   info.dim = cfg.steps * (1 + cfg.links);
   info.differentiable = true;
   info.rl = true;
-  info.cost_hint_s = 3e-5;  // bench_cartpole: forward + gradient of cartpole3, 26 us
+  // `harness calibrate` on the 2-core EPYC (binary f21b88f): cartpole1 (1 link) 8.5 us forward,
+  // 14 us gradient; cartpole3 21 us and 36 us; linear in the links in between
+  info.cost_hint_forward_s = 2e-6 + 6.3e-6 * cfg.links;
+  info.cost_hint_s = 3.5e-6 + 1.1e-5 * cfg.links;
   return info;
 }
 
