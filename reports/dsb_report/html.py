@@ -1,10 +1,11 @@
 """index.html: a self-contained page (relative links, images as files, no JavaScript, no network)."""
 from __future__ import annotations
 
-import re
 from html import escape
 
 from . import captions, renders
+from .claim_runs import CLAIMS_SEEDS
+from .registry import base_env
 from . import gradient_quality as gq
 from .tables import final_md_rows, fmt, mark, overview_text, rank_md_rows
 
@@ -64,35 +65,53 @@ def _provenance(ctx) -> str:
     return "<h2 id=\"provenance\">Provenance</h2>\n" + table(["item", "value"], rows)
 
 
+def claim_counts(c) -> str:
+    """'env missing 1, holds 5, runs missing 3': rows per verdict, 'runs missing: k of n done'
+    counted as 'runs missing'."""
+    states = c["verdict"].str.split(":").str[0]
+    return ", ".join(f"{v} {n}" for v, n in states.value_counts().sort_index().items())
+
+
+def claim_row_classes(c) -> list:
+    return ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
+
+
+def settle_text(r) -> str:
+    """The command that settles an unsettled row, '—' where none can."""
+    return r["settle"] or ("—" if r["verdict"] in ("holds", "does not hold") else "none")
+
+
+def _env_budget(r) -> str:
+    return f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"]
+
+
 def _claims_compact(ctx) -> str:
     """The verdicts, one line per claim and env, at the top of the page (the details further down)."""
     c = ctx["claims"]
-    rows = [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"],
-             r["verdict"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2)] for _, r in c.iterrows()]
-    cls = ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
-    counts = ", ".join(f"{v} {n}" for v, n in c["verdict"].value_counts().sort_index().items())
+    rows = [[r["id"], _env_budget(r), r["verdict"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2),
+             settle_text(r)] for _, r in c.iterrows()]
     return ('<h2 id="claims">The paper\'s claims</h2>\n'
-            f"<p>{escape(counts or 'No claims.')}: each qualitative claim of Antonova et al. "
+            f"<p>{escape(claim_counts(c) or 'No claims.')}: each qualitative claim of Antonova et al. "
             "(CoRL 2022) tested on the final best losses over seeds (what the paper says, the test "
-            f"and why: {link('#claims-detail', 'the claims in detail')}; {link('claims.csv')}).</p>\n" +
-            table(["claim", "env (budget)", "verdict", "p (Holm)", "A12"], rows, cls,
-                  numeric={3, 4}))
+            f"and why: {link('#claims-detail', 'the claims in detail')}; {link('claims.csv')}). "
+            f"{escape(captions.CLAIMS_SETTLE.format(seeds=CLAIMS_SEEDS))}</p>\n" +
+            table(["claim", "env (budget)", "verdict", "p (Holm)", "A12", "to settle, run"], rows,
+                  claim_row_classes(c), numeric={3, 4}))
 
 
 def _claims(ctx) -> str:
     c = ctx["claims"]
-    rows = [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"],
-             f"{r['statement']} ({r['source']})", r["test"], r["n"],
-             fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2), r["verdict"], r["reason"]]
-            for _, r in c.iterrows()]
-    cls = ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
-    counts = ", ".join(f"{v} {n}" for v, n in c["verdict"].value_counts().sort_index().items())
+    rows = [[r["id"], _env_budget(r), f"{r['statement']} ({r['source']})", r["test"], r["n"],
+             fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2), r["verdict"], r["reason"],
+             settle_text(r)] for _, r in c.iterrows()]
+    cls = claim_row_classes(c)
+    counts = claim_counts(c)
     return ('<h2 id="claims-detail">The paper\'s claims in detail</h2>\n<p>' +
             escape(captions.CLAIMS) + "</p>\n"
             f"<p>{escape(counts or 'No claims.')} ({link('claims.csv')}; every comparison: "
             f"{link('claims_comparisons.csv')})</p>\n" +
             table(["claim", "env (budget)", "the paper says", "tested as", "seeds", "p (Holm)", "A12",
-                   "verdict", "why"], rows, cls, numeric={5, 6}))
+                   "verdict", "why", "to settle, run"], rows, cls, numeric={5, 6}))
 
 
 def heat(score: float) -> str:
@@ -223,14 +242,6 @@ def _landscapes(ctx) -> str:
     for e in ctx["landscape_errors"]:
         p.append(f'<p class="note">Skipped: {escape(e)}</p>')
     return "\n".join(p)
-
-
-def base_env(name: str) -> str:
-    """The env of `harness list` a landscape's variant belongs to: fluid-h5 -> fluid,
-    plb-table-h5 -> plb-table (scripts/landscape-gallery.sh slices the particle envs' short
-    variants); any other name is its own env."""
-    m = re.fullmatch(r"((?:fluid|plb-[a-z]+))-h[0-9]+", name)
-    return m.group(1) if m else name
 
 
 def gallery_groups(landscapes: list, gq_df) -> list:
