@@ -738,10 +738,19 @@ TAB10 = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e37
 
 
 def _overview_runs(con):
-    """Every run replaced by the OVERVIEW_CELLS runs: OVERVIEW_BUDGET episodes whose loss falls as
-    final + 10 / (episode + 1) - 10 / budget to the cell's final best loss at the last episode
-    (the same curve for every seed with the same final loss), the OVERVIEW_NAN episodes NaN; plus
-    one failed run of (branin, random) with two NaN episodes stored."""
+    """Every run replaced by the OVERVIEW_CELLS runs (_curve_runs), the OVERVIEW_NAN episodes NaN;
+    plus one failed run of (branin, random) with two NaN episodes stored."""
+    insert = _curve_runs(con, OVERVIEW_CELLS, OVERVIEW_NAN)
+    insert("branin", "random", 6, 1.0, "failed")
+    insert("hartmann6", "cmaes", 0, 1.0, "failed")     # an env whose only run failed
+
+
+def _curve_runs(con, cells, nan_episodes):
+    """Every run replaced by done runs of `cells` ((env, optimizer) -> final best losses, one per
+    seed): OVERVIEW_BUDGET episodes whose loss falls as final + 10 / (episode + 1) - 10 / budget
+    to the cell's final best loss at the last episode (the same curve for every seed with the same
+    final loss), the episodes of nan_episodes ((env, optimizer, seed) -> episodes) NaN. Returns
+    insert(env, optimizer, seed, final, status) for more runs."""
     env_h, opt_h, ver = con.execute(
         "SELECT env_config_hash, opt_config_hash, harness_version FROM runs LIMIT 1").fetchone()
     for table in ("replay", "evals", "runs"):
@@ -755,7 +764,7 @@ def _overview_runs(con):
             "VALUES (?, ?, ?, ?, ?, ?, '0', ?, ?, ?, 0.1, ?, 'test', 'test', ?)",
             (env, opt, seed, b, env_h, opt_h, status, b, final, ver,
              "blew up" if status == "failed" else None))
-        nan = OVERVIEW_NAN.get((env, opt, seed), [0, 1] if status == "failed" else [])
+        nan = nan_episodes.get((env, opt, seed), [0, 1] if status == "failed" else [])
         best = None
         for ep in range(b):
             loss = None if ep in nan else final + 10.0 / (ep + 1) - 10.0 / b
@@ -765,11 +774,64 @@ def _overview_runs(con):
                         "failed) VALUES (?, ?, ?, ?, 0, 0.01, ?)",
                         (cur.lastrowid, ep, loss, best, int(loss is None)))
 
-    for (env, opt), finals in OVERVIEW_CELLS.items():
+    for (env, opt), finals in cells.items():
         for seed, final in enumerate(finals):
             insert(env, opt, seed, final, "done")
-    insert("branin", "random", 6, 1.0, "failed")
-    insert("hartmann6", "cmaes", 0, 1.0, "failed")     # an env whose only run failed
+    return insert
+
+
+# Medians 1e-11 to 1.8 on cartpole1 (as its 1,000-episode grid has them): a log colour scale;
+# bounce's 1 to 99 stays linear (ratio 99 <= 100)
+LOG_CELLS = {("cartpole1", "nlopt-lbfgs"): [1e-11] * 5, ("cartpole1", "gd"): [1e-3] * 5,
+             ("cartpole1", "cmaes"): [1e-2] * 5, ("cartpole1", "random"): [1.8] * 5,
+             ("bounce", "cmaes"): [1.0] * 5, ("bounce", "gd"): [10.0] * 5,
+             ("bounce", "random"): [99.0] * 5}
+
+
+def hex_rgb(text):
+    return tuple(int(text[i:i + 2], 16) for i in (1, 3, 5))
+
+
+class TestOverviewLogScale(ReportCase):
+    """Where an env's medians span orders of magnitude, the overview's colours follow their logs."""
+    modify = staticmethod(lambda con: _curve_runs(con, LOG_CELLS, {}))
+
+    def cells_of(self, env):
+        sec = section(self.html, "overview")
+        head = re.findall(r"<th>(.*?)</th>", html_rows(sec)[0])[1:]
+        row = next(r for r in html_rows(sec)[1:] if f">{env}</a>" in r)
+        tds = re.findall(r"<td([^>]*)>(.*?)</td>", row, re.S)
+        out = {}
+        for o, (attrs, text) in zip(head, tds[1:]):
+            bg = re.search(r"background:(#[0-9a-f]{6})", attrs)
+            out[o] = (re.sub(r"<[^>]+>", "", text), bg.group(1) if bg else None)
+        return re.sub(r"<[^>]+>", "", tds[0][1]), out
+
+    def test_log_scale_tells_1e_minus_11_from_1e_minus_3(self):
+        name, cells = self.cells_of("cartpole1")
+        self.assertEqual(name, "cartpole1 (40)log colour scale")
+        span = math.log(1.8) - math.log(1e-11)
+        self.assertEqual(cells["nlopt-lbfgs"][0], "0.00★ best")
+        self.assertEqual(cells["gd"][0], f"{(math.log(1e-3) - math.log(1e-11)) / span:.2f}")  # 0.71
+        self.assertEqual(cells["cmaes"][0], f"{(math.log(1e-2) - math.log(1e-11)) / span:.2f}")
+        self.assertEqual(cells["random"][0], "1.00")
+        green, gd = hex_rgb(cells["nlopt-lbfgs"][1]), hex_rgb(cells["gd"][1])
+        self.assertEqual(cells["nlopt-lbfgs"][1], "#aadeaa")
+        # on a linear scale gd's (1e-3 - 1e-11) / 1.8 = 0.0006 would be the winner's green to
+        # the digit; on the log scale it is a pale red, 80 apart in red
+        self.assertGreater(max(abs(p - q) for p, q in zip(green, gd)), 60, (green, gd))
+        with open(self.file("summary.md"), encoding="utf-8") as f:
+            self.assertIn("| cartpole1 (40, log colour scale) |", f.read())
+
+    def test_two_decades_or_less_stay_linear(self):
+        name, cells = self.cells_of("bounce")
+        self.assertEqual(name, "bounce (40)")
+        self.assertEqual(cells["gd"][0], f"{(10.0 - 1.0) / (99.0 - 1.0):.2f}")   # 0.09
+        sys.path.insert(0, HERE)
+        from dsb_report import tables
+        self.assertFalse(tables.uses_log([1.0, 100.0]))
+        self.assertTrue(tables.uses_log([1.0, 100.5, math.inf]))
+        self.assertFalse(tables.uses_log([-1.0, 1e6]))     # a log scale needs positive medians
 
 
 def png_rgba(path):

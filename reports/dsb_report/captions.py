@@ -25,7 +25,11 @@ FINALS = ("Bars: mean over seeds of the final best loss at the budget; whiskers:
 
 OVERVIEW = ("Each cell: the optimizer's median final best loss over seeds, normalised per env as "
             "(median − lowest median) / (highest median − lowest median): 0 = the env's winner, "
-            "1 = the worst optimizer there (a median of +∞, no finite loss, counts 1). ★ best: the "
+            "1 = the worst optimizer there (a median of +∞, no finite loss, counts 1). Where an "
+            "env's medians are positive and the highest is more than 100 times the lowest (log "
+            "colour scale, under the env's name), the same on their logarithms, (log median − log "
+            "lowest) / (log highest − log lowest), so that medians orders of magnitude apart get "
+            "different colours. ★ best: the "
             "lowest median; ≈ best: a one-sided Mann-Whitney U test (worse than the winner?), "
             "Holm-corrected over the env's comparisons, cannot tell it apart at α = 0.05 (a tie); "
             "too few seeds: even perfectly separated samples of these seed counts could not reach "

@@ -20,8 +20,8 @@ def render(ctx) -> str:
     opts = ctx["optimizers"]
     out += ["## Overview: final results per env and optimizer", "", captions.OVERVIEW, "",
             md_table(["env (budget)"] + list(opts),
-                     [[f"{r['env']} ({r['budget']})"] + [overview_text(r["cells"][o]) for o in opts]
-                      for r in ctx["overview"]]), ""]
+                     [[f"{r['env']} ({r['budget']}{', log colour scale' if r['log'] else ''})"] +
+                      [overview_text(r["cells"][o]) for o in opts] for r in ctx["overview"]]), ""]
     fl = ctx["failures"]
     out += ["## Failed episodes and failed runs", "", captions.FAILURES, "",
             md_table(["env (budget)"] + list(opts),
