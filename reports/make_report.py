@@ -4,6 +4,7 @@ self-contained folder with index.html, summary.md, PNG figures and CSV tables.
 
 usage: /usr/bin/python3 reports/make_report.py --db FILE --out DIR [--landscapes DIR] [--build-type T]
                                               [--claims FILE] [--gradient-quality FILE] [--renders DIR]
+                                              [--harness BIN]
 
 Needs pandas, matplotlib and scipy (Debian: python3-pandas python3-matplotlib python3-scipy, which
 only Debian's /usr/bin/python3 sees). Exit codes: 0 written, 2 bad input or missing modules.
@@ -62,7 +63,22 @@ def parse_args(argv):
                         "(default: data/gradient_quality.csv, the section says so when it is absent)")
     p.add_argument("--renders", help="folder of render_<env>.png from scripts/render-best.sh, shown "
                                      "in each env's section")
+    p.add_argument("--harness", help="harness binary whose `list` says which envs exist and which "
+                                     "optimizers --all runs on each (default: $DSB_HARNESS, else "
+                                     "build/bin/harness of this source tree if it exists)")
     return p.parse_args(argv)
+
+
+def load_registry(registry, harness):
+    """`harness list` of --harness (an error when it cannot be read) or of the default harness
+    (None when there is none or it cannot be read: the claims then cannot tell a missing env)."""
+    if harness:
+        return registry.load(harness)
+    default = registry.default_harness(os.path.dirname(HERE))
+    try:
+        return registry.load(default) if default else None
+    except registry.RegistryError:
+        return None
 
 
 def main(argv=None) -> int:
@@ -74,7 +90,7 @@ def main(argv=None) -> int:
     args = parse_args(sys.argv[1:] if argv is None else argv)
     if HERE not in sys.path:
         sys.path.insert(0, HERE)
-    from dsb_report import build, claims
+    from dsb_report import build, claims, registry
     from dsb_report import gradient_quality as gq
     from dsb_report.data import DataError, load
 
@@ -94,6 +110,10 @@ def main(argv=None) -> int:
             gq_table = gq.load(gq_path)
         except gq.GradientQualityError as e:
             return fail(str(e))
+    try:
+        env_registry = load_registry(registry, args.harness)
+    except registry.RegistryError as e:
+        return fail(str(e))
     if args.landscapes is not None and not os.path.isdir(args.landscapes):
         return fail(f"--landscapes '{args.landscapes}' is not a directory")
     if args.renders is not None and not os.path.isdir(args.renders):
@@ -108,7 +128,7 @@ def main(argv=None) -> int:
         return fail(f"cannot write to --out '{args.out}': {e.strerror or e}")
     made = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     written = build.build(data, args.out, args.landscapes, args.build_type, made, claim_list,
-                          gq_table, gq_path, args.renders)
+                          gq_table, gq_path, args.renders, env_registry)
     for name in sorted(os.listdir(args.out)):        # stale figures/tables of an older report
         if OWN_FILES.match(name) and name not in written:
             os.remove(os.path.join(args.out, name))

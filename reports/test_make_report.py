@@ -5,6 +5,9 @@ usage: /usr/bin/python3 reports/test_make_report.py DB_PATH
    or: DSB_REPORT_DB=DB_PATH /usr/bin/python3 -m unittest reports/test_make_report.py
        (without a database it makes one with build/bin/harness, or $DSB_HARNESS, if it exists)
 
+The harness ($DSB_HARNESS, else build/bin/harness) is also the generator's --harness: its `list`
+tells the claims table which envs exist. The claims tests that need it are skipped without one.
+
 The database is never written: every case works on a copy in a temporary folder. The generator is
 run with the same interpreter as this test (sys.executable). Prints 'N passed, M failed' last and
 exits non-zero on any failure. DSB_REPORT_KEEP=1 keeps the temporary folders.
@@ -28,6 +31,20 @@ SCRIPT = os.path.join(HERE, "make_report.py")
 _DB = {"path": None}
 
 
+def harness_path():
+    """$DSB_HARNESS, else build/bin/harness of this source tree; None when not executable."""
+    harness = os.environ.get("DSB_HARNESS",
+                             os.path.join(os.path.dirname(HERE), "build", "bin", "harness"))
+    return harness if os.access(harness, os.X_OK) else None
+
+
+def need_harness():
+    harness = harness_path()
+    if harness is None:
+        raise unittest.SkipTest("no harness binary: set DSB_HARNESS")
+    return harness
+
+
 def db_path():
     """The database under test: argv, $DSB_REPORT_DB, or one made now with the harness."""
     if _DB["path"]:
@@ -36,9 +53,8 @@ def db_path():
     if env:
         _DB["path"] = env
         return env
-    harness = os.environ.get("DSB_HARNESS",
-                             os.path.join(os.path.dirname(HERE), "build", "bin", "harness"))
-    if not os.access(harness, os.X_OK):
+    harness = harness_path()
+    if harness is None:
         raise unittest.SkipTest("no database: pass DB_PATH or set DSB_REPORT_DB")
     tmp = tempfile.mkdtemp(prefix="dsb_report_db_")
     if not os.environ.get("DSB_REPORT_KEEP"):
@@ -48,6 +64,26 @@ def db_path():
                     "--seeds", "3", "--budget", "20", "--db", out, "--quiet"], check=True)
     _DB["path"] = out
     return out
+
+
+def plan_runs_per_env(harness):
+    """env -> the runs of `harness plan --all --seeds 1` on it: the optimizers --all runs there."""
+    tmp = tempfile.mkdtemp(prefix="dsb_report_plan_")
+    try:
+        out = subprocess.run([harness, "plan", "--all", "--seeds", "1", "--budget", "1", "--db",
+                              os.path.join(tmp, "none.sqlite")], capture_output=True, text=True,
+                             check=True, timeout=120).stdout
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    lines = out.splitlines()
+    start = next(k for k, x in enumerate(lines) if x.split()[:2] == ["env", "runs"])
+    runs = {}
+    for x in lines[start + 1:]:
+        w = x.split()
+        if not w or not w[1].isdigit():
+            break
+        runs[w[0]] = int(w[1])
+    return runs
 
 
 def copy_db(dst):
@@ -137,7 +173,9 @@ class ReportCase(unittest.TestCase):
         write_sphere_landscape(cls.land)
         write_sphere_landscape(cls.land, checked=True)
         cls.out = os.path.join(cls.tmp, "report")
-        extra = cls.extra(cls.tmp) if cls.extra else ()
+        extra = tuple(cls.extra(cls.tmp)) if cls.extra else ()
+        if harness_path():
+            extra += ("--harness", harness_path())
         cls.proc = run_report(cls.db, cls.out, "--landscapes", cls.land, "--build-type", "TestBuild",
                               *extra)
         if cls.proc.returncode != 0:
@@ -246,17 +284,29 @@ class TestReport(ReportCase):
         for env, _ in self.cells:
             self.assertIn(env, md)
 
-    def test_claims_without_the_papers_envs_say_env_missing(self):
+    def test_claims_without_the_papers_runs_say_runs_missing(self):
         rows = read_csv(self.file("claims.csv"))
         with open(os.path.join(HERE, "paper_claims.csv"), newline="", encoding="utf-8") as f:
-            want = sum(len(r["env"].split()) for r in csv.DictReader(f))
-        self.assertEqual(len(rows), want)
-        paper_envs = {r["env"] for r in rows}
-        if not paper_envs & {e for e, _ in self.cells}:
-            self.assertEqual({r["verdict"] for r in rows}, {"env missing"})
+            paper = list(csv.DictReader(f))
+        self.assertEqual(len(rows), sum(len(r["env"].split()) for r in paper))
         top = self.html.index('id="claims"')
         self.assertLess(top, self.html.index('id="provenance"'))
         self.assertIn("The paper&#x27;s claims", self.html)
+        if {r["env"] for r in rows} & {e for e, _ in self.cells}:
+            return                      # a database with the paper's envs: verdicts of its own
+        all_runs = plan_runs_per_env(need_harness())
+        kinds = {r["id"]: r for r in paper}
+        for r in rows:
+            c = kinds[r["id"]]
+            if c["kind"] == "not_testable":
+                self.assertEqual((r["verdict"], r["settle"]), ("not testable from the database", ""))
+                continue
+            # 5 seeds of each optimizer named; a_best: of every optimizer `harness --all` runs there
+            n = 5 * (all_runs[r["env"]] if c["kind"] == "a_best" else len(set((c["a"] + " " + c["b"]).split())))
+            self.assertEqual(r["verdict"], f"runs missing: 0 of {n} done", r["id"])
+            self.assertEqual(r["settle"], f"harness --claims --env {r['env']} --seeds 5")
+            self.assertTrue(r["reason"].startswith(f"No run of {r['env']} in the database; the claim "
+                                                   f"needs {n} runs ("), r["reason"])
 
     def test_gradient_quality_from_the_default_file(self):
         default = os.path.join(os.path.dirname(HERE), "data", "gradient_quality.csv")
@@ -378,6 +428,11 @@ CLAIM_CELLS = {
     ("fluid", "boleap"): [1, 2, 3, 4, 5, 6],             # best, but no lift metric stored
     ("fluid", "cmaes"): [11, 12, 13, 14, None, 16],      # None: a run without a finite loss
 }
+# 5 seeds of 8 optimizers for a claim of 4 x 4 one-sided comparisons ("many"): Holm's smallest
+# reachable p is 16 / C(10, 5) = 0.063 >= 0.05, so it needs 6 seeds (16 / C(12, 6) = 0.017)
+MANY_A, MANY_B = ["gd", "rand-descents", "boleap", "nlopt-lbfgs"], ["cmaes", "random", "bo", "nlopt-bobyqa"]
+CLAIM_CELLS.update({("hartmann6", o): [k + 10 * j for k in range(5)]
+                    for j, o in enumerate(MANY_A + MANY_B)})
 
 
 def _synthetic_runs(con, cells=CLAIM_CELLS):
@@ -411,6 +466,8 @@ def _paper_and_metric_claims(tmp):
         w.writerow(["lifts", "plb-torus", "metric_most", "boleap", "", "0.5", "lifts", "t", ""])
         w.writerow(["drops", "plb-torus", "metric_few", "cmaes", "", "0.5", "drops", "t", ""])
         w.writerow(["wrong", "plb-torus", "metric_most", "cmaes", "", "0.5", "wrong", "t", ""])
+        w.writerow(["many", "hartmann6", "a_below_b", " ".join(MANY_A), " ".join(MANY_B), "",
+                    "many", "t", ""])
     return ("--claims", path)
 
 
@@ -447,6 +504,11 @@ class TestPaperClaims(ReportCase):
         self.assertEqual(float(c["a12"]), 1.0)
         self.assertEqual(r["n"], "boleap 6; cmaes 6")
         self.assertEqual(self.claim("fluid-boleap-best", "fluid")["verdict"], "holds")
+        # a settled row names no command (the page: "—")
+        self.assertEqual((r["settle"], r["runs_done"], r["runs_needed"]), ("", "", ""))
+        row = next(c for c in map(row_cells, html_rows(section(self.html, "claims")))
+                   if c[:2] == ["plb-boleap-beats-cmaes", "plb-torus (2)"])
+        self.assertEqual((row[2], row[5]), ("holds", "—"))
 
     def test_reversed_difference_does_not_hold(self):
         r = self.claim("plb-boleap-beats-cmaes", "plb-assembly")
@@ -462,18 +524,39 @@ class TestPaperClaims(ReportCase):
         self.assertGreaterEqual(float(r["p_claim"]), 0.05)
 
     def test_three_seeds_are_not_enough(self):
+        # not enough data for the test, and 2 of the claims grid's 5 seeds a side absent
         r = self.claim("plb-boleap-like-cmaes", "plb-table")
-        self.assertEqual(r["verdict"], "not enough data", r["reason"])
+        self.assertEqual(r["verdict"], "runs missing: 6 of 10 done", r["reason"])
         self.assertEqual(int(r["min_n"]), 4)   # two-sided, one comparison: 2/C(8,4) = 0.029
+        self.assertIn("6 of 10 runs done (boleap, cmaes x seeds 0-4, budget 2). Absent: boleap, "
+                      "cmaes seeds 3-4.", r["reason"])
         self.assertIn("needs >= 4 seeds", r["reason"])
+        self.assertEqual(r["settle"], "harness --claims --env plb-table --seeds 5")
+
+    def test_more_comparisons_need_more_seeds(self):
+        # 16 comparisons: 5 seeds of each optimizer cannot reach alpha; the claim asks for 6
+        r = self.claim("many", "hartmann6")
+        self.assertEqual((r["comparisons"], r["min_n"]), ("16", "6"))
+        self.assertEqual(r["verdict"], "runs missing: 40 of 48 done", r["reason"])
+        self.assertIn(f"Absent: {', '.join(MANY_A + MANY_B)} seed 5.", r["reason"])
+        self.assertEqual(r["settle"], "harness --claims --env hartmann6 --seeds 6")
 
     def test_env_or_optimizer_missing(self):
+        need_harness()        # runs missing vs env missing: `harness list` says plb-triplemove exists
         r = self.claim("plb-boleap-beats-cmaes", "plb-triplemove")
-        self.assertEqual((r["verdict"], r["reason"]), ("env missing", "no done run of plb-triplemove"))
+        self.assertEqual((r["verdict"], r["reason"]), (
+            "runs missing: 0 of 10 done", "No run of plb-triplemove in the database; the claim needs "
+            "10 runs (boleap, cmaes x seeds 0-4)."))
+        self.assertEqual(r["settle"], "harness --claims --env plb-triplemove --seeds 5")
+        # boleap's seeds 0-4 of its 6 done, the three gradient optimizers absent
         r = self.claim("plb-boleap-beats-gradient", "plb-torus")
-        self.assertEqual(r["verdict"], "env missing")
-        self.assertIn("gd, rand-descents, nlopt-lbfgs", r["reason"])
-        self.assertEqual(self.claim("cartpole1-boleap-best", "cartpole1")["verdict"], "env missing")
+        self.assertEqual(r["verdict"], "runs missing: 5 of 20 done")
+        self.assertIn("Absent: gd, rand-descents, nlopt-lbfgs seeds 0-4.", r["reason"])
+        # a_best on an RL env: every optimizer of --all (12 there) x 5 seeds; cmaes, rand-descents
+        # and bo have 5 of their 6 seeds counted
+        r = self.claim("cartpole1-boleap-best", "cartpole1")
+        self.assertEqual(plan_runs_per_env(need_harness())["cartpole1"], 12)
+        self.assertEqual(r["verdict"], "runs missing: 15 of 60 done", r["reason"])
 
     def test_holm_over_a_two_comparison_claim(self):
         c = self.comparisons("cartpole1-cmaes-like-gradient", "cartpole1")
@@ -498,10 +581,132 @@ class TestPaperClaims(ReportCase):
         self.assertEqual(got, {"lifts": "holds", "drops": "holds", "wrong": "does not hold"})
 
     def test_table_near_the_top_of_the_page(self):
-        rows = [row_cells(x) for x in html_rows(self.html)]
-        verdicts = {c[7] for c in rows if len(c) == 9}
-        self.assertTrue({"holds", "does not hold", "not enough data", "env missing"} <= verdicts)
+        rows = [row_cells(x) for x in html_rows(section(self.html, "claims-detail"))]
+        verdicts = {c[7] for c in rows if len(c) == 10}
+        self.assertTrue({"holds", "does not hold", "runs missing: 6 of 10 done",
+                         "not testable from the database"} <= verdicts, verdicts)
         self.assertLess(self.html.index('id="claims"'), self.html.index('id="provenance"'))
+
+
+def _killed_and_failed(con):
+    """On the harness's database: branin's cmaes seed 1 as a harness killed after 7 of its 20
+    episodes leaves it (status running, episodes 7-19 not stored) and random seed 2 failed."""
+    rid = con.execute("SELECT run_id FROM runs WHERE env = 'branin' AND optimizer = 'cmaes' AND "
+                      "seed = 1").fetchone()[0]
+    con.execute("UPDATE runs SET status = 'running', episodes = 7, finished_at = NULL WHERE "
+                "run_id = ?", (rid,))
+    con.execute("DELETE FROM evals WHERE run_id = ? AND episode >= 7", (rid,))
+    con.execute("UPDATE runs SET status = 'failed', error = 'boom' WHERE env = 'branin' AND "
+                "optimizer = 'random' AND seed = 2")
+
+
+def _state_claims(tmp):
+    """One claim per state the claims table tells apart, on the harness database's envs."""
+    path = os.path.join(tmp, "state_claims.csv")
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["id", "env", "kind", "a", "b", "threshold", "statement", "source", "note"])
+        w.writerow(["gone", "cartpole2", "a_below_b", "cmaes", "random", "", "s", "t", ""])
+        w.writerow(["short", "sphere-2", "a_below_b", "cmaes", "random", "", "s", "t", ""])
+        w.writerow(["broken", "branin", "a_below_b", "cmaes", "random", "", "s", "t", ""])
+        w.writerow(["best", "sphere-2", "a_best", "gd", "", "", "s", "t", ""])
+        w.writerow(["variant", "sphere-3", "a_below_b", "cmaes", "random", "", "s", "t", ""])
+    return ("--claims", path)
+
+
+class TestClaimStates(ReportCase):
+    """What an unsettled claim lacks, on the harness's database (sphere-2, branin x random, cmaes,
+    gd x 3 seeds, budget 20) with one of branin's runs killed part-way and one failed: env missing
+    (no such env in `harness list`), runs missing, runs incomplete; each with its command."""
+    modify = staticmethod(_killed_and_failed)
+    extra = staticmethod(_state_claims)
+
+    @classmethod
+    def setUpClass(cls):
+        need_harness()
+        super().setUpClass()
+
+    def claim(self, cid):
+        return next(r for r in read_csv(self.file("claims.csv")) if r["id"] == cid)
+
+    def test_env_missing(self):
+        r = self.claim("gone")
+        self.assertEqual((r["verdict"], r["settle"], r["runs_done"]), ("env missing", "", ""))
+        self.assertTrue(r["reason"].startswith("the harness has no env cartpole2 (`harness list` of "),
+                        r["reason"])
+        # sphere-3 is a dimension of the sphere family that `harness list` shows as sphere-10
+        self.assertEqual(self.claim("variant")["verdict"], "runs missing: 0 of 10 done")
+
+    def test_runs_missing(self):
+        r = self.claim("short")
+        self.assertEqual(r["verdict"], "runs missing: 6 of 10 done")
+        self.assertEqual((r["runs_done"], r["runs_needed"]), ("6", "10"))
+        self.assertTrue(r["reason"].startswith(
+            "6 of 10 runs done (cmaes, random x seeds 0-4, budget 20). Absent: cmaes, random seeds "
+            "3-4."), r["reason"])
+        self.assertEqual(r["settle"], "harness --claims --env sphere-2 --seeds 5")
+
+    def test_runs_incomplete(self):
+        r = self.claim("broken")
+        self.assertEqual(r["verdict"], "runs incomplete: 4 of 10 done")
+        self.assertTrue(r["reason"].startswith(
+            "4 of 10 runs done (cmaes, random x seeds 0-4, budget 20). Running: cmaes seed 1. "
+            "Failed: random seed 2. Absent: cmaes, random seeds 3-4."), r["reason"])
+        self.assertEqual(r["settle"], "harness --claims --env branin --seeds 5")
+
+    def test_a_best_needs_every_optimizer_of_all(self):
+        # sphere-2 is not an RL env: the 10 optimizers of --all there, 3 of them with 3 seeds done
+        self.assertEqual(plan_runs_per_env(need_harness())["sphere-10"], 10)
+        r = self.claim("best")
+        self.assertEqual(r["verdict"], "runs missing: 9 of 50 done")
+        self.assertIn("Absent: gd, random, cmaes seeds 3-4; rand-descents, bo, boleap, nlopt-lbfgs, "
+                      "nlopt-bobyqa, nlopt-direct-l, nlopt-crs2 seeds 0-4.", r["reason"])
+
+    def test_page_and_summary_name_the_commands(self):
+        top = {c[0]: c for c in map(row_cells, html_rows(section(self.html, "claims"))) if c}
+        self.assertEqual(top["gone"][2:], ["env missing", "—", "—", "none"])
+        self.assertEqual(top["broken"][2], "runs incomplete: 4 of 10 done")
+        self.assertEqual(top["broken"][5], "harness --claims --env branin --seeds 5")
+        self.assertIn("env missing 1, runs incomplete 1, runs missing 3:",
+                      html.unescape(section(self.html, "claims")))
+        with open(self.file("summary.md"), encoding="utf-8") as f:
+            md = f.read()
+        self.assertIn("| runs missing: 6 of 10 done |", md)
+        self.assertIn("| harness --claims --env sphere-2 --seeds 5 |", md)
+
+
+class TestRegistry(unittest.TestCase):
+    """dsb_report.registry reads `harness list`: which envs exist, which optimizers --all runs."""
+
+    @classmethod
+    def setUpClass(cls):
+        sys.path.insert(0, HERE)
+        from dsb_report import registry
+        cls.reg = registry.load(need_harness())
+
+    def test_optimizers_of_all_per_env_equal_the_plan(self):
+        plan = plan_runs_per_env(need_harness())
+        self.assertEqual(set(plan), set(self.reg.envs))
+        self.assertEqual({e: len(self.reg.optimizers_for(e)) for e in plan}, plan)
+        self.assertIn("ppo", self.reg.optimizers_for("cartpole1"))
+        self.assertNotIn("ppo", self.reg.optimizers_for("branin"))
+        self.assertFalse(any(":" in o for o in self.reg.optimizers))   # ext:NAME is no optimizer
+
+    def test_variants_exist_and_unknown_names_do_not(self):
+        for name in ("sphere-3", "fluid-h5", "plb-table-h10", "cartpole1"):
+            self.assertTrue(self.reg.has_env(name), name)
+        for name in ("pinball-2x2", "cartpole2", "sphere", "fluid-x5"):
+            self.assertFalse(self.reg.has_env(name), name)
+
+    def test_without_a_registry_a_best_counts_at_least(self):
+        from dsb_report import claims
+        c = claims.Claim(id="x", envs=["cartpole1"], kind="a_best", a=["boleap"], b=[],
+                         threshold=math.nan, statement="", source="", note="")
+        v, _ = claims.evaluate([c], [], None, None)
+        self.assertEqual(v.loc[0, "verdict"], "runs missing: 0 of at least 5 done")
+        self.assertIn("Whether the harness has env cartpole1 is unknown", v.loc[0, "reason"])
+        v, _ = claims.evaluate([c], [], None, self.reg)
+        self.assertEqual(v.loc[0, "verdict"], "runs missing: 0 of 60 done")
 
 
 # The overview, failures, regret and 'too few seeds' on a synthetic database: per (env, optimizer)
@@ -533,10 +738,19 @@ TAB10 = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e37
 
 
 def _overview_runs(con):
-    """Every run replaced by the OVERVIEW_CELLS runs: OVERVIEW_BUDGET episodes whose loss falls as
-    final + 10 / (episode + 1) - 10 / budget to the cell's final best loss at the last episode
-    (the same curve for every seed with the same final loss), the OVERVIEW_NAN episodes NaN; plus
-    one failed run of (branin, random) with two NaN episodes stored."""
+    """Every run replaced by the OVERVIEW_CELLS runs (_curve_runs), the OVERVIEW_NAN episodes NaN;
+    plus one failed run of (branin, random) with two NaN episodes stored."""
+    insert = _curve_runs(con, OVERVIEW_CELLS, OVERVIEW_NAN)
+    insert("branin", "random", 6, 1.0, "failed")
+    insert("hartmann6", "cmaes", 0, 1.0, "failed")     # an env whose only run failed
+
+
+def _curve_runs(con, cells, nan_episodes):
+    """Every run replaced by done runs of `cells` ((env, optimizer) -> final best losses, one per
+    seed): OVERVIEW_BUDGET episodes whose loss falls as final + 10 / (episode + 1) - 10 / budget
+    to the cell's final best loss at the last episode (the same curve for every seed with the same
+    final loss), the episodes of nan_episodes ((env, optimizer, seed) -> episodes) NaN. Returns
+    insert(env, optimizer, seed, final, status) for more runs."""
     env_h, opt_h, ver = con.execute(
         "SELECT env_config_hash, opt_config_hash, harness_version FROM runs LIMIT 1").fetchone()
     for table in ("replay", "evals", "runs"):
@@ -550,7 +764,7 @@ def _overview_runs(con):
             "VALUES (?, ?, ?, ?, ?, ?, '0', ?, ?, ?, 0.1, ?, 'test', 'test', ?)",
             (env, opt, seed, b, env_h, opt_h, status, b, final, ver,
              "blew up" if status == "failed" else None))
-        nan = OVERVIEW_NAN.get((env, opt, seed), [0, 1] if status == "failed" else [])
+        nan = nan_episodes.get((env, opt, seed), [0, 1] if status == "failed" else [])
         best = None
         for ep in range(b):
             loss = None if ep in nan else final + 10.0 / (ep + 1) - 10.0 / b
@@ -560,11 +774,64 @@ def _overview_runs(con):
                         "failed) VALUES (?, ?, ?, ?, 0, 0.01, ?)",
                         (cur.lastrowid, ep, loss, best, int(loss is None)))
 
-    for (env, opt), finals in OVERVIEW_CELLS.items():
+    for (env, opt), finals in cells.items():
         for seed, final in enumerate(finals):
             insert(env, opt, seed, final, "done")
-    insert("branin", "random", 6, 1.0, "failed")
-    insert("hartmann6", "cmaes", 0, 1.0, "failed")     # an env whose only run failed
+    return insert
+
+
+# Medians 1e-11 to 1.8 on cartpole1 (as its 1,000-episode grid has them): a log colour scale;
+# bounce's 1 to 99 stays linear (ratio 99 <= 100)
+LOG_CELLS = {("cartpole1", "nlopt-lbfgs"): [1e-11] * 5, ("cartpole1", "gd"): [1e-3] * 5,
+             ("cartpole1", "cmaes"): [1e-2] * 5, ("cartpole1", "random"): [1.8] * 5,
+             ("bounce", "cmaes"): [1.0] * 5, ("bounce", "gd"): [10.0] * 5,
+             ("bounce", "random"): [99.0] * 5}
+
+
+def hex_rgb(text):
+    return tuple(int(text[i:i + 2], 16) for i in (1, 3, 5))
+
+
+class TestOverviewLogScale(ReportCase):
+    """Where an env's medians span orders of magnitude, the overview's colours follow their logs."""
+    modify = staticmethod(lambda con: _curve_runs(con, LOG_CELLS, {}))
+
+    def cells_of(self, env):
+        sec = section(self.html, "overview")
+        head = re.findall(r"<th>(.*?)</th>", html_rows(sec)[0])[1:]
+        row = next(r for r in html_rows(sec)[1:] if f">{env}</a>" in r)
+        tds = re.findall(r"<td([^>]*)>(.*?)</td>", row, re.S)
+        out = {}
+        for o, (attrs, text) in zip(head, tds[1:]):
+            bg = re.search(r"background:(#[0-9a-f]{6})", attrs)
+            out[o] = (re.sub(r"<[^>]+>", "", text), bg.group(1) if bg else None)
+        return re.sub(r"<[^>]+>", "", tds[0][1]), out
+
+    def test_log_scale_tells_1e_minus_11_from_1e_minus_3(self):
+        name, cells = self.cells_of("cartpole1")
+        self.assertEqual(name, "cartpole1 (40)log colour scale")
+        span = math.log(1.8) - math.log(1e-11)
+        self.assertEqual(cells["nlopt-lbfgs"][0], "0.00★ best")
+        self.assertEqual(cells["gd"][0], f"{(math.log(1e-3) - math.log(1e-11)) / span:.2f}")  # 0.71
+        self.assertEqual(cells["cmaes"][0], f"{(math.log(1e-2) - math.log(1e-11)) / span:.2f}")
+        self.assertEqual(cells["random"][0], "1.00")
+        green, gd = hex_rgb(cells["nlopt-lbfgs"][1]), hex_rgb(cells["gd"][1])
+        self.assertEqual(cells["nlopt-lbfgs"][1], "#aadeaa")
+        # on a linear scale gd's (1e-3 - 1e-11) / 1.8 = 0.0006 would be the winner's green to
+        # the digit; on the log scale it is a pale red, 80 apart in red
+        self.assertGreater(max(abs(p - q) for p, q in zip(green, gd)), 60, (green, gd))
+        with open(self.file("summary.md"), encoding="utf-8") as f:
+            self.assertIn("| cartpole1 (40, log colour scale) |", f.read())
+
+    def test_two_decades_or_less_stay_linear(self):
+        name, cells = self.cells_of("bounce")
+        self.assertEqual(name, "bounce (40)")
+        self.assertEqual(cells["gd"][0], f"{(10.0 - 1.0) / (99.0 - 1.0):.2f}")   # 0.09
+        sys.path.insert(0, HERE)
+        from dsb_report import tables
+        self.assertFalse(tables.uses_log([1.0, 100.0]))
+        self.assertTrue(tables.uses_log([1.0, 100.5, math.inf]))
+        self.assertFalse(tables.uses_log([-1.0, 1e6]))     # a log scale needs positive medians
 
 
 def png_rgba(path):
@@ -699,7 +966,12 @@ class TestOverview(ReportCase):
         # the compact verdicts at the top: claim, env, verdict, p, A12; one row per claim and env
         top = [c for c in map(row_cells, html_rows(section(self.html, "claims"))) if c]
         self.assertEqual(len(top), len(read_csv(self.file("claims.csv"))))
-        self.assertTrue(all(len(c) == 5 and c[2] == "env missing" for c in top))
+        # claim, env, verdict, p, A12, command; none of the paper's envs has a run here
+        for c in top:
+            self.assertEqual(len(c), 6)
+            if c[2] != "not testable from the database":
+                self.assertRegex(c[2], r"^runs missing: 0 of (at least )?[0-9]+ done$")
+                self.assertEqual(c[5], f"harness --claims --env {c[1]} --seeds 5")
         with open(self.file("summary.md"), encoding="utf-8") as f:
             heads = [x for x in f.read().splitlines() if x.startswith("## ")]
         self.assertEqual(heads[:3], ["## The paper's claims",
@@ -918,6 +1190,12 @@ class TestBadInput(unittest.TestCase):
         line = self.assert_one_line_exit_2(run_report(db_path(), os.path.join(self.tmp, "out"),
                                                       "--gradient-quality", absent))
         self.assertIn(absent, line)
+
+    def test_bad_harness(self):
+        bad = os.path.join(self.tmp, "no_such_harness")
+        line = self.assert_one_line_exit_2(run_report(db_path(), os.path.join(self.tmp, "out"),
+                                                      "--harness", bad))
+        self.assertIn(bad, line)
 
     def test_not_a_database(self):
         bad = os.path.join(self.tmp, "text.sqlite")

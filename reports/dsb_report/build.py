@@ -52,7 +52,15 @@ def _minp_text(tables: list) -> str:
     return text
 
 
-def _provenance(data, build_type, made, stored_episodes) -> list:
+def _registry_text(registry) -> str:
+    if registry is None:
+        return ("none: no harness to ask (make_report.py --harness BIN, $DSB_HARNESS or "
+                "build/bin/harness), so a claim's env without runs may not exist")
+    return (f"`harness list` of {registry.source}: {len(registry.envs)} envs, "
+            f"{len(registry.optimizers)} optimizers")
+
+
+def _provenance(data, build_type, made, stored_episodes, registry=None) -> list:
     r = data.runs
     status = r["status"].value_counts()
     versions = (f"pandas {pd.__version__}, matplotlib {matplotlib.__version__}, "
@@ -64,6 +72,7 @@ def _provenance(data, build_type, made, stored_episodes) -> list:
         ["harness version(s)", _counts(r["harness_version"])],
         ["git sha(s)", _counts(r["git_sha"])],
         ["build type", build_type],
+        ["env registry", _registry_text(registry)],
         ["host(s)", _counts(r["host"])],
         ["envs", f"{r['env'].nunique()}: " + ", ".join(sorted(r["env"].unique()))],
         ["optimizers", f"{len(data.optimizers)}: " + ", ".join(data.optimizers)],
@@ -82,7 +91,8 @@ def _provenance(data, build_type, made, stored_episodes) -> list:
 
 
 def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=(),
-          gradient_quality=None, gradient_quality_path: str = "", render_dir=None) -> list:
+          gradient_quality=None, gradient_quality_path: str = "", render_dir=None,
+          registry=None) -> list:
     style.setup()
     pal = style.palette(data.optimizers)
     marks = style.markers(data.optimizers)
@@ -110,7 +120,7 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
         tables.append(t)
 
     mp = main_panels(data)
-    verdicts, comparisons = claims.evaluate(list(claim_list), mp)
+    verdicts, comparisons = claims.evaluate(list(claim_list), mp, data.runs, registry)
     write_csv(verdicts, path("claims.csv"))
     write_csv(comparisons, path("claims_comparisons.csv"))
     by_env = stats.ranks(mp)
@@ -177,7 +187,8 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
                   f"budget(s) {_ranges(r['budget'])}; database {os.path.basename(data.db_path)}, "
                   f"made {made}."),
         notes=notes,
-        provenance=_provenance(data, build_type, made, int(sum(p.best.size for p in data.panels))),
+        provenance=_provenance(data, build_type, made, int(sum(p.best.size for p in data.panels)),
+                               registry),
         claims=verdicts, panels=items, mean_ranks=mr, ranks_png="ranks.png", ecdf_png="ecdf.png",
         targets=tinfo, gradient_quality=gradient_quality,
         gradient_quality_path=gradient_quality_path,

@@ -25,7 +25,11 @@ FINALS = ("Bars: mean over seeds of the final best loss at the budget; whiskers:
 
 OVERVIEW = ("Each cell: the optimizer's median final best loss over seeds, normalised per env as "
             "(median − lowest median) / (highest median − lowest median): 0 = the env's winner, "
-            "1 = the worst optimizer there (a median of +∞, no finite loss, counts 1). ★ best: the "
+            "1 = the worst optimizer there (a median of +∞, no finite loss, counts 1). Where an "
+            "env's medians are positive and the highest is more than 100 times the lowest (log "
+            "colour scale, under the env's name), the same on their logarithms, (log median − log "
+            "lowest) / (log highest − log lowest), so that medians orders of magnitude apart get "
+            "different colours. ★ best: the "
             "lowest median; ≈ best: a one-sided Mann-Whitney U test (worse than the winner?), "
             "Holm-corrected over the env's comparisons, cannot tell it apart at α = 0.05 (a tie); "
             "too few seeds: even perfectly separated samples of these seed counts could not reach "
@@ -56,10 +60,18 @@ CLAIMS = ("Each row is a qualitative claim of Antonova et al. (CoRL 2022) tested
           "claim's comparisons, α = 0.05; p is the deciding corrected p (the largest for a claim of "
           "differences, the smallest for a claim of none), A12 the probability that a run of the "
           "first optimizer ends lower than one of the other (0.5 = no effect). 'not enough data': "
-          "even perfectly separated samples could not reach α after Holm (comparisons × "
-          "1/C(nA+nB, nA), doubled if two-sided, ≥ α: one comparison needs 4 seeds a side); "
-          "'env missing': the env or an optimizer of the claim has no done run; 'not testable': "
-          "the database does not record what the paper judged.")
+          "every run the claim needs is done, but even perfectly separated samples could not "
+          "reach α after Holm (comparisons × 1/C(nA+nB, nA), doubled if two-sided, ≥ α: one "
+          "comparison needs 4 seeds a side); 'not testable': the database does not record what "
+          "the paper judged.")
+
+CLAIMS_SETTLE = ("A claim the database cannot settle yet says what it lacks: 'env missing' (the "
+                 "harness has no such env, per `harness list`), 'runs missing: k of n done' (the "
+                 "env exists; of the n runs the claim needs, {seeds} seeds of each optimizer it names at "
+                 "the env's largest budget, only k are in the database as done) or 'runs "
+                 "incomplete: k of n done' (some of those runs are running, were stopped part-way "
+                 "or failed), and names the command that makes its runs: the claims grid of the "
+                 "harness restricted to that env.")
 
 SIGNIFICANCE = ("For each env, the best optimizer is the one with the lowest median final loss. Every "
                 "other optimizer's final best losses over seeds are compared with the best one's by a "

@@ -16,10 +16,14 @@ the env's largest budget; NULL = +inf, stats.final_values):
 - metric_most / metric_few: each optimizer of a reaches the env's second metric (evals.metric at
                    each run's best episode) >= threshold in more / fewer than half of its seeds.
 - not_testable:    what the paper says cannot be read from the database (the note says why).
-Holm runs over the comparisons of one claim on one env. Verdicts: 'env missing' (no done run of
-the env, or of an optimizer of the claim), 'not enough data' (some comparison could not reach
-alpha even with perfectly separated samples: comparisons x smallest exact p >= alpha, see
-stats.min_seeds), 'not testable from the database', else 'holds' or 'does not hold'.
+Holm runs over the comparisons of one claim on one env. Verdicts: 'holds', 'does not hold', 'not
+testable from the database', and for a claim the data cannot settle yet (no done run of the env
+or of an optimizer of the claim, or 'not enough data': some comparison could not reach alpha even
+with perfectly separated samples, comparisons x smallest exact p >= alpha, see stats.min_seeds)
+what it still needs (claim_runs.assess): 'env missing' (the harness has no such env), 'runs
+missing: k of n done' (runs it needs are absent from the database), 'runs incomplete: k of n done'
+(some of them are running or failed), or 'not enough data' when every run it needs is done. Such
+a row names the command that makes its runs (settle).
 """
 from __future__ import annotations
 
@@ -30,10 +34,12 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from . import stats
+from . import claim_runs, stats
 
 HOLDS, FAILS = "holds", "does not hold"
-NO_DATA, MISSING, UNTESTABLE = "not enough data", "env missing", "not testable from the database"
+NO_DATA, UNTESTABLE = "not enough data", "not testable from the database"
+NO_RUNS = "no done run"      # as judged; _still_needed says what is missing (claim_runs.assess)
+MISSING = claim_runs.ENV_MISSING
 TEST_KINDS = {"a_below_b": (1, True), "a_best": (1, True),      # (sides, holds if significant)
               "not_below": (1, False), "not_significant": (2, False)}
 METRIC_KINDS = ("metric_most", "metric_few")
@@ -41,7 +47,8 @@ KINDS = tuple(TEST_KINDS) + METRIC_KINDS + ("not_testable",)
 RATE_MIN_SEEDS = stats.min_seeds(1, 1)   # a rate over fewer seeds than one test needs says nothing
 REQUIRED_COLUMNS = ("id", "env", "kind", "a", "b", "statement", "source")
 CLAIM_COLUMNS = ["id", "env", "budget", "kind", "statement", "source", "test", "a", "b", "n", "comparisons",
-                 "min_n", "p_holm", "p_claim", "a12", "a12_claim", "verdict", "reason"]
+                 "min_n", "p_holm", "p_claim", "a12", "a12_claim", "verdict", "reason", "runs_done",
+                 "runs_needed", "settle"]
 COMPARISON_COLUMNS = ["id", "env", "a", "b", "alternative", "n_a", "n_b", "p_raw", "p_holm", "a12"]
 
 
@@ -101,9 +108,13 @@ def _number(text, where) -> float:
         raise ClaimsError(f"{where}: threshold '{text}' is not a number") from None
 
 
-def evaluate(claims: list, panels: list):
+def evaluate(claims: list, panels: list, runs: pd.DataFrame | None = None, registry=None):
     """Verdict table (CLAIM_COLUMNS, one row per claim and env) and the comparisons behind it
-    (COMPARISON_COLUMNS, one row per pair tested). panels: one per env (data.main_panels)."""
+    (COMPARISON_COLUMNS, one row per pair tested). panels: one per env (data.main_panels); runs:
+    every run of the database (data.runs, any status); registry: `harness list` (registry.py) or
+    None when no harness could be asked."""
+    if runs is None:
+        runs = pd.DataFrame(columns=["run_id", "env", "optimizer", "seed", "budget", "status"])
     by_env = {p.env: p for p in panels}
     rows, comps = [], []
     for c in claims:
@@ -112,11 +123,30 @@ def evaluate(claims: list, panels: list):
             row = dict(id=c.id, env=env, budget=panel.budget if panel else "", kind=c.kind,
                        statement=c.statement, source=c.source,
                        test=test_text(c), a=" ".join(c.a), b=" ".join(c.b), n="", comparisons=0,
-                       min_n="", p_holm="", p_claim=np.nan, a12="", a12_claim=np.nan)
+                       min_n="", p_holm="", p_claim=np.nan, a12="", a12_claim=np.nan,
+                       runs_done="", runs_needed="", settle="")
             row.update(_judge(c, env, panel, comps))
+            row.update(_still_needed(c, env, row, runs, registry))
             rows.append(row)
     return (pd.DataFrame(rows, columns=CLAIM_COLUMNS),
             pd.DataFrame(comps, columns=COMPARISON_COLUMNS))
+
+
+def _still_needed(c: Claim, env: str, row: dict, runs: pd.DataFrame, registry) -> dict:
+    """For a row the data cannot settle yet ('env missing' or 'not enough data' as judged): the
+    runs it still needs and the command (claim_runs.assess). 'not enough data' with every run of
+    CLAIMS_SEEDS seeds done asks for the seeds the claim needs (min_n) and keeps its reason."""
+    if row["verdict"] not in (NO_RUNS, NO_DATA):
+        return {}
+    seeds = claim_runs.CLAIMS_SEEDS
+    if row["verdict"] == NO_DATA and row["min_n"] != "":
+        seeds = max(seeds, int(row["min_n"]))
+    out = claim_runs.assess(c.kind, c.a, c.b, env, runs, registry, seeds)
+    if out["verdict"] is None:
+        return {k: v for k, v in out.items() if k not in ("verdict", "reason")}
+    if row["verdict"] == NO_DATA and out["verdict"] != MISSING:
+        out["reason"] += " " + row["reason"][:1].upper() + row["reason"][1:] + "."
+    return out
 
 
 def test_text(c: Claim) -> str:
@@ -135,16 +165,16 @@ def stats_fmt(v: float) -> str:
 
 
 def _judge(c: Claim, env: str, panel, comps: list) -> dict:
-    if panel is None:
-        return dict(verdict=MISSING, reason=f"no done run of {env}")
-    if c.kind == "not_testable":
+    if c.kind == "not_testable":      # no run can settle it: before any check of the runs
         return dict(verdict=UNTESTABLE, reason=c.note or "the database does not record it")
+    if panel is None:
+        return dict(verdict=NO_RUNS, reason=f"no done run of {env}")
     b = [o for o in panel.optimizers if o not in c.a] if c.kind == "a_best" else c.b
     absent = [o for o in c.a + b if o not in panel.optimizers]
     if absent:
-        return dict(verdict=MISSING, reason=f"no done run of {', '.join(absent)} on {panel.env}")
+        return dict(verdict=NO_RUNS, reason=f"no done run of {', '.join(absent)} on {panel.env}")
     if c.kind == "a_best" and not b:
-        return dict(verdict=MISSING, reason=f"no other optimizer has a done run on {panel.env}")
+        return dict(verdict=NO_RUNS, reason=f"no other optimizer has a done run on {panel.env}")
     if c.kind in METRIC_KINDS:
         return _judge_rate(c, panel)
     return _judge_tests(c, b, panel, comps)

@@ -1,10 +1,11 @@
 """index.html: a self-contained page (relative links, images as files, no JavaScript, no network)."""
 from __future__ import annotations
 
-import re
 from html import escape
 
 from . import captions, renders
+from .claim_runs import CLAIMS_SEEDS
+from .registry import base_env
 from . import gradient_quality as gq
 from .tables import final_md_rows, fmt, mark, overview_text, rank_md_rows
 
@@ -21,12 +22,10 @@ figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #ddd; 
 figcaption { font-size: 0.9em; color: #444; max-width: 900px; }
 .note { background: #fff8e1; border-left: 4px solid #f0c000; padding: 0.4em 0.8em; }
 code { background: #f4f4f4; padding: 0 3px; }
-table.overview td.cell { text-align: center; min-width: 5.5em; }
+table.overview td.cell { text-align: center; min-width: 4em; }
 table.overview td.win { font-weight: bold; outline: 2px solid #1a7f37; outline-offset: -2px; }
 table.overview td.tie { font-weight: bold; }
 table.overview small { display: block; font-weight: normal; color: #555; }
-.answer { display: flex; flex-wrap: wrap; gap: 0 2.5em; align-items: flex-start; }
-.answer > div { flex: 1 1 28em; min-width: 0; }
 .gallery { display: flex; flex-wrap: wrap; gap: 0.6em; }
 .gallery figure { flex: 0 1 32%; margin: 0; } .gallery figcaption { font-size: 0.8em; }
 """
@@ -64,35 +63,53 @@ def _provenance(ctx) -> str:
     return "<h2 id=\"provenance\">Provenance</h2>\n" + table(["item", "value"], rows)
 
 
+def claim_counts(c) -> str:
+    """'env missing 1, holds 5, runs missing 3': rows per verdict, 'runs missing: k of n done'
+    counted as 'runs missing'."""
+    states = c["verdict"].str.split(":").str[0]
+    return ", ".join(f"{v} {n}" for v, n in states.value_counts().sort_index().items())
+
+
+def claim_row_classes(c) -> list:
+    return ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
+
+
+def settle_text(r) -> str:
+    """The command that settles an unsettled row, '—' where none can."""
+    return r["settle"] or ("—" if r["verdict"] in ("holds", "does not hold") else "none")
+
+
+def _env_budget(r) -> str:
+    return f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"]
+
+
 def _claims_compact(ctx) -> str:
     """The verdicts, one line per claim and env, at the top of the page (the details further down)."""
     c = ctx["claims"]
-    rows = [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"],
-             r["verdict"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2)] for _, r in c.iterrows()]
-    cls = ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
-    counts = ", ".join(f"{v} {n}" for v, n in c["verdict"].value_counts().sort_index().items())
+    rows = [[r["id"], _env_budget(r), r["verdict"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2),
+             settle_text(r)] for _, r in c.iterrows()]
     return ('<h2 id="claims">The paper\'s claims</h2>\n'
-            f"<p>{escape(counts or 'No claims.')}: each qualitative claim of Antonova et al. "
+            f"<p>{escape(claim_counts(c) or 'No claims.')}: each qualitative claim of Antonova et al. "
             "(CoRL 2022) tested on the final best losses over seeds (what the paper says, the test "
-            f"and why: {link('#claims-detail', 'the claims in detail')}; {link('claims.csv')}).</p>\n" +
-            table(["claim", "env (budget)", "verdict", "p (Holm)", "A12"], rows, cls,
-                  numeric={3, 4}))
+            f"and why: {link('#claims-detail', 'the claims in detail')}; {link('claims.csv')}). "
+            f"{escape(captions.CLAIMS_SETTLE.format(seeds=CLAIMS_SEEDS))}</p>\n" +
+            table(["claim", "env (budget)", "verdict", "p (Holm)", "A12", "to settle, run"], rows,
+                  claim_row_classes(c), numeric={3, 4}))
 
 
 def _claims(ctx) -> str:
     c = ctx["claims"]
-    rows = [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"],
-             f"{r['statement']} ({r['source']})", r["test"], r["n"],
-             fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2), r["verdict"], r["reason"]]
-            for _, r in c.iterrows()]
-    cls = ["best" if v == "holds" else "bad" if v == "does not hold" else "" for v in c["verdict"]]
-    counts = ", ".join(f"{v} {n}" for v, n in c["verdict"].value_counts().sort_index().items())
+    rows = [[r["id"], _env_budget(r), f"{r['statement']} ({r['source']})", r["test"], r["n"],
+             fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2), r["verdict"], r["reason"],
+             settle_text(r)] for _, r in c.iterrows()]
+    cls = claim_row_classes(c)
+    counts = claim_counts(c)
     return ('<h2 id="claims-detail">The paper\'s claims in detail</h2>\n<p>' +
             escape(captions.CLAIMS) + "</p>\n"
             f"<p>{escape(counts or 'No claims.')} ({link('claims.csv')}; every comparison: "
             f"{link('claims_comparisons.csv')})</p>\n" +
             table(["claim", "env (budget)", "the paper says", "tested as", "seeds", "p (Holm)", "A12",
-                   "verdict", "why"], rows, cls, numeric={5, 6}))
+                   "verdict", "why", "to settle, run"], rows, cls, numeric={5, 6}))
 
 
 def heat(score: float) -> str:
@@ -113,7 +130,9 @@ def _overview(ctx) -> str:
     out = ['<table class="overview">',
            "<tr><th>env (budget)</th>" + "".join(f"<th>{escape(o)}</th>" for o in opts) + "</tr>"]
     for r in rows:
-        tds = [f'<td><a href="#env-{escape(r["slug"])}">{escape(r["env"])}</a> ({r["budget"]})</td>']
+        scale = "<small>log colour scale</small>" if r["log"] else ""
+        tds = [f'<td><a href="#env-{escape(r["slug"])}">{escape(r["env"])}</a> ({r["budget"]})'
+               f"{scale}</td>"]
         for o in opts:
             c = r["cells"][o]
             if c is None:
@@ -225,14 +244,6 @@ def _landscapes(ctx) -> str:
     return "\n".join(p)
 
 
-def base_env(name: str) -> str:
-    """The env of `harness list` a landscape's variant belongs to: fluid-h5 -> fluid,
-    plb-table-h5 -> plb-table (scripts/landscape-gallery.sh slices the particle envs' short
-    variants); any other name is its own env."""
-    m = re.fullmatch(r"((?:fluid|plb-[a-z]+))-h[0-9]+", name)
-    return m.group(1) if m else name
-
-
 def gallery_groups(landscapes: list, gq_df) -> list:
     """(env, [landscape items]) in the order of the gradient survey's rows (harness list's order),
     then the other envs by name."""
@@ -335,10 +346,10 @@ def render(ctx) -> str:
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
              "<title>diffsim-bench report</title>", f"<style>{CSS}</style></head><body>",
              "<h1>diffsim-bench comparison report</h1>", f"<p>{escape(ctx['headline'])}</p>"]
-    # the answer: the claims' verdicts and the overview side by side where the window is wide
-    # enough for both (they wrap one under the other otherwise)
-    parts.append('<div class="answer"><div>' + _claims_compact(ctx) + "</div><div>" +
-                 _overview(ctx) + "</div></div>")
+    # the answer: the claims' verdicts, then the overview at the page's full width (every
+    # optimizer's column in view at 1,400 px: tests/report_screenshot_test.py measures it)
+    parts.append(_claims_compact(ctx))
+    parts.append(_overview(ctx))
     parts.append(_failures(ctx))
     for note in ctx["notes"]:
         parts.append(f'<p class="note">{escape(note)}</p>')

@@ -2,22 +2,26 @@
 from __future__ import annotations
 
 from . import captions
+from .claim_runs import CLAIMS_SEEDS
 from . import gradient_quality as gq
+from .html import settle_text
 from .tables import final_md_rows, fmt, md_table, overview_text, rank_md_rows
 
 
 def render(ctx) -> str:
     out = ["# diffsim-bench comparison report", "", ctx["headline"], ""]
     c = ctx["claims"]
-    out += ["## The paper's claims", "", captions.CLAIMS, "", md_table(
-        ["claim", "env (budget)", "tested as", "seeds", "p (Holm)", "A12", "verdict", "why"],
-        [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"], r["test"], r["n"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2),
-          r["verdict"], r["reason"]] for _, r in c.iterrows()]), ""]
+    out += ["## The paper's claims", "", captions.CLAIMS, "", captions.CLAIMS_SETTLE.format(seeds=CLAIMS_SEEDS), "", md_table(
+        ["claim", "env (budget)", "tested as", "seeds", "p (Holm)", "A12", "verdict", "why",
+         "to settle, run"],
+        [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"], r["test"],
+          r["n"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2), r["verdict"], r["reason"],
+          settle_text(r)] for _, r in c.iterrows()]), ""]
     opts = ctx["optimizers"]
     out += ["## Overview: final results per env and optimizer", "", captions.OVERVIEW, "",
             md_table(["env (budget)"] + list(opts),
-                     [[f"{r['env']} ({r['budget']})"] + [overview_text(r["cells"][o]) for o in opts]
-                      for r in ctx["overview"]]), ""]
+                     [[f"{r['env']} ({r['budget']}{', log colour scale' if r['log'] else ''})"] +
+                      [overview_text(r["cells"][o]) for o in opts] for r in ctx["overview"]]), ""]
     fl = ctx["failures"]
     out += ["## Failed episodes and failed runs", "", captions.FAILURES, "",
             md_table(["env (budget)"] + list(opts),

@@ -82,13 +82,35 @@ def rank_md_rows(mean_ranks: pd.DataFrame) -> tuple:
     return headers, rows
 
 
+LOG_RATIO = 100.0   # log colour scale where the highest finite median / the lowest exceeds this
+                    # (two decades, the rule of the curves' log y axis: style.DECADES_FOR_LOG)
+
+
+def uses_log(medians) -> bool:
+    """The overview's scale of one env: log when every finite median is positive and they span
+    more than LOG_RATIO (cartpole1: 1e-11 to 1.8), else linear."""
+    fin = [m for m in medians if math.isfinite(m)]
+    return bool(fin) and min(fin) > 0 and max(fin) / min(fin) > LOG_RATIO
+
+
+def score(median: float, lo: float, hi: float, log: bool) -> float:
+    """Position of a median between the env's lowest (0) and highest (1) finite median, on a log
+    or linear scale; +inf (no finite loss) scores 1, and 0 when all medians are equal."""
+    if not math.isfinite(median):
+        return 1.0
+    if not hi > lo:
+        return 0.0
+    if log:
+        return (math.log(median) - math.log(lo)) / (math.log(hi) - math.log(lo))
+    return (median - lo) / (hi - lo)
+
+
 def overview(panels: list, optimizers: list) -> list:
     """The answer table: one row per env (budget) with one cell per optimizer, dict(score, median,
-    mark, n) or None (no done run). score = (median - best) / (worst - best) over the env's
-    optimizers with a done run (0 = the lowest median, 1 = the highest; 0 for all when they are
-    equal; a median of +inf, no finite loss, scores 1). mark: 'best', '≈ best' (the Holm-corrected
-    Mann-Whitney U test cannot tell it from the best), 'too few seeds' (no test could: see
-    stats.too_few_seeds) or '' (worse)."""
+    mark, n) or None (no done run), and log (the row's scale, uses_log). score: see score(), over
+    the env's optimizers with a done run (0 = the lowest median, 1 = the highest). mark: 'best',
+    '≈ best' (the Holm-corrected Mann-Whitney U test cannot tell it from the best), 'too few
+    seeds' (no test could: see stats.too_few_seeds) or '' (worse)."""
     rows = []
     for it in panels:
         t = it["table"]
@@ -96,23 +118,18 @@ def overview(panels: list, optimizers: list) -> list:
         med = t["median"].astype(float)
         fin = med[np.isfinite(med)]
         lo, hi = (float(fin.min()), float(fin.max())) if len(fin) else (math.nan, math.nan)
+        log = uses_log(med)
         cells = {}
         for o in optimizers:
             if o not in t.index:
                 cells[o] = None
                 continue
             m = float(t.loc[o, "median"])
-            if not math.isfinite(m):
-                score = 1.0
-            elif hi > lo:
-                score = (m - lo) / (hi - lo)
-            else:
-                score = 0.0
             mk = mark(t.loc[o])
-            cells[o] = dict(score=score, median=m, mark="" if mk == "worse" else mk,
-                            n=int(t.loc[o, "n_seeds"]))
+            cells[o] = dict(score=score(m, lo, hi, log), median=m,
+                            mark="" if mk == "worse" else mk, n=int(t.loc[o, "n_seeds"]))
         rows.append(dict(env=it["panel"].env, budget=it["panel"].budget, slug=it["panel"].slug,
-                         cells=cells))
+                         cells=cells, log=log))
     return rows
 
 
