@@ -111,6 +111,13 @@ int command_report(const std::string& db_path, const std::string& out_dir, const
   const std::string script = std::string(reports_env ? reports_env : DSB_SOURCE_DIR "/reports") + "/make_report.py";
   if (!std::filesystem::is_regular_file(script)) throw UsageError("report generator not found at '" + script + "'");
   std::vector<std::string> args = {python, script, "--db", db_path, "--out", out_dir, "--build-type", DSB_BUILD_TYPE};
+  // this binary's `list` tells the report which envs exist (a missing env from missing runs)
+  std::error_code self_error;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", self_error);
+  if (!self_error) {
+    args.push_back("--harness");
+    args.push_back(self.string());
+  }
   if (!landscapes.empty()) {
     args.push_back("--landscapes");
     args.push_back(landscapes);
