@@ -1,7 +1,7 @@
 // `harness export --format ioh`: IOHprofiler's analyzer format for IOHanalyzer.
 //
-// What it writes follows the facts on IOHexperimenter's Analyzer logger (format "v2", its default;
-// ../shared/spec/reference/harness-anchors.md, section 2.2):
+// What it writes follows IOHexperimenter's Analyzer logger as documented by IOHprofiler (format
+// "v2", the logger's default):
 //
 //   OUT/<algorithm>/IOHprofiler_f<fid>_<function>.json            one meta file per function
 //   OUT/<algorithm>/data_f<fid>_<function>/IOHprofiler_f<fid>_DIM<d>.dat

@@ -1,6 +1,6 @@
 #pragma once
 // `cmaes`: CMA-ES with active (negative) weights, following the rules of the CyberAgentAILab `cmaes`
-// library (class CMA, v0.9.0 .. v0.13.1; see reference/optimizer-facts.md section 1), with IPOP
+// library (class CMA, v0.9.0 .. v0.13.1), with IPOP
 // restarts (Auger & Hansen 2005) as in that repository's examples/ipop_cma.py. Re-implemented in
 // Eigen from the published formulas; equation numbers refer to N. Hansen, "The CMA Evolution
 // Strategy: A Tutorial" (arXiv 1604.00772).

@@ -1,5 +1,5 @@
 // NLopt adapters: restarts, budget accounting, failed-episode penalty. See nlopt_adapters.hpp for
-// the behaviour; reference/optimizer-facts.md section 5 for the NLopt facts it relies on.
+// the behaviour; NLopt's documented behaviour is what it relies on.
 #include "optimizers/nlopt_adapters.hpp"
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 #pragma once
-// NLopt 2.7.1 adapters (see reference/optimizer-facts.md section 5):
+// NLopt 2.7.1 adapters (its documented behaviour):
 //   `nlopt-lbfgs`    LD_LBFGS (Luksan's limited-memory BFGS, needs the gradient)
 //   `nlopt-bobyqa`   LN_BOBYQA (Powell's bound-constrained quadratic models, derivative-free)
 //   `nlopt-direct-l` GN_DIRECT_L (locally biased DIRECT, deterministic, derivative-free)

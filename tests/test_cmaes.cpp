@@ -63,7 +63,7 @@ struct Row {
   int funhist_term;
 };
 
-// reference/optimizer-facts.md, section 1.2 (mu_eff to 4 decimals, the rest to 5)
+// Hansen's CMA-ES tutorial defaults (mu_eff to 4 decimals, the rest to 5)
 const Row kTable[] = {
     {1, 4, 2, 1.4598, 0.29631, 0.02769, 0.46379, 1.46379, 0.68940, 0.79762, 18},
     {2, 6, 3, 2.0286, 0.15482, 0.05786, 0.44620, 1.44620, 0.62455, 1.25427, 20},

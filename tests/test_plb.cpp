@@ -35,7 +35,7 @@ struct Expected {
   double E, nu, yield, floor_friction;
 };
 
-// reference/environment-facts.md 1.5
+// PlasticineLab's task files
 const Expected kExpected[] = {{"assembly", 30, 10000, 5e3, 0.2, 100, 100},   {"pinch", 15, 6000, 5e3, 0.2, 50, 100},
                               {"rollingpin", 15, 10000, 5e3, 0.2, 50, 1.5}, {"rope", 30, 10000, 5e3, 0.2, 50, 0.3},
                               {"table", 15, 10000, 5e3, 0.05, 50, 0.3},     {"torus", 15, 10000, 5e3, 0.2, 50, 100},

@@ -1,5 +1,5 @@
 #pragma once
-// The `flip` task (after the seed's DiffTaichi "Flip", reference/environment-facts.md "Flip"): a
+// The `flip` task (after the seed study's DiffTaichi "Flip"): a
 // square pancake, a soft mass-spring sheet, lies in a round pan of radius 20 cm; the pan moves in
 // the vertical x-y plane and tilts about z (3 DOF: x, y, tilt) along 5 waypoints, and the pancake
 // should end flipped over in the pan. Every constant below is "chosen here" (the seed gives only

@@ -8,7 +8,7 @@
 //       with it. The cloth starts at rest.
 //   swing-velocity-{single,corner,mesh}   3 params: the initial velocity of every vertex (the
 //       throw), x in [-1, 1]^3 -> [v_low, v_high] per axis; every patch at param 0.
-// Losses (the seed's definitions, reference/environment-facts.md "Swing"), at the final state:
+// Losses (the seed study's definitions for DiffTaichi's "Swing"), at the final state:
 //   single  |c - c*|, c the cloth's centre of mass (the seed's "final centre of mass to goal")
 //   corner  mean over the 4 corner vertices of |x_c - x_c*|
 //   mesh    mean over all vertices of |x_i - x_i*| (the seed's "mean vertex distance to a target

@@ -1,6 +1,6 @@
 #pragma once
 // `fluid`: a rigid ladle with 2 DOF scoops a sugar cube out of a tank of syrup (the paper's Fluid
-// task, App. B; reference/environment-facts.md 3). The seed fixes the tank (0.4 x 0.4 m, 0.2 m
+// task, App. B). The seed fixes the tank (0.4 x 0.4 m, 0.2 m
 // high), the 2-DOF ladle (forward/back and up/down speeds), 5 segments (10 params) and the loss
 //   max(0, y_w - y_cube) + 3 |xz_cube - xz_ladle| + |xz_cube - xz_axis|,  y_w = 0.2,
 // heights measured from the tank floor. Everything else is chosen here, in SI units (m, s, kg,

@@ -8,8 +8,8 @@
 // the next block along each axis). Memory is dense (64^3 nodes x 7 doubles = 15 MB); work is
 // proportional to the active blocks.
 //
-// Deterministic scatter (reference/mpm-facts.md 7): particles are binned by their home *unit*, the
-// cube of U = 2^kUnitLog2 nodes per axis containing their base node, in a stable counting sort
+// Deterministic scatter (so that no sum depends on the threads): particles are binned by their
+// home *unit*, the cube of U = 2^kUnitLog2 nodes per axis containing their base node, in a stable counting sort
 // (ascending particle index inside a unit), and units are coloured by the parity of their unit
 // coordinates. A particle writes nodes base..base+2, i.e. nodes uU .. uU + U + 1 along each axis,
 // so two units of one colour (2U nodes apart along some axis, U >= 2) never write the same node:

@@ -1,5 +1,5 @@
 #pragma once
-// The quadratic B-spline stencil of one particle (reference/mpm-facts.md 1): per axis
+// The quadratic B-spline stencil of one particle (MLS-MPM, Hu et al. 2018): per axis
 // base = floor(x/dx - 1/2), f = x/dx - base in [0.5, 1.5), weights
 //   w0 = (1.5 - f)^2 / 2,  w1 = 3/4 - (f - 1)^2,  w2 = (f - 0.5)^2 / 2,
 // their derivatives dw/dx = (-(1.5 - f), -2 (f - 1), f - 0.5) / dx, and node offsets o in {0,1,2}

@@ -1,7 +1,7 @@
 #pragma once
 // Constitutive models of the MPM engine, each a forward update and its adjoint, per particle.
 //
-// Solids (PlasticineLab's p2g, reference/environment-facts.md 1.1): F_tmp = (I + dt C) F,
+// Solids (PlasticineLab's p2g): F_tmp = (I + dt C) F,
 // F_tmp = U diag(sigma) V^T, then
 //  - `plastic`: von Mises return mapping in log (Hencky) strain: sigma clamped >= 0.05,
 //    eps = log sigma, eps^ = eps - mean(eps), |eps^| = sqrt(eps^.eps^ + 1e-8),
@@ -13,7 +13,7 @@
 //  Fixed-corotated Kirchhoff stress with R = U V^T of F_tmp:
 //    tau = 2 mu (F_new - R) F_new^T + lam J (J - 1) I = U diag(g) U^T,
 //    g_i = 2 mu (f_i - 1) f_i + lam J (J - 1), J = f_0 f_1 f_2.
-// Fluid (`fluid`, a viscous weakly compressible liquid for syrup; reference/mpm-facts.md 2, the
+// Fluid (`fluid`, a viscous weakly compressible liquid for syrup; the
 // "direct route" with a scalar J and no SVD): J_new = (1 + dt tr C) J,
 //    tau = K J_new (J_new - 1) I + eta J_new (C + C^T - 2/3 tr C I)
 // (pressure p = K (1 - J) as FluidLab's liquid with K = lambda; Newtonian deviatoric viscosity

@@ -1,6 +1,6 @@
 #pragma once
 // Constants of one MLS-MPM simulation (grid, time step, gravity, boundary): a plain struct with
-// PlasticineLab's defaults (reference/environment-facts.md 1.1), validated with messages that
+// PlasticineLab's defaults (its simulator's constants), validated with messages that
 // name the field, stored with every run through the task's config.
 //
 // The domain is the box [0, n_x dx] x [0, n_y dx] x [0, n_z dx] with grid nodes at integer

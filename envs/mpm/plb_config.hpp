@@ -1,6 +1,6 @@
 #pragma once
 // Configuration of a PlasticineLab task (`plb-NAME`, plb_tasks.hpp): PlasticineLab's simulator
-// constants (reference/environment-facts.md 1.1), its loss weights with the contact weight raised
+// constants (its simulator), its loss weights with the contact weight raised
 // (the paper's one change to the loss), the paper's action parameterization (5 segments of held
 // per-manipulator commands) and the horizon. Stored with every run.
 #include <cstdint>

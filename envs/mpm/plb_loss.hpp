@@ -1,5 +1,5 @@
 #pragma once
-// PlasticineLab's loss (reference/environment-facts.md 1.4) and its adjoint: after every env step
+// PlasticineLab's loss (its task loss) and its adjoint: after every env step
 //   L_t = w_sdf sum_I d_I m_I + w_density sum_I |m_I - t_I| + w_contact sum_k (min_p max(sdf_k(x_p), 0))^2
 // with m the grid mass (P2G of each particle's mass with the simulation's own B-spline), t the
 // target, d the distance to the target (plb_scene.hpp), k over the manipulators; the trajectory

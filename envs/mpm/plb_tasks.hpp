@@ -1,5 +1,5 @@
 #pragma once
-// PlasticineLab's eight tasks as data (reference/environment-facts.md 1.5): the simulator's
+// PlasticineLab's eight tasks as data (PlasticineLab's task files): the simulator's
 // per-task overrides, the plasticine shapes and particle counts, the manipulators (primitives with
 // their poses, sizes, bounds and action scales), PlasticineLab's target bounding box and centre of
 // mass (to compare ours with), and our scripted reference motion, whose final state is the

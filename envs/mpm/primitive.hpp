@@ -1,6 +1,6 @@
 #pragma once
 // Rigid primitives of the MPM engine: an analytic SDF shape (sdf.hpp), a pose that moves with
-// the actions, and PlasticineLab's grid contact (reference/environment-facts.md 1.3), each with
+// the actions, and PlasticineLab's grid contact (its primitives' SDF collision), each with
 // its adjoint.
 //
 // Kinematics per substep (PlasticineLab: an env step's action, scaled and divided by the

@@ -1,5 +1,5 @@
 #pragma once
-// One MLS-MPM substep in PlasticineLab's order (reference/environment-facts.md 1.1), and its
+// One MLS-MPM substep in PlasticineLab's order (its simulator's substep), and its
 // reverse. Forward:
 //   1. bin particles by home block; clear the active blocks;
 //   2. stress: F_tmp = (I + dt C) F, SVD, return mapping, Kirchhoff stress (material.hpp), the

@@ -11,7 +11,7 @@ CartpoleConfig CartpoleConfig::one_link() {
   CartpoleConfig c;
   c.links = 1;
   c.link_masses = {1.0};
-  // chosen here: design.md's (1.0, 2.5) is out of reach of a 1 m pole (loss floor 1.5, which
+  // chosen here: the design's first choice, (1.0, 2.5), is out of reach of a 1 m pole (loss floor 1.5, which
   // every optimizer hits); the 3-link target's height scaled to the chain length, 2.5/3 -> 0.8
   c.target = {1.0, 0.8};
   return c;

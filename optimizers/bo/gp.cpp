@@ -1,7 +1,7 @@
 // Exact GP regression (Matern-5/2 ARD, constant mean, Gaussian noise with a floor) with BoTorch's
-// 2022 SingleTaskGP priors. Facts: spec/reference/optimizer-facts.md sections 2.1-2.4 (GPyTorch
-// defaults, psd_safe_cholesky, min_variance), 4.2 (limbo's O(n^2) Cholesky extension) and 5
-// (NLopt LD_LBFGS).
+// 2022 SingleTaskGP priors. Relies on: GPyTorch's
+// defaults, psd_safe_cholesky and min_variance; limbo's O(n^2) Cholesky extension; NLopt's
+// LD_LBFGS.
 //
 // Choices made here (and why):
 // - Fit: every one of cfg.fit_attempts L-BFGS starts is run (the current hyperparameters, then

@@ -1,6 +1,6 @@
 #pragma once
 // Fully connected network for the RL baselines (ports of Stable-Baselines3's PPO and SAC, see
-// reference/optimizer-facts.md section 3): layer sizes {in, h1, ..., out}, a tanh or relu on every
+// Stable-Baselines3's defaults): layer sizes {in, h1, ..., out}, a tanh or relu on every
 // hidden layer, a linear output layer.
 //
 // Parameter layout (one flat vector, so Adam, gradient clipping, Polyak averaging and hashing see

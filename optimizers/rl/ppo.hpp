@@ -1,5 +1,5 @@
 #pragma once
-// `ppo`: a port of Stable-Baselines3's PPO (reference/optimizer-facts.md 3.1) with the seed's
+// `ppo`: a port of Stable-Baselines3's PPO (SB3 ppo.py) with the seed's
 // changes, driving an env's per-step view through the budgeted Objective (Objective::rl_*).
 //
 // Follows SB3: n_steps 2048 decisions per rollout (episodes run on across rollouts), GAE

@@ -1,6 +1,6 @@
 #pragma once
 // `sac`: Soft Actor-Critic as Stable-Baselines3's SAC (stable_baselines3/sac/sac.py and
-// sac/policies.py; reference/optimizer-facts.md section 3.2) with the seed paper's changes,
+// sac/policies.py) with the seed paper's changes,
 // re-implemented on the RL view of the budgeted Objective (Objective::rl_reset / rl_step).
 //
 // Where this follows SB3 (defaults):

@@ -1,7 +1,7 @@
 #pragma once
-// The math of one SAC gradient step (SB3 sac.py SAC.train, see reference/optimizer-facts.md
-// section 3.2), as free functions on plain numbers and on Mlp networks, so that tests can compare
-// each piece with hand values and central differences. optimizers/rl/sac.hpp strings them together.
+// The math of one SAC gradient step (SB3 sac.py SAC.train), as free functions on plain numbers and
+// on Mlp networks, so that tests can compare each piece with hand values and central differences.
+// optimizers/rl/sac.hpp strings them together.
 //
 // Networks (SB3 SAC policies with share_features_extractor = False, flatten features):
 //   - actor: one Mlp {obs_dim, h..., 2 action_dim}: rows 0 .. d-1 of its output are the mean,

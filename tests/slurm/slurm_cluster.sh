@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A real single-node Slurm cluster (munge + slurmctld + slurmd) in a scratch folder, started without
-# systemd, for tests (recipe: ../shared/spec/reference/slurm-single-node.md). Source this file, then
+# systemd, for tests (munge key, slurm.conf for one node, daemons in the foreground). Source this file, then
 #   slurm_cluster_start DIR   # starts the daemons, exports SLURM_CONF, waits until the node is idle
 #   slurm_cluster_stop        # stops them (TERM, KILL after 15 s); safe to call twice
 # Needs root (the daemons run as root) and the Debian packages slurmctld, slurmd, slurm-client, munge.
