@@ -209,10 +209,12 @@ TEST_F(Reliability, TheLockBelongsToTheFileNotItsName) {
   const std::string db = path("l.sqlite");
   const pid_t first = start_harness(grid + " --db " + db);
   ASSERT_GT(first, 0);
-  const bool started =
-      wait_until(db, "SELECT count(*) FROM runs WHERE status='running'", "1", first, std::chrono::seconds(120));
+  // a run 'running' with a committed prefix (commits come every 2 s; on a loaded machine the first
+  // may come late, and the checks below need a journal to find intact)
+  const bool started = wait_until(db, "SELECT count(*) FROM runs WHERE status='running' AND episodes > 0", "1",
+                                  first, std::chrono::seconds(120));
   if (!started) ::kill(first, SIGKILL);
-  ASSERT_TRUE(started) << "no run row 'running' appeared";
+  ASSERT_TRUE(started) << "no run row 'running' with committed episodes appeared";
   fs::create_symlink(db, path("sym.sqlite"));
   fs::create_hard_link(db, path("hard.sqlite"));
   const std::string holder = "is in use by another harness (pid " + std::to_string(first);
