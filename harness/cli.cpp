@@ -28,6 +28,7 @@
 #include "harness/plan_report.hpp"
 #include "harness/render_command.hpp"
 #include "harness/report_refresher.hpp"
+#include "harness/run_order.hpp"
 #include "harness/runner.hpp"
 #include "harness/slurm_command.hpp"
 #include "harness/store.hpp"
@@ -227,7 +228,7 @@ int command_plan(const RunArgs& a, const std::string& runs_csv) {
   const CostModel costs;
   print_plan(std::cout, plan, costs, plan_context(a, run));
   print_failed_runs(std::cout, plan, failed);
-  if (!runs_csv.empty()) write_plan_runs_csv(runs_csv, plan, costs);
+  if (!runs_csv.empty()) write_plan_runs_csv(runs_csv, plan, costs, !a.no_sharing, run.jobs);
   const double planning_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cout << fmt::format("  planned in {:.3f} s; env models built: {} (nothing was written)\n", planning_s,
                            lazy_model_builds());
@@ -275,12 +276,12 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
     print_plan(text, plan, costs, plan_context(a, run));
     std::fputs(text.str().c_str(), stderr);
   }
-  // cheapest runs first, so partial reports come early, but the first seed of a sharing group
-  // before them (each run's result does not depend on order)
+  // cheapest runs first, so partial reports come early, each sharing group's lead pulled ahead of
+  // its followers (run_order.hpp; each run's result does not depend on order)
   const std::vector<double> cost = run_costs(plan, costs);
   std::vector<PlannedRun> pending;
   std::vector<double> pending_cost;
-  for (const std::size_t i : run_order(plan.pending, cost, !a.no_sharing)) {
+  for (const std::size_t i : run_order(plan.pending, cost, !a.no_sharing, run.jobs)) {
     pending.push_back(plan.pending[i]);
     pending_cost.push_back(cost[i]);
   }
@@ -387,8 +388,8 @@ int harness_main(int argc, char** argv) {
   add_run_options(*plan, plan_args);
   std::string plan_runs_csv;
   plan->add_option("--runs-csv", plan_runs_csv,
-                   "also write each run to run with its estimated seconds (CSV: env,optimizer,seed,budget,"
-                   "planned_s,source; a new file)");
+                   "also write each run to run with its estimated seconds and its place in the start order (CSV: "
+                   "env,optimizer,seed,budget,planned_s,source,start_rank,lead_seed; a new file)");
 
   RunArgs calibrate_args;
   bool calibrate_force = false;

@@ -4,12 +4,12 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <numeric>
 #include <set>
 
 #include <fmt/format.h>
 
 #include "harness/output_path.hpp"
+#include "harness/run_order.hpp"
 #include "optimizers/core/registry.hpp"
 
 namespace dsb {
@@ -35,15 +35,22 @@ struct Tally {
 
 }  // namespace
 
-void write_plan_runs_csv(const std::string& path, const GridPlan& plan, const CostModel& costs) {
+void write_plan_runs_csv(const std::string& path, const GridPlan& plan, const CostModel& costs, bool share, int jobs) {
   const std::vector<double> cost = run_costs(plan, costs);
+  std::vector<std::size_t> rank(plan.pending.size());
+  const std::vector<std::size_t> order = run_order(plan.pending, cost, share, jobs);
+  for (std::size_t r = 0; r < order.size(); ++r) rank[order[r]] = r;
+  const std::vector<std::ptrdiff_t> lead =
+      share ? share_leads(plan.pending) : std::vector<std::ptrdiff_t>(plan.pending.size(), -1);
   OutputFile file("--runs-csv", path, false);
-  file.stream() << "env,optimizer,seed,budget,planned_s,source\n";
+  file.stream() << "env,optimizer,seed,budget,planned_s,source,start_rank,lead_seed\n";
   for (std::size_t i = 0; i < plan.pending.size(); ++i) {
     const PlannedRun& p = plan.pending[i];
     const bool measured = !plan.measured_wall_s.empty() && std::isfinite(plan.measured_wall_s[i]);
-    file.stream() << fmt::format("{},{},{},{},{:.6g},{}\n", p.spec.env, p.spec.optimizer, p.spec.seed, p.spec.budget,
-                                 cost[i], measured ? "measured" : "model");
+    const std::string lead_seed =
+        lead[i] >= 0 ? std::to_string(plan.pending[static_cast<std::size_t>(lead[i])].spec.seed) : std::string();
+    file.stream() << fmt::format("{},{},{},{},{:.6g},{},{},{}\n", p.spec.env, p.spec.optimizer, p.spec.seed,
+                                 p.spec.budget, cost[i], measured ? "measured" : "model", rank[i], lead_seed);
   }
   file.commit();
 }
@@ -71,27 +78,6 @@ std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs) {
     c.push_back(std::isfinite(measured) ? measured * (1.0 - share) : costs.run_seconds(plan.pending[i], share));
   }
   return c;
-}
-
-std::vector<std::size_t> cheapest_first(const std::vector<double>& run_cost_s) {
-  std::vector<std::size_t> order(run_cost_s.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return run_cost_s[a] < run_cost_s[b]; });
-  return order;
-}
-
-std::vector<std::size_t> run_order(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
-                                   bool share) {
-  std::vector<std::size_t> order = cheapest_first(run_cost_s);
-  if (!share) return order;
-  std::vector<char> leads(pending.size(), 0);
-  for (const std::ptrdiff_t l : share_leads(pending))
-    if (l >= 0) leads[static_cast<std::size_t>(l)] = 1;
-  // the leads, the most expensive first, then the rest as they were
-  std::stable_partition(order.begin(), order.end(), [&](std::size_t i) { return leads[i] != 0; });
-  const auto n_leads = std::count(leads.begin(), leads.end(), char{1});
-  std::reverse(order.begin(), order.begin() + n_leads);
-  return order;
 }
 
 void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& ctx) {

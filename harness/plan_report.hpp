@@ -21,20 +21,14 @@ struct PlanContext {
 // the pending runs' estimated seconds, in plan order
 std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs);
 
-// the order to run them: cheapest first (stable, so equal costs keep grid order), so partial
-// reports come early; results do not depend on the order
-std::vector<std::size_t> cheapest_first(const std::vector<double>& run_cost_s);
-// With sharing across seeds: the leads of sharing groups (share_leads) first, the most expensive
-// first, so that their other seeds can replay them while the rest runs; then cheapest first.
-std::vector<std::size_t> run_order(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
-                                   bool share);
-
 void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& context);
 
-// `harness plan --runs-csv`: one line per pending run, env,optimizer,seed,budget,planned_s,source
-// (source: measured when the database's done runs of its group gave it, else model), written
-// whole to a new file (output_path.hpp)
-void write_plan_runs_csv(const std::string& path, const GridPlan& plan, const CostModel& costs);
+// `harness plan --runs-csv`: one line per pending run, env,optimizer,seed,budget,planned_s,source,
+// start_rank,lead_seed (source: measured when the database's done runs of its group gave it, else
+// model; start_rank: its place in the order a grid with these `jobs` starts runs, run_order.hpp;
+// lead_seed: the seed whose run it waits for and replays, empty when none), written whole to a
+// new file (output_path.hpp)
+void write_plan_runs_csv(const std::string& path, const GridPlan& plan, const CostModel& costs, bool share, int jobs);
 
 // the grid's runs that the database holds as 'failed' (`failed`: key -> error, runs_of_file),
 // each with its error, at most kFailedRunsShown of them; nothing when there are none

@@ -1,7 +1,8 @@
 // The grid's cost model and its uses: the progress line's share of the estimated work and ETA,
-// cheapest-first order, shards cut from run keys, durations as the plan prints them; a plan that
+// the run order (cheapest first, sharing leads pulled ahead), shards cut from run keys, durations as the plan prints them; a plan that
 // takes a database's measured walls, Slurm time limits from the plan, and no optimizer's name in
 // the harness (its costs come from the registry).
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -10,6 +11,8 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -17,6 +20,7 @@
 #include "harness/plan.hpp"
 #include "harness/plan_report.hpp"
 #include "harness/progress.hpp"
+#include "harness/run_order.hpp"
 #include "harness/slurm_command.hpp"
 #include "optimizers/core/registry.hpp"
 #include "support/harness_process.hpp"
@@ -70,6 +74,87 @@ TEST(PlanOrder, CheapestFirstIsStableSoEqualCostsKeepGridOrder) {
   EXPECT_EQ(cheapest_first(cost), want);
 }
 
+// The runner's rule (runner.hpp) on estimated costs: `jobs` workers; each free worker takes the
+// first run in `order` not taken whose lead has ended. Returns each run's end time.
+std::vector<double> simulate_runner(const std::vector<std::size_t>& order, const std::vector<double>& cost,
+                                    const std::vector<std::ptrdiff_t>& lead, int jobs) {
+  std::vector<double> end(cost.size(), -1.0), worker_free(static_cast<std::size_t>(jobs), 0.0);
+  std::vector<char> taken(cost.size(), 0);
+  for (std::size_t started = 0; started < cost.size(); ++started) {
+    // the earliest moment some worker is free and some run may start there
+    double best_t = 1e300;
+    std::size_t best_w = 0, best_i = 0;
+    for (std::size_t w = 0; w < worker_free.size(); ++w)
+      for (const std::size_t i : order) {
+        if (taken[i]) continue;
+        double t = worker_free[w];
+        if (lead[i] >= 0) {
+          const double lead_end = end[static_cast<std::size_t>(lead[i])];
+          if (lead_end < 0) continue;  // the lead has not started: not free at any known time
+          t = std::max(t, lead_end);
+        }
+        if (t < best_t) best_t = t, best_w = w, best_i = i;
+        break;  // later runs in order are taken only when this one is not free at t
+      }
+    taken[best_i] = 1;
+    end[best_i] = best_t + cost[best_i];
+    worker_free[best_w] = end[best_i];
+  }
+  return end;
+}
+
+std::vector<PlannedRun> runs_of(const std::vector<std::tuple<std::string, std::string, int>>& specs) {
+  std::vector<PlannedRun> runs;
+  for (const auto& [env, opt, seed] : specs)
+    runs.push_back({RunSpec{env, opt, seed, 100}, RunKey{env, opt, seed, 100, "e", "o", "0.1.0"}, nullptr, nullptr});
+  return runs;
+}
+
+TEST(PlanOrder, WithoutSharingTheOrderIsCheapestFirst) {
+  const auto runs = runs_of({{"a", "gd", 0}, {"a", "gd", 1}, {"b", "cmaes", 0}});
+  const std::vector<double> cost = {5.0, 3.0, 1.0};
+  EXPECT_EQ(run_order(runs, cost, false, 2), cheapest_first(cost));
+  // cmaes draws at its start: no group has a lead, so sharing leaves cheapest first too
+  const auto drawing = runs_of({{"a", "cmaes", 0}, {"a", "cmaes", 1}, {"b", "cmaes", 0}});
+  EXPECT_EQ(run_order(drawing, cost, true, 2), cheapest_first(cost));
+}
+
+TEST(PlanOrder, LightRunsReportFirstAndAnExpensiveLeadEndsAsItsFollowersAreDue) {
+  // an expensive gd group of 5 seeds (the lead 300 s, each follower 30 s: 90% of it replayed),
+  // 20 tiny runs of 1 s and 100 light ones of 10 s (cmaes: no sharing), on 2 workers
+  std::vector<std::tuple<std::string, std::string, int>> specs;
+  std::vector<double> cost;
+  for (int s = 0; s < 5; ++s) specs.emplace_back("heavy", "gd", s), cost.push_back(s == 0 ? 300.0 : 30.0);
+  for (int s = 0; s < 20; ++s) specs.emplace_back("tiny", "cmaes", s), cost.push_back(1.0);
+  for (int s = 0; s < 100; ++s) specs.emplace_back("light", "cmaes", s), cost.push_back(10.0);
+  const auto runs = runs_of(specs);
+  const auto lead = share_leads(runs);
+  ASSERT_EQ(lead[1], 0);
+  const auto order = run_order(runs, cost, true, 2);
+  std::vector<std::size_t> at(order.size());
+  for (std::size_t r = 0; r < order.size(); ++r) at[order[r]] = r;
+  // the lead comes before its followers, and the tiny runs before the lead
+  for (std::size_t f = 1; f < 5; ++f) EXPECT_LT(at[0], at[f]);
+  for (std::size_t t = 5; t < 25; ++t) EXPECT_LT(at[t], at[0]);
+  const auto end_of = [](const std::vector<double>& e, std::size_t from, std::size_t to) {
+    return *std::max_element(e.begin() + static_cast<std::ptrdiff_t>(from), e.begin() + static_cast<std::ptrdiff_t>(to));
+  };
+  const auto end = simulate_runner(order, cost, lead, 2);
+  // the tiny env is done after its 20 s of work on 2 workers; no worker ever waits:
+  // (300 + 4 x 30 + 20 + 1000) s of work over 2 workers = 720 s
+  EXPECT_DOUBLE_EQ(end_of(end, 5, 25), 10.0);
+  EXPECT_DOUBLE_EQ(end_of(end, 0, end.size()), 720.0);
+  // leads first (the earlier order) holds a worker from the start: the tiny env ends at 20 s
+  std::vector<std::size_t> leads_first = {0};
+  for (const std::size_t i : cheapest_first(cost))
+    if (i != 0) leads_first.push_back(i);
+  const auto end_lf = simulate_runner(leads_first, cost, lead, 2);
+  EXPECT_DOUBLE_EQ(end_of(end_lf, 5, 25), 20.0);
+  // cheapest first reaches the lead last, and a worker waits while it runs alone
+  const auto end_cf = simulate_runner(cheapest_first(cost), cost, lead, 2);
+  EXPECT_DOUBLE_EQ(end_of(end_cf, 0, end_cf.size()), 870.0);
+}
+
 TEST(Shards, AShardIsAFunctionOfTheRunKeyAlone) {
   const RunKey a{"fluid", "cmaes", 3, 1000, "e", "o", "0.1.0"};
   RunKey other_version = a;
@@ -118,7 +203,7 @@ TEST_F(PlanFromDatabase, DoneRunsOfAGroupCostItsPendingRunsByTheirMedianWall) {
   EXPECT_NE(p.out.find("2 runs costed from the median wall time of their group's done runs"), std::string::npos)
       << p.out;
   const std::string csv = testing::read_file(path("runs.csv"));
-  EXPECT_EQ(csv.rfind("env,optimizer,seed,budget,planned_s,source\n", 0), 0u) << csv;
+  EXPECT_EQ(csv.rfind("env,optimizer,seed,budget,planned_s,source,start_rank,lead_seed\n", 0), 0u) << csv;
   // cmaes seeds 2 and 3 at the median of seeds 0 and 1 (their mean), gd from the model
   const double median = std::stod(testing::scalar(
       path("m.sqlite"), "SELECT printf('%.17g', avg(wall_s)) FROM runs WHERE optimizer='cmaes'"));
@@ -126,9 +211,13 @@ TEST_F(PlanFromDatabase, DoneRunsOfAGroupCostItsPendingRunsByTheirMedianWall) {
   ASSERT_NE(at, std::string::npos) << csv;
   EXPECT_NEAR(std::stod(csv.substr(at + 21)), median, 1e-5 * median) << csv;
   EXPECT_NE(csv.find("cartpole1,cmaes,3,30,"), std::string::npos) << csv;
-  EXPECT_NE(csv.find(",measured\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",measured,"), std::string::npos) << csv;
   EXPECT_NE(csv.find("cartpole1,gd,0,30,"), std::string::npos) << csv;
-  EXPECT_NE(csv.find(",model\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",model,"), std::string::npos) << csv;
+  // gd's seeds 1-3 wait for seed 0 and replay it; cmaes draws at its start and waits for none
+  EXPECT_NE(csv.find("cartpole1,gd,3,30,"), std::string::npos) << csv;
+  EXPECT_EQ(csv.substr(csv.find('\n', csv.find("cartpole1,gd,3,30,")) - 2, 2), ",0") << csv;
+  EXPECT_EQ(csv.substr(csv.find('\n', csv.find("cartpole1,cmaes,3,30,")) - 1, 1), ",") << csv;
 }
 
 TEST_F(PlanFromDatabase, SlurmTakesItsTimeLimitFromThePlanUnlessGivenOne) {
