@@ -24,6 +24,7 @@
 #include "harness/merge_command.hpp"
 #include "harness/output_path.hpp"
 #include "envs/core/lazy_model.hpp"
+#include "envs/core/registry.hpp"
 #include "harness/plan.hpp"
 #include "harness/plan_report.hpp"
 #include "harness/render_command.hpp"
@@ -50,7 +51,7 @@ struct RunArgs {
   int threads = 1;  // inside one rollout
   std::string shard;
   bool quiet = false;
-  std::vector<std::string> knobs;  // --set OPT.KNOB=VALUE, repeatable
+  std::vector<std::string> knobs;  // --set OPT.KNOB=VALUE or ENV.KEY=VALUE, repeatable
   std::vector<std::string> ext;    // --ext NAME=COMMAND, repeatable
   std::string ext_timeout;         // --ext-timeout SECONDS (empty: the default)
   bool no_sharing = false;         // --no-sharing: simulate every seed's every episode
@@ -67,9 +68,14 @@ std::size_t default_tape_memory_bytes(int jobs) {
                                   static_cast<double>(std::max(1, jobs)));
 }
 
-// --set's help: the knobs of every optimizer that has some
+// --set's help: the knobs of every optimizer that has some, and the env options
 std::string knob_help() {
-  std::string h = "set a knob of an optimizer's config (repeatable; the run key keeps variants apart):";
+  std::string h = "set a knob of an optimizer's config, OPT.KNOB=VALUE, or an option of an env of the grid, "
+                  "ENV.KEY=VALUE (repeatable; the run key keeps variants apart; `harness list` shows both). Env "
+                  "options:";
+  for (const auto& f : env_families())
+    for (const auto& o : f.options) h += " " + f.pattern + "." + o.key + ";";
+  h += " knobs:";
   for (const auto& e : optimizer_entries()) {
     if (e.knobs.empty()) continue;
     h += " " + e.name + ":";
@@ -87,7 +93,7 @@ void add_grid_options(CLI::App& app, RunArgs& a) {
   app.add_option("--optimizer", a.optimizers, "optimizer names, comma-separated")->delimiter(',');
   app.add_option("--seeds", a.seeds, "number of seeds per (env, optimizer), seed indices 0..N-1");
   app.add_option("--budget", a.budget, "episodes per run (default 1000)");
-  app.add_option("--set", a.knobs, knob_help())->type_name("OPT.KNOB=VALUE");
+  app.add_option("--set", a.knobs, knob_help())->type_name("OPT.KNOB=VALUE|ENV.KEY=VALUE");
   app.add_option("--ext", a.ext,
                  "the command of external optimizer ext:NAME, run once per run with /bin/sh -c and spoken to in "
                  "JSON lines (docs/ext-protocol.md); repeatable")
@@ -197,7 +203,7 @@ std::string grid_flags(const RunArgs& a) {
   if (!a.envs.empty()) f += (f.empty() ? "" : " ") + std::string("--env ") + join(a.envs);
   if (!a.optimizers.empty()) f += " --optimizer " + join(a.optimizers);
   f += fmt::format(" --seeds {} --budget {}", a.seeds, a.budget);
-  for (const auto& k : a.knobs) f += " --set " + k;
+  for (const auto& k : a.knobs) f += " --set " + shell_word(k);
   for (const auto& x : a.ext) f += " --ext " + shell_word(x);
   if (!a.ext_timeout.empty()) f += " --ext-timeout " + a.ext_timeout;
   return f;
@@ -242,12 +248,14 @@ int command_calibrate(const RunArgs& a, bool force) {
   CostModel costs;
   std::cout << fmt::format("{:<26} {:>12} {:>12} {:>10}  {}\n", "env", "forward s", "gradient s", "decisions",
                            "source");
+  std::map<std::string, EnvOptions> options;  // of each env of the grid (one set per env name)
+  for (const auto& spec : run.grid) options[spec.env] = spec.env_options;
   for (const auto& [name, config] : plan.env_configs) {
     EpisodeCost c = costs.episode(name, config.hash);
     const bool measure = force || !c.measured;
     if (measure) {
       std::cerr << "harness: timing " << name << " ..." << std::endl;
-      c = costs.calibrate(name, config.hash, run.tape_memory_bytes);
+      c = costs.calibrate(name, config.hash, run.tape_memory_bytes, options[name]);
       costs.save();  // after each env: an interrupted calibration keeps what it measured
     }
     std::cout << fmt::format("{:<26} {:>12.4g} {:>12.4g} {:>10}  {}\n", name, c.forward_s, c.gradient_s, c.decisions,
@@ -330,7 +338,9 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
     shard_runs.assign(options.shards, 0);
     for (const PlannedRun& p : plan_grid(run.grid, {}, kVersion).pending) ++shard_runs[shard_of(p.key, options.shards)];
   }
-  const SlurmGridFlags flags{a.all, a.envs, a.optimizers, a.seeds, a.budget, a.knobs, a.ext, a.ext_timeout};
+  // the tasks run in another folder: a target file's path goes to them absolute
+  const SlurmGridFlags flags{
+      a.all, a.envs, a.optimizers, a.seeds, a.budget, settings_with_absolute_paths(a.knobs), a.ext, a.ext_timeout};
   SlurmOptions o = options;
   if (o.time.empty() && !shard_runs.empty()) {
     // each task's wall from the plan (its runs over its CPUs, at least its longest run)
@@ -409,9 +419,12 @@ int harness_main(int argc, char** argv) {
   slurm->add_option("--partition", slurm_opts.partition, "Slurm partition (default: the cluster's)");
 
   std::string eval_env, eval_x;
+  std::vector<std::string> eval_sets;
   bool eval_grad = false;
   auto* eval = app.add_subcommand("eval", "one rollout at x, JSON on stdout");
   eval->add_option("--env", eval_env, "env name")->required();
+  eval->add_option("--set", eval_sets, "an option of the env, ENV.KEY=VALUE (repeatable; `harness list` shows them)")
+      ->type_name("ENV.KEY=VALUE");
   eval->add_option("--x", eval_x, "comma-separated parameters in [-1, 1]")->required();
   eval->add_flag("--grad", eval_grad, "also print dLoss/dx (normalized units)");
 
@@ -522,7 +535,7 @@ int harness_main(int argc, char** argv) {
       check_report_folder(report_out, report_force);
       return command_report(report_db, report_out, report_landscapes, false, report_gradient_quality, report_renders);
     }
-    if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad);
+    if (eval->parsed()) return command_eval(eval_env, eval_x, eval_grad, parse_env_settings(eval_env, eval_sets));
     if (render->parsed()) return command_render(render_args);
     if (gradcheck->parsed())
       return command_gradcheck(gc_env, gc, gc_json);

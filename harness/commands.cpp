@@ -64,6 +64,11 @@ int command_list() {
   std::cout << fmt::format("{:<22} {:>14} {:>8} {:>9}  {}\n", "ext:NAME", "either", "no", "its own",
                            "your own optimizer, a program on the process protocol: --ext NAME='COMMAND' "
                            "(docs/ext-protocol.md)");
+  std::cout << "\nenv options (--set ENV.KEY=VALUE with ENV a name of the family, e.g. plb-pinch-h5.target=F.npy; "
+               "also `harness eval --set`; another value is another env config, so its own runs)\n";
+  for (const auto& family : env_families())
+    for (const auto& o : family.options)
+      std::cout << fmt::format("{:<22} {:<8} {}; default: {}\n", family.pattern, o.key, o.meaning, o.default_text);
   std::cout << "\nknobs (--set OPTIMIZER.KNOB=VALUE; a variant is its own run)\n";
   for (const auto& e : optimizer_entries())
     if (!e.knobs.empty()) std::cout << fmt::format("{:<22} {}\n", e.name, fmt::join(e.knobs, ", "));
@@ -87,8 +92,8 @@ nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : 
 
 }  // namespace
 
-int command_eval(const std::string& env_name, const std::string& x_text, bool with_grad) {
-  const auto env = make_env(env_name);
+int command_eval(const std::string& env_name, const std::string& x_text, bool with_grad, const EnvOptions& options) {
+  const auto env = make_env(env_name, options);
   const auto x = checked_point(*env, x_text);
   if (with_grad && !env->differentiable())
     throw UsageError("--grad: env '" + env_name + "' is not differentiable");

@@ -7,12 +7,15 @@
 #include <vector>
 
 #include "envs/core/env.hpp"
+#include "envs/core/env_options.hpp"
 #include "envs/core/gradient_check.hpp"
 
 namespace dsb {
 
 int command_list();
-int command_eval(const std::string& env_name, const std::string& x_text, bool with_grad);
+// One rollout of env_name (with its options, --set ENV.KEY=VALUE) at x: JSON on stdout.
+int command_eval(const std::string& env_name, const std::string& x_text, bool with_grad,
+                 const EnvOptions& options = {});
 // Analytic gradient vs central differences at seeded random points (harness/gradcheck_command.cpp):
 // a per-point table and the survey's summary, or one JSON object with json. 0 when every point
 // passes, 1 when any fails (gradient disagrees, loss() and loss_and_grad() disagree, non-finite).

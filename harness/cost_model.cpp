@@ -108,8 +108,8 @@ double CostModel::run_seconds(const PlannedRun& run, double shared_share) const 
 }
 
 EpisodeCost CostModel::calibrate(const std::string& env_name, const std::string& env_config_hash,
-                                 std::size_t tape_memory_bytes) {
-  const auto env = shared_env(env_name);
+                                 std::size_t tape_memory_bytes, const EnvOptions& env_options) {
+  const auto env = shared_env(env_name, env_options);
   const auto ws = env->make_workspace();
   ws->tape_memory_bytes = tape_memory_bytes;
   const std::vector<double> x(static_cast<std::size_t>(env->dim()), 0.0);

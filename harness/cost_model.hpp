@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "envs/core/env.hpp"
+#include "envs/core/env_options.hpp"
 #include "harness/plan.hpp"
 
 namespace dsb {
@@ -40,9 +41,9 @@ class CostModel {
 
   // times one forward and one gradient episode of the env (repeated to at least 0.2 s for cheap
   // envs: the median is kept; the gradient with `tape_memory_bytes` as a run has them) and its RL
-  // view's decisions, and records them
+  // view's decisions, and records them; `env_options` as the grid gives the env (--set ENV.KEY=VALUE)
   EpisodeCost calibrate(const std::string& env_name, const std::string& env_config_hash,
-                        std::size_t tape_memory_bytes = 0);
+                        std::size_t tape_memory_bytes = 0, const EnvOptions& env_options = {});
   // writes the cache (creating its folder); throws UsageError naming the file when it cannot
   void save() const;
 

@@ -1,5 +1,7 @@
 #include "harness/grid.hpp"
 
+#include <algorithm>
+#include <filesystem>
 #include <set>
 
 #include "common/error.hpp"
@@ -35,12 +37,23 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
   if (!opts_explicit)
     for (const auto& e : optimizer_entries()) optimizers.push_back(e.name);
 
+  // --set's settings of an env of the grid are its options; the others must be optimizer knobs
+  std::map<std::string, EnvOptions> env_options;
+  std::map<std::string, KnobSettings> knobs;
+  for (const auto& [owner, settings] : req.knobs) {
+    if (std::find(envs.begin(), envs.end(), owner) != envs.end())
+      env_options[owner] = settings;
+    else
+      knobs[owner] = settings;
+  }
+
   // validate every name before anything runs; duplicates are a user error too
   std::set<std::string> seen;
   std::vector<bool> differentiable, rl;
   for (const auto& name : envs) {
     if (!seen.insert("env:" + name).second) throw UsageError("env '" + name + "' given twice");
-    const auto env = make_env(name);
+    const auto options = env_options.find(name);
+    const auto env = make_env(name, options == env_options.end() ? EnvOptions{} : options->second);
     differentiable.push_back(env->differentiable());
     rl.push_back(env->supports_rl());
   }
@@ -62,9 +75,10 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
   for (const auto& [name, command] : req.ext)
     if (!ext.count("ext:" + name))
       throw UsageError("--ext names 'ext:" + name + "', which is not in the grid's --optimizer list");
-  for (const auto& [name, settings] : req.knobs) {
+  for (const auto& [name, settings] : knobs) {
     if (!seen.count("opt:" + name))
-      throw UsageError("--set names optimizer '" + name + "', which is not in the grid");
+      throw UsageError("--set names '" + name + "', which is neither an env nor an optimizer of the grid "
+                       "(--set ENV.KEY=VALUE, --set OPTIMIZER.KNOB=VALUE)");
     if (ext.count(name)) throw UsageError("optimizer '" + name + "' has no knobs to --set");
     make_optimizer(name, settings);  // unknown knob, malformed or out-of-range value: UsageError
   }
@@ -73,10 +87,12 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
 
   std::vector<RunSpec> grid;
   for (std::size_t e = 0; e < envs.size(); ++e) {
+    const auto options = env_options.find(envs[e]);
+    const EnvOptions& env_opts = options == env_options.end() ? EnvOptions{} : options->second;
     for (const auto& opt : optimizers) {
       if (const auto x = ext.find(opt); x != ext.end()) {
         for (int s = 0; s < req.seeds; ++s)
-          grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s), {}, x->second});
+          grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s), {}, x->second, env_opts});
         continue;
       }
       if (optimizer_entry(opt).needs_gradient && !differentiable[e]) {
@@ -92,9 +108,9 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
         continue;
       }
       for (int s = 0; s < req.seeds; ++s) {
-        const auto knobs = req.knobs.find(opt);
+        const auto k = knobs.find(opt);
         grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s),
-                        knobs == req.knobs.end() ? KnobSettings{} : knobs->second, std::nullopt});
+                        k == knobs.end() ? KnobSettings{} : k->second, std::nullopt, env_opts});
       }
     }
   }
@@ -119,10 +135,39 @@ void parse_knob_setting(const std::string& text, std::map<std::string, KnobSetti
   const auto dot = text.find('.');
   const auto eq = text.find('=');
   if (dot == std::string::npos || eq == std::string::npos || dot == 0 || eq < dot + 2 || eq + 1 == text.size())
-    throw UsageError("--set wants OPTIMIZER.KNOB=VALUE (e.g. boleap.sigma0=0.3), got '" + text + "'");
+    throw UsageError("--set wants OPTIMIZER.KNOB=VALUE or ENV.KEY=VALUE (e.g. boleap.sigma0=0.3, "
+                     "plb-pinch.target=Pinch3D-v1.npy), got '" + text + "'");
   const std::string opt = text.substr(0, dot), key = text.substr(dot + 1, eq - dot - 1);
   if (!knobs[opt].emplace(key, text.substr(eq + 1)).second)
     throw UsageError("--set " + opt + "." + key + " given twice");
+}
+
+EnvOptions parse_env_settings(const std::string& env, const std::vector<std::string>& settings) {
+  std::map<std::string, KnobSettings> by_owner;
+  for (const auto& text : settings) parse_knob_setting(text, by_owner);
+  for (const auto& [owner, values] : by_owner)
+    if (owner != env)
+      throw UsageError("--set names '" + owner + "'; this command runs env '" + env + "' alone (its options: --set " +
+                       env + ".KEY=VALUE)");
+  return by_owner.count(env) ? by_owner.at(env) : EnvOptions{};
+}
+
+std::vector<std::string> settings_with_absolute_paths(const std::vector<std::string>& settings) {
+  std::vector<std::string> out;
+  for (const auto& text : settings) {
+    std::map<std::string, KnobSettings> one;
+    parse_knob_setting(text, one);
+    const auto& [owner, values] = *one.begin();
+    const auto& [key, value] = *values.begin();
+    bool path = false;
+    try {
+      for (const auto& o : env_family_of(owner).options) path = path || (o.key == key && o.path);
+    } catch (const UsageError&) {
+      // not an env: an optimizer's knob
+    }
+    out.push_back(path ? owner + "." + key + "=" + std::filesystem::absolute(value).lexically_normal().string() : text);
+  }
+  return out;
 }
 
 }  // namespace dsb

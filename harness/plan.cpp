@@ -48,7 +48,8 @@ GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& don
   GridPlan plan;
   for (const auto& spec : grid) {
     const ResolvedConfig& env =
-        resolve(plan.env_configs, spec.env, [](const std::string& n) { return shared_env(n)->config(); });
+        resolve(plan.env_configs, spec.env,
+                [&](const std::string& n) { return shared_env(n, spec.env_options)->config(); });
     const ResolvedConfig& opt =
         resolve(plan.opt_configs, spec.optimizer, [&](const std::string&) { return make_run_optimizer(spec)->config(); });
     RunKey key{spec.env, spec.optimizer, spec.seed, spec.budget, env.hash, opt.hash, harness_version};

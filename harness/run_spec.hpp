@@ -22,6 +22,7 @@ struct RunSpec {
   std::uint64_t rng_seed = 0;  // per-run seed = hash(seed index, env, optimizer)
   std::map<std::string, std::string> knobs = {};  // optimizer knobs set on the command line (--set)
   std::optional<ExtOptimizerSpec> ext = {};  // an external optimizer (ext:NAME), probed
+  std::map<std::string, std::string> env_options = {};  // the env's options (--set ENV.KEY=VALUE)
 };
 
 // per-run seed: FNV-1a over "env\0optimizer\0seed", mixed once more by splitmix64

@@ -162,7 +162,7 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
           store.reset_progress(start.run_id);
           start.committed_episodes = 0;
         }
-        const auto env = shared_env(p.spec.env);
+        const auto env = shared_env(p.spec.env, p.spec.env_options);
         progress.run_started(w, run_cost_s[i] / static_cast<double>(p.spec.budget));
         RunResult r;
         const std::int64_t shared_episodes = start.shared_episodes;

@@ -3,6 +3,7 @@
 //   import diffsim_bench as dsb
 //   dsb.envs()                                  # [{name, dim, differentiable, rl, ...}, ...]
 //   env = dsb.make("cartpole1", threads=1)      # the registry's env (its model is shared)
+//   env = dsb.make("plb-pinch", target="Pinch3D-v1.npy")  # with env options (--set ENV.KEY=VALUE)
 //   env.loss(x); env.loss_and_grad(x)           # x in [-1, 1]^dim -> float, (float, ndarray)
 //   rl = env.rl(); rl.reset(); rl.observe(); rl.step(a); rl.done(); rl.final_loss()
 //
@@ -166,7 +167,7 @@ class PyRl {
 // One env for a user's loop: the registry's shared model, a team of `threads`, one workspace.
 class PyEnv {
  public:
-  PyEnv(const std::string& name, int threads) {
+  PyEnv(const std::string& name, int threads, const EnvOptions& options) {
     if (threads < 1) throw py::value_error("threads must be >= 1, got " + std::to_string(threads));
     // the harness's --threads cap: more threads than CPUs only slow a rollout down
     if (threads > usable_cpus())
@@ -174,7 +175,7 @@ class PyEnv {
                             std::to_string(usable_cpus()) +
                             " CPUs this process may use (the cap: more threads than CPUs only slow a rollout down; "
                             "results are the same for any count)");
-    env_ = shared_env(name);  // metadata only: the model is built on the first rollout
+    env_ = shared_env(name, options);  // metadata only: the model is built on the first rollout
     description_ = description_of(name);
     team_ = std::make_unique<ThreadTeam>(threads);
   }
@@ -299,9 +300,19 @@ PYBIND11_MODULE(diffsim_bench, m) {
         "Every env of the harness's --all grid (as `harness list`): a list of dicts with name, dim, "
         "differentiable, rl, description, threaded, cost_hint_s and metric. Builds no model.");
   m.def(
-      "make", [](const std::string& name, int threads) { return std::make_unique<PyEnv>(name, threads); },
+      "make",
+      [](const std::string& name, int threads, const py::kwargs& kwargs) {
+        // each keyword is an env option, its value as text (a pathlib.Path gives its path)
+        dsb::EnvOptions options;
+        for (const auto& [key, value] : kwargs)
+          options[key.cast<std::string>()] = py::str(value).cast<std::string>();
+        return std::make_unique<PyEnv>(name, threads, options);
+      },
       py::arg("name"), py::arg("threads") = 1,
       "The env NAME (any name the harness takes, e.g. 'sphere-3' or 'fluid-h5') with a team of THREADS "
       "threads inside each rollout (same results for every THREADS; at most the CPUs this process may use). Cheap: the model is built on the first "
-      "rollout and shared by every Env of that name. ValueError for an unknown name.");
+      "rollout and shared by every Env of that name and options. Keywords are the env's options, as "
+      "`harness --set ENV.KEY=VALUE` takes them (`harness list` shows them), e.g. "
+      "make('plb-pinch', target='Pinch3D-v1.npy'). ValueError for an unknown name, an option the env does not "
+      "take, or a bad option value (e.g. an unreadable target file).");
 }

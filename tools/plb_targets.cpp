@@ -1,11 +1,20 @@
 // The PlasticineLab tasks' targets: each task's scripted reference motion (plb_tasks.cpp) run by
-// our engine, its final grid mass written as data/targets/plb-<task>.txt.gz; and the check that
-// stored targets equal a fresh generation (decoded values, bit for bit).
+// our engine, its final grid mass written as data/targets/plb-<task>.txt.gz; the check that
+// stored targets equal a fresh generation (decoded values, bit for bit); and our stored targets
+// beside PlasticineLab's own files.
 //   plb_targets --out DIR [--task NAME]      write targets, print bounding boxes vs PlasticineLab's
 //   plb_targets --check DIR [--task NAME]    generate and compare with DIR's files (exit 1 on a difference)
+//   plb_targets --compare ASSETS [--task NAME]
+//       our stored targets against PlasticineLab's .npy files in ASSETS (its plb/envs/assets, e.g.
+//       Pinch3D-v1.npy), read as `--set plb-NAME.target=FILE` reads them: per task the bounding
+//       box of nodes above 1e-4, the centre of mass, the mass, and the overlap (IoU of the sets of
+//       nodes above 1e-4); a task whose file is missing is skipped (exit 2 when none is there, 1
+//       when a file cannot be read)
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -15,6 +24,7 @@
 #include "envs/mpm/plb_env.hpp"
 #include "envs/mpm/plb_loss.hpp"
 #include "envs/mpm/plb_scene.hpp"
+#include "envs/mpm/plb_target_file.hpp"
 #include "envs/mpm/target_grid.hpp"
 
 namespace {
@@ -71,18 +81,110 @@ void describe(const PlbTask& task, const NodeGrid& g, double dx, int pad) {
               b[1], b[2], b[3], b[4], b[5], task.plb_centre.x(), task.plb_centre.y(), task.plb_centre.z());
 }
 
+// What --compare prints of a target: nodes above kInside, positions (I - pad) dx.
+constexpr double kInside = 1e-4;
+
+struct TargetSummary {
+  double lo[3] = {1e9, 1e9, 1e9}, hi[3] = {-1e9, -1e9, -1e9}, centre[3] = {0, 0, 0}, mass = 0.0;
+  long inside = 0;
+};
+
+TargetSummary summarize(const NodeGrid& g, double dx, int pad) {
+  TargetSummary s;
+  for (int i = 0; i < g.n[0]; ++i)
+    for (int j = 0; j < g.n[1]; ++j)
+      for (int k = 0; k < g.n[2]; ++k) {
+        const double v = g.at(i, j, k), x[3] = {(i - pad) * dx, (j - pad) * dx, (k - pad) * dx};
+        s.mass += v;
+        for (int a = 0; a < 3; ++a) s.centre[a] += v * x[a];
+        if (!(v > kInside)) continue;
+        ++s.inside;
+        for (int a = 0; a < 3; ++a) {
+          s.lo[a] = std::min(s.lo[a], x[a]);
+          s.hi[a] = std::max(s.hi[a], x[a]);
+        }
+      }
+  for (double& c : s.centre) c /= s.mass;
+  return s;
+}
+
+void print_summary(const char* task, const std::string& source, const TargetSummary& s) {
+  std::printf("%-11s %-20s [%.3f, %.3f]  [%.3f, %.3f]  [%.3f, %.3f]  (%.3f, %.3f, %.3f)  %.4f  %6ld\n", task,
+              source.c_str(), s.lo[0], s.hi[0], s.lo[1], s.hi[1], s.lo[2], s.hi[2], s.centre[0], s.centre[1],
+              s.centre[2], s.mass, s.inside);
+}
+
+// our stored targets against PlasticineLab's files in `assets`; the exit status (header above)
+int compare(const std::string& assets, const std::string& only) {
+  std::printf("our targets (data/targets) against PlasticineLab's in %s; nodes with mass > %g\n", assets.c_str(),
+              kInside);
+  std::printf("%-11s %-20s %-14s  %-14s  %-14s  %-21s  %-6s  %6s\n", "task", "target", "x range", "y range", "z range",
+              "centre of mass", "mass", "nodes");
+  int found = 0, unreadable = 0;
+  for (const auto& task : plb_tasks()) {
+    if (!only.empty() && task.name != only) continue;
+    const PlbConfig cfg = plb_config(task.name);
+    const std::string file = assets + "/" + task.plb_asset;
+    if (!std::filesystem::exists(file)) {
+      std::printf("%-11s %s: not in %s, skipped\n", task.name.c_str(), task.plb_asset.c_str(), assets.c_str());
+      continue;
+    }
+    ++found;
+    NodeGrid theirs;
+    try {
+      theirs = read_plb_target(file, cfg.mpm).grid;
+    } catch (const UsageError& e) {
+      std::printf("%-11s %s\n", task.name.c_str(), e.what());
+      ++unreadable;
+      continue;
+    }
+    const NodeGrid ours = read_grid_gz(plb_target_path(task.name));
+    const double dx = cfg.mpm.dx;
+    const int pad = cfg.mpm.pad;
+    const TargetSummary a = summarize(ours, dx, pad), b = summarize(theirs, dx, pad);
+    print_summary(task.name.c_str(), "ours", a);
+    print_summary("", task.plb_asset, b);
+    long both = 0, either = 0;
+    for (std::size_t n = 0; n < ours.values.size(); ++n) {
+      const bool in_a = ours.values[n] > kInside, in_b = theirs.values[n] > kInside;
+      both += in_a && in_b;
+      either += in_a || in_b;
+    }
+    const double d = std::hypot(a.centre[0] - b.centre[0], a.centre[1] - b.centre[1], a.centre[2] - b.centre[2]);
+    std::printf("%-11s centre of mass %.3f apart; overlap (IoU of nodes > %g) %.3f (%ld of %ld); mass ratio "
+                "theirs/ours %.3f\n",
+                "", d, kInside, either > 0 ? static_cast<double>(both) / static_cast<double>(either) : 0.0, both,
+                either, b.mass / a.mass);
+  }
+  if (found == 0) {
+    std::fprintf(stderr, "plb_targets: no PlasticineLab target file (e.g. Pinch3D-v1.npy) in %s\n", assets.c_str());
+    return 2;
+  }
+  return unreadable == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string out, check, only;
+  std::string out, check, assets, only;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--out")) out = argv[i + 1];
     else if (!std::strcmp(argv[i], "--check")) check = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--compare")) assets = argv[i + 1];
     else if (!std::strcmp(argv[i], "--task")) only = argv[i + 1];
   }
-  if (out.empty() == check.empty()) {
-    std::fprintf(stderr, "usage: plb_targets --out DIR | --check DIR [--task NAME]\n");
+  const int modes = int{!out.empty()} + int{!check.empty()} + int{!assets.empty()};
+  if (modes != 1) {
+    std::fprintf(stderr, "usage: plb_targets --out DIR | --check DIR | --compare ASSETS_DIR [--task NAME]\n");
     return 2;
+  }
+  if (!assets.empty()) {
+    try {
+      return compare(assets, only);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "plb_targets: %s\n", e.what());
+      return 2;
+    }
   }
   ThreadTeam team(2);
   int differing = 0;

@@ -34,22 +34,52 @@ const std::vector<EnvFamily>& env_families() {
   return families;
 }
 
-std::unique_ptr<Env> make_env(const std::string& name) {
+namespace {
+
+// UsageError naming the first key the family does not take
+void check_option_keys(const EnvFamily& family, const std::string& name, const EnvOptions& options) {
+  std::string known;
+  for (const auto& o : family.options) known += (known.empty() ? "" : ", ") + o.key;
+  for (const auto& [key, value] : options) {
+    bool found = false;
+    for (const auto& o : family.options) found = found || o.key == key;
+    if (found) continue;
+    if (known.empty())
+      throw UsageError("env '" + name + "' takes no options, got '" + key + "' (--set " + name + "." + key + ")");
+    throw UsageError("env '" + name + "' has no option '" + key + "' (its options: " + known + ")");
+  }
+}
+
+}  // namespace
+
+const EnvFamily& env_family_of(const std::string& name) {
   for (const auto& family : env_families())
-    if (auto env = family.try_make(name)) return env;
+    if (family.try_make(name)) return family;
   throw UsageError("unknown env '" + name + "' (see `harness list`)");
 }
 
-std::shared_ptr<const Env> shared_env(const std::string& name) {
+std::unique_ptr<Env> make_env(const std::string& name, const EnvOptions& options) {
+  for (const auto& family : env_families()) {
+    auto env = family.try_make(name);
+    if (!env) continue;
+    if (options.empty()) return env;
+    check_option_keys(family, name, options);
+    return family.make_with_options(name, options);
+  }
+  throw UsageError("unknown env '" + name + "' (see `harness list`)");
+}
+
+std::shared_ptr<const Env> shared_env(const std::string& name, const EnvOptions& options) {
   static std::mutex mutex;
-  static std::map<std::string, std::shared_ptr<const Env>> envs;
+  static std::map<std::pair<std::string, EnvOptions>, std::shared_ptr<const Env>> envs;
   std::lock_guard lock(mutex);
-  auto& slot = envs[name];
+  const auto key = std::make_pair(name, options);
+  auto& slot = envs[key];
   if (!slot) {
     try {
-      slot = make_env(name);
+      slot = make_env(name, options);
     } catch (...) {
-      envs.erase(name);
+      envs.erase(key);
       throw;
     }
   }

@@ -45,6 +45,19 @@ void PlbConfig::validate() const {
   if (observed_particles < 1) fail("observed_particles", "must be >= 1");
 }
 
+namespace {
+
+// the generated target (its file and the motion that made it), or a target file by its values'
+// hash (never its path: the same values from anywhere are the same target)
+nlohmann::json target_json(const PlbConfig& c, const nlohmann::json& reference) {
+  if (!c.target_file) return {{"file", "data/targets/plb-" + c.task + ".txt.gz"}, {"reference_motion", reference}};
+  return {{"source", "a PlasticineLab-format .npy file (env option target)"},
+          {"shape", c.mpm.grid},
+          {"values_fnv1a64", c.target_file->hash}};
+}
+
+}  // namespace
+
 nlohmann::json PlbConfig::to_json() const {
   const PlbTask& t = *find_plb_task(task);
   nlohmann::json shapes = nlohmann::json::array();
@@ -77,7 +90,7 @@ nlohmann::json PlbConfig::to_json() const {
                     {"target_threshold", target_threshold},
                     {"form", "sum over env steps of sdf_weight sum_I d_I m_I + density_weight sum_I |m_I - t_I| + "
                              "contact_weight sum_k (min_p max(sdf_k(x_p), 0))^2"}}},
-          {"target", {{"file", "data/targets/plb-" + task + ".txt.gz"}, {"reference_motion", reference}}},
+          {"target", target_json(*this, reference)},
           {"metric", "soft IoU of the final grid mass with the target"},
           {"params", "5 segments x the manipulators' commands of one env step, each held for env_steps / 5 steps"},
           {"seed", seed},

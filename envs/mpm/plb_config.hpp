@@ -4,11 +4,13 @@
 // (the paper's one change to the loss), the paper's action parameterization (5 segments of held
 // per-manipulator commands) and the horizon. Stored with every run.
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "envs/mpm/mpm_config.hpp"
+#include "envs/mpm/plb_target_file.hpp"
 #include "envs/mpm/plb_tasks.hpp"
 
 namespace dsb::mpm {
@@ -27,6 +29,9 @@ struct PlbConfig {
   double target_threshold = 1e-4;  // target cells above this mass are "inside" for the SDF
   int observed_particles = 200;    // RL observation: every N/200-th particle (PlasticineLab)
   std::uint64_t seed = 0;          // shape sampling (PlasticineLab samples with numpy seed 0)
+  // a target read from a file (the env option `target`), in place of data/targets' generated one;
+  // null: the generated one. In the stored config by the hash of its values only.
+  std::shared_ptr<const PlbTargetFile> target_file;
 
   static MpmConfig default_mpm();
   int steps_per_segment() const { return env_steps / segments; }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <optional>
 
 #include "common/error.hpp"
 #include "common/parallel.hpp"
@@ -155,6 +156,26 @@ double PlbEnv::rollout_with_grad(std::span<const double> x, std::span<double> gr
   return loss;
 }
 
+namespace {
+
+// the config of "plb-TASK" or "plb-TASK-hN"; nullopt when the name is not one (UsageError for a
+// malformed horizon, as parse_horizon_name says)
+std::optional<PlbConfig> plb_config_of_name(const std::string& requested) {
+  if (requested.rfind("plb-", 0) != 0) return std::nullopt;
+  const std::string rest = requested.substr(4);
+  const std::string task = rest.substr(0, rest.rfind("-h"));  // the whole rest when there is no -h
+  if (!find_plb_task(task)) return std::nullopt;
+  PlbConfig cfg = plb_config(task);
+  if (task != rest) {
+    const auto steps = parse_horizon_name(requested, "plb-" + task, cfg.env_steps, cfg.segments);
+    if (!steps) return std::nullopt;
+    cfg.env_steps = *steps;
+  }
+  return cfg;
+}
+
+}  // namespace
+
 EnvFamily plb_family() {
   EnvFamily f;
   f.pattern = "plb-NAME";
@@ -162,15 +183,22 @@ EnvFamily plb_family() {
                   "plb-NAME-hN: the first N env steps of 50 (N = 5..45, a multiple of 5)";
   for (const auto& t : plb_tasks()) f.grid_names.push_back("plb-" + t.name);
   f.try_make = [](const std::string& requested) -> std::unique_ptr<Env> {
-    if (requested.rfind("plb-", 0) != 0) return nullptr;
-    const std::string rest = requested.substr(4);
-    const std::string task = rest.substr(0, rest.rfind("-h"));  // the whole rest when there is no -h
-    if (!find_plb_task(task)) return nullptr;
-    PlbConfig cfg = plb_config(task);
-    if (task != rest) {
-      const auto steps = parse_horizon_name(requested, "plb-" + task, cfg.env_steps, cfg.segments);
-      if (!steps) return nullptr;
-      cfg.env_steps = *steps;
+    auto cfg = plb_config_of_name(requested);
+    return cfg ? std::make_unique<PlbEnv>(requested, *cfg) : nullptr;
+  };
+  f.options = {{"target",
+                "a PlasticineLab-format .npy target grid (float64 or float32, C order, shape (64, 64, 64), "
+                "node (i, j, k) at (i, j, k)/64; e.g. its assets' Pinch3D-v1.npy) in place of ours; a run "
+                "key by the hash of its values",
+                "data/targets/plb-NAME.txt.gz (our reference motion's final state)", true}};
+  f.make_with_options = [](const std::string& requested, const EnvOptions& options) -> std::unique_ptr<Env> {
+    PlbConfig cfg = *plb_config_of_name(requested);
+    if (const auto t = options.find("target"); t != options.end()) {
+      try {
+        cfg.target_file = std::make_shared<const PlbTargetFile>(read_plb_target(t->second, cfg.mpm));
+      } catch (const UsageError& e) {
+        throw UsageError(requested + ".target: " + e.what());
+      }
     }
     return std::make_unique<PlbEnv>(requested, cfg);
   };

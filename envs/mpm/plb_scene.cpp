@@ -61,11 +61,11 @@ std::string plb_target_path(const std::string& task) { return data_dir() + "/tar
 PlbModel build_plb_model(const PlbConfig& cfg) {
   PlbModel model;
   model.mpm = build_plb_scene(cfg);
-  model.target = read_grid_gz(plb_target_path(cfg.task));
+  model.target = cfg.target_file ? cfg.target_file->grid : read_grid_gz(plb_target_path(cfg.task));
   const auto& n = model.mpm.layout.n;
   if (model.target.n != n)
-    throw UsageError("target " + plb_target_path(cfg.task) + " has " + std::to_string(model.target.n[0]) +
-                     " nodes per axis, the scene's grid " + std::to_string(n[0]));
+    throw UsageError("target " + (cfg.target_file ? std::string("file") : plb_target_path(cfg.task)) + " has " +
+                     std::to_string(model.target.n[0]) + " nodes per axis, the scene's grid " + std::to_string(n[0]));
   model.target_sdf = distance_to_mass(model.target, cfg.target_threshold, cfg.mpm.dx);
   for (double v : model.target.values) {
     model.target_sum += v;

@@ -21,7 +21,7 @@ struct PlbModel {
 
 // The scene alone (what the reference motion runs on).
 MpmModel build_plb_scene(const PlbConfig& cfg);
-// The scene and the target read from plb_target_path(cfg.task).
+// The scene and the target: cfg.target_file's when it has one, else read from plb_target_path(cfg.task).
 PlbModel build_plb_model(const PlbConfig& cfg);
 
 std::string plb_target_path(const std::string& task);  // <data dir>/targets/plb-<task>.txt.gz

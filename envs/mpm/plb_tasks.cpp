@@ -64,6 +64,7 @@ std::vector<PlbTask> make_tasks() {
   {  // Assembly: grab the ball between the two spheres, lift it onto the box, let go
     PlbTask a;
     a.name = "assembly";
+    a.plb_asset = "Assembly3D-v1.npy";
     a.yield_stress = 100.0;
     a.floor_friction = 100.0;  // sticky
     a.shapes = {box({0.6, 0.08, 0.5}, {0.16, 0.16, 0.16}, 6000), ball({0.3, 0.06, 0.5}, 0.06, 4000)};
@@ -82,6 +83,7 @@ std::vector<PlbTask> make_tasks() {
   {  // Pinch: press the sphere into the block's top
     PlbTask a;
     a.name = "pinch";
+    a.plb_asset = "Pinch3D-v1.npy";
     a.floor_friction = 100.0;
     a.shapes = {box({0.5, 0.1, 0.5}, {0.2, 0.2, 0.2}, 6000)};
     auto s = mover("sphere", sphere_shape(0.04), {0.5, 0.35, 0.5}, Vec3::Constant(0.02));
@@ -96,6 +98,7 @@ std::vector<PlbTask> make_tasks() {
   {  // RollingPin: press and roll the dough flat along x
     PlbTask a;
     a.name = "rollingpin";
+    a.plb_asset = "Rollingpin3D-v1.npy";
     a.shapes = {box({0.5, 0.05, 0.5}, {0.3, 0.1, 0.3}, 10000)};
     PrimitiveSpec pin;
     pin.name = "rolling_pin";
@@ -116,6 +119,7 @@ std::vector<PlbTask> make_tasks() {
   {  // Rope: push both ends forward around the pillar
     PlbTask a;
     a.name = "rope";
+    a.plb_asset = "Rope3D-v1.npy";
     a.floor_friction = 0.3;
     a.shapes = {box({0.5, 0.03, 0.73}, {0.6, 0.06, 0.06}, 10000)};
     PrimitiveSpec pillar;  // PlasticineLab's Cylinder(h = 0.1 radius, r = 0.2 half height), v1 position
@@ -137,6 +141,7 @@ std::vector<PlbTask> make_tasks() {
   {  // Table: push a leg out from under the table
     PlbTask a;
     a.name = "table";
+    a.plb_asset = "Table3D-v1.npy";
     a.poisson_ratio = 0.05;
     a.floor_friction = 0.3;
     for (double dx : {-0.075, 0.075})
@@ -151,6 +156,7 @@ std::vector<PlbTask> make_tasks() {
   {  // Torus: press the ring into the dough
     PlbTask a;
     a.name = "torus";
+    a.plb_asset = "Torus3D-v1.npy";
     a.floor_friction = 100.0;
     a.shapes = {box({0.5, 0.05, 0.5}, {0.3, 0.1, 0.3}, 10000)};
     Shape ring;
@@ -169,6 +175,7 @@ std::vector<PlbTask> make_tasks() {
   {  // TripleMove: grab each block between two spheres, lift, spread the outer ones
     PlbTask a;
     a.name = "triplemove";
+    a.plb_asset = "TripleMove3D-v1.npy";
     a.yield_stress = 200.0;
     for (double x : {0.3, 0.5, 0.7}) a.shapes.push_back(box({x, 0.05, 0.5}, {0.1, 0.1, 0.1}, 3333));
     const char* names[] = {"sphere_1", "sphere_2", "sphere_3", "sphere_4", "sphere_5", "sphere_6"};
@@ -186,6 +193,7 @@ std::vector<PlbTask> make_tasks() {
   {  // Writer: draw a stroke pattern into the dough's top with the pen
     PlbTask a;
     a.name = "writer";
+    a.plb_asset = "Writer3D-v1.npy";
     a.floor_friction = 100.0;
     a.shapes = {box({0.5, 0.05, 0.5}, {0.3, 0.1, 0.3}, 10000)};
     auto pen = mover("pen", capsule_shape(0.06, 0.03), {0.5, 0.13, 0.5}, Vec3::Constant(0.01));

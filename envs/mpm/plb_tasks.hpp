@@ -45,6 +45,8 @@ struct PlbTask {
   // and centre of mass, where the facts give them (NaN where they do not)
   std::array<double, 6> plb_bbox{};
   Vec3 plb_centre = Vec3::Zero();
+  // PlasticineLab's file of that target in its assets folder (plb/envs/assets), e.g. "Pinch3D-v1.npy"
+  std::string plb_asset;
 };
 
 const std::vector<PlbTask>& plb_tasks();

@@ -3,14 +3,16 @@
 
 Loss and gradient equal `harness eval --grad` bit for bit; the RL view equals loss() for the
 same actions; bad input raises ValueError naming the value; threads give the same bits; the GIL
-is released while a rollout runs.
+is released while a rollout runs; env options (make's keywords) as `harness eval --set` takes them.
 
 Run by hand: PYTHONPATH=build/python DSB_HARNESS=build/bin/harness /usr/bin/python3 python/tests/test_bindings.py -v
 """
 import json
 import math
 import os
+import pathlib
 import subprocess
+import tempfile
 import threading
 import time
 import unittest
@@ -30,11 +32,13 @@ def seeded_point(dim, seed, amplitude=0.8):
     return np.random.default_rng(seed).uniform(-amplitude, amplitude, dim)
 
 
-def harness_eval(env, x, grad=True):
+def harness_eval(env, x, grad=True, sets=()):
     """`harness eval` at x (written in the shortest form that reads back as the same doubles)."""
     cmd = [HARNESS, "eval", "--env", env, "--x=" + ",".join(repr(float(v)) for v in x)]
     if grad:
         cmd.append("--grad")
+    for s in sets:
+        cmd += ["--set", s]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     return json.loads(out)  # exact doubles (JSON null for nan)
 
@@ -128,6 +132,44 @@ class EvalEqualityTest(unittest.TestCase):
         env = dsb.make("sphere-10")
         x = np.array([-1.0, 1.0] * 5)
         self.assertEqual(bits(env.loss(x)), bits(harness_eval("sphere-10", x)["loss"]))
+
+
+class EnvOptionsTest(unittest.TestCase):
+    """make(NAME, KEY=VALUE) takes an env's options as `harness --set NAME.KEY=VALUE` does."""
+
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.target = os.path.join(self.dir.name, "target.npy")
+        t = np.zeros((64, 64, 64))
+        t[24:40, 0:12, 24:40] = 2e-4
+        np.save(self.target, t.astype(np.float32))
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def test_target_file_gives_harness_evals_bits(self):
+        env = dsb.make("plb-pinch-h5", target=self.target)
+        self.assertEqual(env.config["target"]["shape"], [64, 64, 64])
+        self.assertEqual(len(env.config["target"]["values_fnv1a64"]), 16)
+        # a pathlib.Path names the same file: the same config
+        self.assertEqual(dsb.make("plb-pinch-h5", target=pathlib.Path(self.target)).config, env.config)
+        self.assertNotEqual(dsb.make("plb-pinch-h5").config, env.config)
+        x = seeded_point(env.dim, 3)
+        ref = harness_eval("plb-pinch-h5", x, grad=False, sets=["plb-pinch-h5.target=" + self.target])
+        self.assertEqual(bits(env.loss(x)), bits(ref["loss"]))
+        self.assertNotEqual(bits(dsb.make("plb-pinch-h5").loss(x)), bits(ref["loss"]))
+
+    def test_bad_options_raise_value_error_naming_them(self):
+        missing = os.path.join(self.dir.name, "missing.npy")
+        with self.assertRaisesRegex(ValueError, "plb-pinch-h5.target: " + missing + ": cannot open"):
+            dsb.make("plb-pinch-h5", target=missing)
+        with self.assertRaisesRegex(ValueError, "has no option 'tagret'"):
+            dsb.make("plb-pinch-h5", tagret=self.target)
+        with self.assertRaisesRegex(ValueError, "env 'sphere-3' takes no options, got 'target'"):
+            dsb.make("sphere-3", target=self.target)
+        np.save(os.path.join(self.dir.name, "flat.npy"), np.zeros((64, 64)))
+        with self.assertRaisesRegex(ValueError, r"shape \(64, 64\) is not a target grid's"):
+            dsb.make("plb-pinch-h5", target=os.path.join(self.dir.name, "flat.npy"))
 
 
 class RlViewTest(unittest.TestCase):
