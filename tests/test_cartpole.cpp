@@ -141,9 +141,17 @@ TEST(CartpoleRl, StepInterfaceGivesTheSameLossAsTheRollout) {
   ASSERT_NE(rl, nullptr);
   EXPECT_EQ(rl->action_dim(), 4);
   EXPECT_EQ(rl->horizon(), 100);
+  // the paper's observation: the joint positions and velocities (x, vx, phi_1..3, dphi_1..3), no time
+  EXPECT_EQ(rl->observation_dim(), 8);
   rl->reset();
+  const auto states = dynamic_cast<const CartpoleEnv&>(*env).trajectory(x);
   for (int t = 0; t < rl->horizon(); ++t) {
     ASSERT_FALSE(rl->done());
+    const auto obs = rl->observe();
+    ASSERT_EQ(obs.size(), 8u);
+    const CartpoleState& s = states[static_cast<std::size_t>(t)];
+    const std::vector<double> want = {s.x, s.vx, s.phi(0), s.phi(1), s.phi(2), s.dphi(0), s.dphi(1), s.dphi(2)};
+    EXPECT_EQ(obs, want) << t;
     rl->step(std::span<const double>(x).subspan(4 * t, 4));
   }
   EXPECT_TRUE(rl->done());

@@ -118,12 +118,22 @@ TEST(Fluid, RlViewReplaysTheEpisode) {
   auto rl = env.make_rl();
   ASSERT_TRUE(rl);
   EXPECT_EQ(rl->action_dim(), 2);
-  EXPECT_EQ(rl->observation_dim(), 12);
+  // the paper's "object and ladle positions": the cube's centre, then the bowl's
+  EXPECT_EQ(rl->observation_dim(), 6);
   EXPECT_EQ(rl->horizon(), 10);
   rl->reset();
   const auto obs0 = rl->observe();
+  ASSERT_EQ(obs0.size(), 6u);
   const double floor = env.fluid_config().floor_y();
   EXPECT_LT(obs0[1] - floor, 0.05);  // cube on the floor
+  const auto& start = env.fluid_config().ladle_start;
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(obs0[3 + a], start[a]) << a;
+  // the ladle is kinematic: one env step at full forward speed moves the bowl by max_speed x dt x substeps
+  rl->step(std::vector<double>{1.0, 0.0});
+  const auto& cfg = env.fluid_config();
+  EXPECT_NEAR(rl->observe()[3], start[0] + cfg.max_speed * cfg.mpm.dt * cfg.mpm.substeps, 1e-12);
+  EXPECT_NEAR(rl->observe()[4], start[1], 1e-12);
+  rl->reset();
   const int per = env.fluid_config().steps_per_segment();
   for (int k = 0; !rl->done(); ++k) rl->step(std::vector<double>{kScoop[2 * (k / per)], kScoop[2 * (k / per) + 1]});
   EXPECT_EQ(rl->final_loss(), env.loss(kScoop));

@@ -221,11 +221,28 @@ TEST(MpmPlasticity, ReturnMappingPutsTheStateOnTheYieldSurface) {
       EXPECT_NEAR(dev1.norm(), mat.yield_stress / (2.0 * mu) * dev0.norm() / reg, 1e-12) << "trial " << trial;
       EXPECT_NEAR(F_new.determinant(), F.determinant(), 1e-12) << "volume-preserving flow";
     } else {
-      EXPECT_LE((F_new - F).norm(), 1e-14) << "trial " << trial;
+      // inside the yield surface F_new is F_tmp itself, bit for bit (PlasticineLab keeps F_tmp)
+      EXPECT_EQ(F_new, F) << "trial " << trial;
       EXPECT_LE(reg, mat.yield_stress / (2.0 * mu));
     }
     EXPECT_EQ(tape.flow, trial < 25) << "trial " << trial;
   }
+}
+
+TEST(MpmPlasticity, InsideTheYieldSurfaceTheStressTakesSigmaItselfEvenBelowTheLogFloor) {
+  // uniform compression to 0.04 (below the 0.05 floor of the logs): no deviatoric strain, no
+  // flow; F stays F_tmp and the stress is the fixed-corotated one of 0.04, not of 0.05
+  const mpm::Material mat = testing::plastic(5e3, 0.2, 50.0);
+  Mat3 F = 0.04 * Mat3::Identity();
+  mpm::SolidTape tape;
+  const Mat3 tau = mpm::solid_update(mat, Mat3::Zero(), 1e-4, F, tape);
+  EXPECT_FALSE(tape.flow);
+  EXPECT_EQ(F, 0.04 * Mat3::Identity());
+  // tau = 2 mu (F - R) F^T + lam J (J - 1) I with R = I, J = 0.04^3
+  const double J = 0.04 * 0.04 * 0.04;
+  const double want = 2.0 * mat.mu() * (0.04 - 1.0) * 0.04 + mat.lambda() * J * (J - 1.0);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(tau(i, i), want, 1e-12 * std::abs(want)) << i;
+  EXPECT_NEAR(tau(0, 1), 0.0, 1e-12 * std::abs(want));
 }
 
 // a block pressed by a box from above to 70% of its height, then released; returns the final

@@ -122,23 +122,31 @@ TEST(Plb, GradientsMatchCentralDifferencesOnEveryTask) {
 }
 
 TEST(Plb, TargetsLieNearPlasticineLabs) {
-  // bounding box of target nodes above 1e-4 within 0.04 (2.5 cells) of PlasticineLab's, where known
+  // bounding box of target nodes above 1e-4 within 0.04 (2.5 cells) of PlasticineLab's, and the
+  // centre of mass within 0.05, where known
   for (const auto& t : mpm::plb_tasks()) {
     const auto& model = plb("plb-" + t.name).model();
     const auto& g = model.target;
     const int pad = model.mpm.config.pad;
     const double dx = model.mpm.config.dx;
-    double lo[3] = {1e9, 1e9, 1e9}, hi[3] = {-1e9, -1e9, -1e9};
+    double lo[3] = {1e9, 1e9, 1e9}, hi[3] = {-1e9, -1e9, -1e9}, moment[3] = {0, 0, 0}, mass = 0.0;
     for (int i = 0; i < g.n[0]; ++i)
       for (int j = 0; j < g.n[1]; ++j)
-        for (int k = 0; k < g.n[2]; ++k)
-          if (g.at(i, j, k) > 1e-4) {
-            const double x[3] = {(i - pad) * dx, (j - pad) * dx, (k - pad) * dx};
+        for (int k = 0; k < g.n[2]; ++k) {
+          const double x[3] = {(i - pad) * dx, (j - pad) * dx, (k - pad) * dx};
+          mass += g.at(i, j, k);
+          for (int a = 0; a < 3; ++a) moment[a] += g.at(i, j, k) * x[a];
+          if (g.at(i, j, k) > 1e-4)
             for (int a = 0; a < 3; ++a) {
               lo[a] = std::min(lo[a], x[a]);
               hi[a] = std::max(hi[a], x[a]);
             }
-          }
+        }
+    // the centre of mass within 0.05 of PlasticineLab's, where known
+    for (int a = 0; a < 3; ++a)
+      if (!std::isnan(t.plb_centre[a])) {
+        EXPECT_NEAR(moment[a] / mass, t.plb_centre[a], 0.05) << t.name << " centre, axis " << a;
+      }
     for (int a = 0; a < 3; ++a) {
       if (!std::isnan(t.plb_bbox[2 * a])) {
         EXPECT_NEAR(lo[a], t.plb_bbox[2 * a], 0.04) << t.name << " axis " << a;

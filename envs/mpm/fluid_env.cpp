@@ -38,32 +38,28 @@ class FluidRl : public RlEnv {
   FluidRl(const FluidEnv& env) : env_(env), ws_(env.model()), objective_(env.fluid_config(), env.model()) {
     reset();
   }
-  int observation_dim() const override { return 12; }
+  int observation_dim() const override { return 6; }
   int action_dim() const override { return 2; }
   int horizon() const override { return env_.fluid_config().env_steps; }
   void reset() override {
     ws_.reset_state(env_.model());
     step_ = 0;
-    last_action_ = {0.0, 0.0};
     blown_up_ = false;
   }
-  // cube centre and mean velocity, bowl position and velocity
+  // The paper's "object and ladle positions": the cube's centre and the bowl's centre (m). The
+  // ladle is kinematic: each env step moves it by the commanded speed (clamped to its box), with
+  // no inertia and a fixed tilt, so its position is its whole state and nothing else of it is
+  // needed to be Markov. The syrup's and the cube's particles are not observed (as in the paper):
+  // no short observation of them is Markov, and the cube's velocity is left out with them.
   std::vector<double> observe() const override {
-    const MpmModel& m = env_.model();
-    const Vec3 c = cube_centre(m, ws_.particles);
-    Vec3 v = Vec3::Zero();
-    const Body& cube = m.bodies[0];
-    for (int p = cube.begin; p < cube.end; ++p) v += ws_.particles[p].v;
-    v /= static_cast<double>(cube.end - cube.begin);
+    const Vec3 c = cube_centre(env_.model(), ws_.particles);
     const Vec3& b = ws_.poses[0].p;
-    const double speed = env_.fluid_config().max_speed;
-    return {c.x(), c.y(), c.z(), v.x(), v.y(), v.z(), b.x(), b.y(), b.z(),
-            speed * last_action_[0], speed * last_action_[1], 0.0};
+    return {c.x(), c.y(), c.z(), b.x(), b.y(), b.z()};
   }
   void step(std::span<const double> action) override {
     if (done()) return;
-    last_action_ = {std::clamp(action[0], -1.0, 1.0), std::clamp(action[1], -1.0, 1.0)};
-    const double a[kActionsPerStep] = {last_action_[0], last_action_[1], last_action_[0], last_action_[1]};
+    const double ax = std::clamp(action[0], -1.0, 1.0), ay = std::clamp(action[1], -1.0, 1.0);
+    const double a[kActionsPerStep] = {ax, ay, ax, ay};
     for (int s = 0; s < env_.model().config.substeps; ++s) substep(env_.model(), ws_, serial_team(), a, nullptr);
     if (!state_is_finite(ws_.particles, serial_team())) blown_up_ = true;
     ++step_;
@@ -79,7 +75,6 @@ class FluidRl : public RlEnv {
   MpmWorkspace ws_;
   FluidObjective objective_;
   int step_ = 0;
-  std::array<double, 2> last_action_{};
   bool blown_up_ = false;
 };
 

@@ -31,24 +31,20 @@ struct PlasticMap {
   bool flow = false;
 };
 
-// Derivatives of the singular-value map sigma -> f: dfds(i, j) = d f_i / d sigma_j and the
-// divided differences dd(i, j) = (f_i - f_j) / (sigma_i - sigma_j) (their limit when equal).
+// Derivatives of a flowing particle's singular-value map sigma -> f = exp(mean + k eps^):
+// dfds(i, j) = d f_i / d sigma_j and the divided differences dd(i, j) = (f_i - f_j) /
+// (sigma_i - sigma_j) (their limit when equal). Without flow f = sigma: the identity and ones.
 void plastic_derivatives(const Vec3& sigma, const SolidTape& t, Mat3& dfds, Mat3& dd) {
   const Vec3& f = t.f;
   Vec3 inv;  // d log(sigma_c) / d sigma: 0 where the floor holds
   for (int i = 0; i < 3; ++i) inv[i] = sigma[i] > kSigmaFloor ? 1.0 / sigma[i] : 0.0;
-  if (!t.flow) {
-    dfds = Mat3::Zero();
-    for (int i = 0; i < 3; ++i) dfds(i, i) = sigma[i] > kSigmaFloor ? 1.0 : 0.0;
-  } else {
-    // d eps'_i / d eps_j = 1/3 + k (delta_ij - 1/3) - k eps^_i eps^_j / |eps^|^2
-    const double n2 = t.norm * t.norm;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) {
-        const double de = 1.0 / 3.0 + t.k * ((i == j ? 1.0 : 0.0) - 1.0 / 3.0) - t.k * t.eps_hat[i] * t.eps_hat[j] / n2;
-        dfds(i, j) = f[i] * de * inv[j];
-      }
-  }
+  // d eps'_i / d eps_j = 1/3 + k (delta_ij - 1/3) - k eps^_i eps^_j / |eps^|^2
+  const double n2 = t.norm * t.norm;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double de = 1.0 / 3.0 + t.k * ((i == j ? 1.0 : 0.0) - 1.0 / 3.0) - t.k * t.eps_hat[i] * t.eps_hat[j] / n2;
+      dfds(i, j) = f[i] * de * inv[j];
+    }
   dd = Mat3::Zero();
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
@@ -166,17 +162,15 @@ void solid_update_batch(const Material* const* mats, Mat3* F, SolidTape* tapes, 
   for (int i = 0; i < n; ++i) {
     SolidTape& t = tapes[i];
     const Vec3& sigma = t.svd.sigma;
-    if (mats[i]->kind == MaterialKind::plastic) {
-      if (t.flow) {
-        t.f = Vec3(logs[e], logs[e + 1], logs[e + 2]);
-        e += 3;
-      } else {
-        for (int a = 0; a < 3; ++a) t.f[a] = std::max(sigma[a], kSigmaFloor);
-      }
-      // F_new = U diag(f) V^T
+    if (t.flow) {
+      // F_new = U diag(exp(mean + k eps^)) V^T: projected onto the yield surface
+      t.f = Vec3(logs[e], logs[e + 1], logs[e + 2]);
+      e += 3;
       F[i] = t.svd.U * t.f.asDiagonal() * t.svd.V.transpose();
     } else {
-      t.f = sigma;  // F_new = F_tmp, already in F
+      // F_new = F_tmp, already in F: elastic, or plastic inside the yield surface (as PlasticineLab,
+      // which keeps F_tmp as it is there; the stress takes sigma itself, not max(sigma, 0.05))
+      t.f = sigma;
     }
     // tau = U diag(g) U^T
     tau[i] = solid_stress(*mats[i], t);
@@ -195,9 +189,9 @@ void solid_update_adjoint(const Material& mat, const Mat3& C, const Mat3& F_befo
   const double mu = mat.mu(), lam = mat.lambda();
   const Vec3& sigma = tape.svd.sigma;
   Mat3 dfds, dd;
-  if (mat.kind == MaterialKind::plastic) {
+  if (tape.flow) {
     plastic_derivatives(sigma, tape, dfds, dd);
-  } else {
+  } else {  // f = sigma
     dfds.setIdentity();
     dd.setOnes();
     dd.diagonal().setZero();
@@ -213,8 +207,8 @@ void solid_update_adjoint(const Material& mat, const Mat3& C, const Mat3& F_befo
     for (int j = 0; j < 3; ++j)
       if (i != j) ddg(i, j) = 2.0 * mu * (tape.f[i] + tape.f[j] - 1.0) * dd(i, j);
   Mat3 F_tmp_bar = iso_uu_adjoint(tape.svd, dgds, ddg, tau_bar);
-  // F_new = U diag(f) V^T (plastic) or F_tmp (elastic)
-  if (mat.kind == MaterialKind::plastic)
+  // F_new = U diag(f) V^T (flow) or F_tmp (no flow, or elastic)
+  if (tape.flow)
     F_tmp_bar += iso_uv_adjoint(tape.svd, tape.f, dfds, dd, F_new_bar);
   else
     F_tmp_bar += F_new_bar;

@@ -6,9 +6,9 @@
 //  - `plastic`: von Mises return mapping in log (Hencky) strain: sigma clamped >= 0.05,
 //    eps = log sigma, eps^ = eps - mean(eps), |eps^| = sqrt(eps^.eps^ + 1e-8),
 //    dgamma = |eps^| - yield / (2 mu); if dgamma > 0: eps' = mean + k eps^ with
-//    k = yield / (2 mu |eps^|) (= eps - dgamma eps^ / |eps^|), f = exp(eps'); else f = the
-//    clamped sigma (PlasticineLab computes exp(log sigma), equal up to rounding). F_new =
-//    U diag(f) V^T.
+//    k = yield / (2 mu |eps^|) (= eps - dgamma eps^ / |eps^|), f = exp(eps'), F_new =
+//    U diag(f) V^T; else (inside the yield surface) f = sigma and F_new = F_tmp, as PlasticineLab
+//    keeps F_tmp there.
 //  - `elastic`: no projection, f = sigma, F_new = F_tmp.
 //  Fixed-corotated Kirchhoff stress with R = U V^T of F_tmp:
 //    tau = 2 mu (F_new - R) F_new^T + lam J (J - 1) I = U diag(g) U^T,

@@ -26,8 +26,10 @@ struct MpmConfig {
   double floor_friction = 1.5;             // PlasticineLab ground_friction: 0 = slip, >= 10 = sticky
   double grid_mass_epsilon = 1e-12;        // nodes at or below this mass are empty (PlasticineLab)
   // Extra grid nodes below index 0 on every axis (node i stores position (i - pad) dx): with
-  // pad = 1 particles may sit anywhere down to 0, as in PlasticineLab, whose shapes start at y = 0,
-  // and their stencils (base node floor(x / dx - 1/2) >= -1) still stay on the grid.
+  // pad = 1 particles may sit anywhere down to 0, as PlasticineLab's, whose shapes start at y = 0,
+  // and their stencils (base node floor(x / dx - 1/2) >= -1) still stay on the grid. A departure:
+  // PlasticineLab has no such row; its integer cast truncates the base toward zero (0 for
+  // x < dx/2) and takes the weights at fx = x / dx < 1/2 (docs/departures.md).
   int pad = 0;
 
   // Particles' positions are clamped to [lo, hi] per axis after advection: hi = (n - bound) dx as

@@ -172,7 +172,7 @@ std::vector<PlbTask> make_tasks() {
     a.plb_centre = Vec3::Constant(kNaN);
     t.push_back(a);
   }
-  {  // TripleMove: grab each block between two spheres, lift, spread the outer ones
+  {  // TripleMove: grab each block between two spheres, carry the left and middle ones back, lift, spread
     PlbTask a;
     a.name = "triplemove";
     a.plb_asset = "TripleMove3D-v1.npy";
@@ -181,13 +181,20 @@ std::vector<PlbTask> make_tasks() {
     const char* names[] = {"sphere_1", "sphere_2", "sphere_3", "sphere_4", "sphere_5", "sphere_6"};
     const double xs[] = {0.23, 0.37, 0.43, 0.57, 0.63, 0.77};
     for (int i = 0; i < 6; ++i) a.primitives.push_back(mover(names[i], sphere_shape(0.03), {xs[i], 0.05, 0.5}, Vec3::Constant(0.01)));
+    // PlasticineLab's target (v1) holds the left and middle blocks low and far back (z about 0.19)
+    // and the right one high at the start's z; its centre of mass (0.54, 0.25, 0.30). Ours: grab
+    // (3 steps), lift all and take the left and middle pairs back (14), the middle up a little
+    // more (3), the left and middle further back and the right higher (14), spread them in x, the
+    // middle to the right (11), hold (5): blocks at about (0.19, 0.19, 0.19), (0.61, 0.22, 0.19),
+    // (0.81, 0.33, 0.50) if the spheres carry them without slip.
     a.reference = {{3, cmd({1, 0, 0, -1, 0, 0, 1, 0, 0, -1, 0, 0, 1, 0, 0, -1, 0, 0})},
-                   {15, cmd({0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0})},
-                   {11, cmd({-1, 0, 0, -1, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0})},
-                   {13, cmd({0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0})},  // the middle one higher
-                   {8, cmd({0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0})}};
-    a.plb_bbox = {0.14, 0.86, 0.14, 0.39, kNaN, kNaN};
-    a.plb_centre = Vec3::Constant(kNaN);
+                   {14, cmd({0, 1, -1, 0, 1, -1, 0, 1, -1, 0, 1, -1, 0, 1, 0, 0, 1, 0})},
+                   {3, cmd({0, 0, -1, 0, 0, -1, 0, 1, -1, 0, 1, -1, 0, 0, 0, 0, 0, 0})},
+                   {14, cmd({0, 0, -1, 0, 0, -1, 0, 0, -1, 0, 0, -1, 0, 1, 0, 0, 1, 0})},
+                   {11, cmd({-1, 0, 0, -1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0})},
+                   {5, cmd({0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0})}};
+    a.plb_bbox = {0.14, 0.86, 0.14, 0.39, 0.14, 0.56};
+    a.plb_centre = Vec3(0.54, 0.25, 0.30);
     t.push_back(a);
   }
   {  // Writer: draw a stroke pattern into the dough's top with the pen

@@ -164,7 +164,7 @@ DSB_LANE_INLINE void solid_adjoint_tail(SolidAdjointChunk& c, const TransferGrid
     }
 
   // ---- solid_update_adjoint
-  const T plastic = load<T>(&s.plastic[o]), flow = load<T>(&s.flow[o]);
+  const T flow = load<T>(&s.flow[o]);  // 0 on elastic lanes
   const T two_mu = load<T>(&s.two_mu[o]), lam = load<T>(&s.lambda[o]);
   const T k = load<T>(&s.k[o]), norm = load<T>(&s.norm[o]);
   T sigma[3], f[3], hat[3], inv[3];
@@ -178,7 +178,7 @@ DSB_LANE_INLINE void solid_adjoint_tail(SolidAdjointChunk& c, const TransferGrid
   load_matrix(s.U, o, U);
   load_matrix(s.V, o, V);
   // plastic_derivatives: dfds(i, j) = d f_i / d sigma_j and the divided differences dd(i, j);
-  // the identity and ones for elastic lanes
+  // the identity and ones without flow (f = sigma)
   const T n2 = norm * norm;
   T dfds[3][3], dd[3][3];
   for (int i = 0; i < 3; ++i)
@@ -186,8 +186,7 @@ DSB_LANE_INLINE void solid_adjoint_tail(SolidAdjointChunk& c, const TransferGrid
       const T delta(i == j ? 1.0 : 0.0);
       const T de = (third + k * (delta - third)) - ((k * hat[i]) * hat[j]) / n2;
       const T with_flow = (f[i] * de) * inv[j];
-      const T without = i == j ? sel_gt(sigma[i], floor, one, zero) : zero;
-      dfds[i][j] = sel_gt(plastic, zero, sel_gt(flow, zero, with_flow, without), delta);
+      dfds[i][j] = sel_gt(flow, zero, with_flow, delta);
       if (i == j) {
         dd[i][j] = zero;
         continue;
@@ -200,7 +199,7 @@ DSB_LANE_INLINE void solid_adjoint_tail(SolidAdjointChunk& c, const TransferGrid
       const T above_i = sel_gt(sigma[i], floor, one, zero), above_j = sel_gt(sigma[j], floor, one, zero);
       const T above = sel_gt(above_i, zero, sel_gt(above_j, zero, both, quotient),
                              sel_gt(above_j, zero, quotient, zero));
-      dd[i][j] = sel_gt(plastic, zero, above, one);
+      dd[i][j] = sel_gt(flow, zero, above, one);
     }
   // corotated_diagonal's dg/df, then dg/dsigma = dg/df df/dsigma and ddg = 2 mu (f_i + f_j - 1) dd
   const T J = (f[0] * f[1]) * f[2];
@@ -232,9 +231,9 @@ DSB_LANE_INLINE void solid_adjoint_tail(SolidAdjointChunk& c, const TransferGrid
       H[j][i] = w * sigma[i];
     }
   back_to_F(U, H, V, X);
-  // iso_uv_adjoint (plastic): G = U^T F_new_bar V; H_ii = sum_j dfds(j, i) G_jj; H_ij =
+  // iso_uv_adjoint (flow): G = U^T F_new_bar V; H_ii = sum_j dfds(j, i) G_jj; H_ij =
   // (a + b)/2 G_ij + (a - b)/2 G_ji, a = dd(i, j), b = (f_i + f_j) / (sigma_i + sigma_j); U H V^T.
-  // Elastic lanes add F_new_bar itself.
+  // Lanes without flow add F_new_bar itself.
   T F_new_bar[3][3], G[3][3], Y[3][3];
   load_matrix(c.adj_F, o, F_new_bar);
   transposed_chain(U, F_new_bar, V, G);
@@ -250,7 +249,7 @@ DSB_LANE_INLINE void solid_adjoint_tail(SolidAdjointChunk& c, const TransferGrid
   back_to_F(U, H, V, Y);
   T F_tmp_bar[3][3];
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) F_tmp_bar[i][j] = X[i][j] + sel_gt(plastic, zero, Y[i][j], F_new_bar[i][j]);
+    for (int j = 0; j < 3; ++j) F_tmp_bar[i][j] = X[i][j] + sel_gt(flow, zero, Y[i][j], F_new_bar[i][j]);
   // F_tmp = (I + dt C) F: C_bar += (dt F_tmp_bar) F^T, F_bar = F_tmp_bar + (dt C^T) F_tmp_bar
   T C[3][3], F[3][3];
   load_matrix(s.C, o, C);

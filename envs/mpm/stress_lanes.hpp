@@ -82,27 +82,24 @@ DSB_LANE_INLINE bool flow_targets(SolidChunk& c, int o) {
   return any_gt(flow, zero);
 }
 
-// f = exp(target) (flow), max(sigma, 0.05) (plastic, no flow) or sigma (elastic); F_new =
-// U diag(f) V^T (plastic; assigned to F in solid_update_batch); the fixed-corotated
+// f = exp(target) (flow) or sigma (no flow, or elastic); F_new = U diag(f) V^T where the lane
+// flows (F_tmp elsewhere; assigned to F in stress_phase_lanes); the fixed-corotated
 // g_i = 2 mu (f_i - 1) f_i + lam J (J - 1), tau = U diag(g) U^T, and A = stress_scale tau + m C.
 // (c.values holds the exponentials where some lane of the chunk flows, else the logarithms, which
 // no lane then reads.) Without with_F_new (the reverse pass's recomputation) F_new is not formed.
 template <class T>
 DSB_LANE_INLINE void stress_affine(SolidChunk& c, int o, bool with_F_new) {
-  const T zero(0.0), one(1.0), floor(kSigmaFloor);
-  const T plastic = load<T>(&c.plastic[o]);
-  const T flow = load<T>(&c.flow[o]);
+  const T zero(0.0), one(1.0);
+  const T flow = load<T>(&c.flow[o]);  // 0 on elastic lanes
   T f[3];
   for (int a = 0; a < 3; ++a) {
-    const T sigma = load<T>(&c.sigma[a][o]);
-    const T held = sel_gt(flow, zero, load<T>(&c.values[a][o]), max_floor(sigma, floor));
-    f[a] = sel_gt(plastic, zero, held, sigma);
+    f[a] = sel_gt(flow, zero, load<T>(&c.values[a][o]), load<T>(&c.sigma[a][o]));
     store(&c.f[a][o], f[a]);
   }
   T U[3][3];
   for (int i = 0; i < 3; ++i)
     for (int k = 0; k < 3; ++k) U[i][k] = load<T>(&c.U[i + 3 * k][o]);
-  // F_new = (U diag(f)) V^T where plastic
+  // F_new = (U diag(f)) V^T where the lane flows
   T Uf[3][3];
   for (int i = 0; i < 3; ++i)
     for (int k = 0; k < 3; ++k) Uf[i][k] = U[i][k] * f[k];
@@ -111,7 +108,7 @@ DSB_LANE_INLINE void stress_affine(SolidChunk& c, int o, bool with_F_new) {
     for (int i = 0; i < 3; ++i) {
       const T x = eigen_assigned_product_sum(Uf[i][0] * v0, Uf[i][1] * v1, Uf[i][2] * v2);
       double* out = &c.F_new[i + 3 * j][o];
-      store(out, sel_gt(plastic, zero, x, load<T>(out)));
+      store(out, sel_gt(flow, zero, x, load<T>(out)));
     }
   }
   // g = 2 mu (f - 1) f + lam J (J - 1), J = f0 f1 f2

@@ -132,12 +132,13 @@ double CartpoleEnv::rollout_with_grad(std::span<const double> x, std::span<doubl
 
 namespace {
 
-// Per-step interface: observation = (x, vx, phi_1..n, dphi_1..n, t / steps), action = one step's
-// normalized controls (cart speed, torques).
+// Per-step interface: observation = (x, vx, phi_1..n, dphi_1..n), the joint positions and
+// velocities as the paper's RL view (the state cartpole_step advances: Markov; no time), action =
+// one step's normalized controls (cart speed, torques).
 class CartpoleRl : public RlEnv {
  public:
   explicit CartpoleRl(const CartpoleEnv& env) : env_(env) { reset(); }
-  int observation_dim() const override { return 3 + 2 * env_.model().n; }
+  int observation_dim() const override { return 2 + 2 * env_.model().n; }
   int action_dim() const override { return 1 + env_.model().n; }
   int horizon() const override { return env_.cartpole_config().steps; }
   // the seed: "in cartpole, as other methods take actions once per timestep, action repeat is 1"
@@ -150,7 +151,6 @@ class CartpoleRl : public RlEnv {
     std::vector<double> o{state_.x, state_.vx};
     for (int i = 0; i < env_.model().n; ++i) o.push_back(state_.phi(i));
     for (int i = 0; i < env_.model().n; ++i) o.push_back(state_.dphi(i));
-    o.push_back(static_cast<double>(t_) / horizon());
     return o;
   }
   void step(std::span<const double> action) override {
