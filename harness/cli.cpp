@@ -18,6 +18,7 @@
 #include "common/error.hpp"
 #include "common/usable_cpus.hpp"
 #include "common/usable_memory.hpp"
+#include "harness/claims_grid.hpp"
 #include "harness/commands.hpp"
 #include "harness/grid.hpp"
 #include "harness/interrupt.hpp"
@@ -43,6 +44,7 @@ const char* kVersion = DSB_VERSION;
 
 struct RunArgs {
   bool all = false;
+  bool claims = false;  // --claims: the runs the claims table needs (claims_grid.hpp)
   std::vector<std::string> envs, optimizers;
   int seeds = 1;
   std::string budget = "1000";
@@ -89,6 +91,10 @@ std::string knob_help() {
 // the flags that define the grid (also those of `harness slurm`)
 void add_grid_options(CLI::App& app, RunArgs& a) {
   app.add_flag("--all", a.all, "every registered env x every applicable optimizer");
+  app.add_flag("--claims", a.claims,
+               "exactly the runs the report's claims table needs (reports/paper_claims.csv, compiled in): per claim, "
+               "its envs x its optimizers (an 'is best' claim: every optimizer --all pairs with the env); --env "
+               "restricts it to those envs");
   app.add_option("--env", a.envs, "env names, comma-separated (see `harness list`)")->delimiter(',');
   app.add_option("--optimizer", a.optimizers, "optimizer names, comma-separated")->delimiter(',');
   app.add_option("--seeds", a.seeds, "number of seeds per (env, optimizer), seed indices 0..N-1");
@@ -189,7 +195,21 @@ CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
       throw UsageError("--tape-memory must be gigabytes from 0 to 1000000, got '" + a.tape_memory + "'");
     tape = static_cast<std::size_t>(gb * 1e9);
   }
-  return {expand_grid(req), shard, jobs, tape};
+  std::vector<RunSpec> grid;
+  if (a.claims) {
+    if (a.all) throw UsageError("--claims and --all: give one of them (--claims is the claims table's part of --all)");
+    if (!a.optimizers.empty())
+      throw UsageError("--claims takes its optimizers from the claims, got --optimizer " + a.optimizers.front());
+    GridRequest base = req;
+    base.envs.clear();
+    for (const GridRequest& r : claims_requests(base, a.envs)) {
+      std::vector<RunSpec> part = expand_grid(r);
+      grid.insert(grid.end(), std::make_move_iterator(part.begin()), std::make_move_iterator(part.end()));
+    }
+  } else {
+    grid = expand_grid(req);
+  }
+  return {std::move(grid), shard, jobs, tape};
 }
 
 // the grid of `a` as flags, for commands the plan suggests (shard and db left out)
@@ -199,7 +219,7 @@ std::string grid_flags(const RunArgs& a) {
     for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
     return s;
   };
-  std::string f = a.all ? "--all" : "";
+  std::string f = a.all ? "--all" : (a.claims ? "--claims" : "");
   if (!a.envs.empty()) f += (f.empty() ? "" : " ") + std::string("--env ") + join(a.envs);
   if (!a.optimizers.empty()) f += " --optimizer " + join(a.optimizers);
   f += fmt::format(" --seeds {} --budget {}", a.seeds, a.budget);
@@ -340,7 +360,8 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
   }
   // the tasks run in another folder: a target file's path goes to them absolute
   const SlurmGridFlags flags{
-      a.all, a.envs, a.optimizers, a.seeds, a.budget, settings_with_absolute_paths(a.knobs), a.ext, a.ext_timeout};
+      a.all, a.claims, a.envs, a.optimizers, a.seeds, a.budget, settings_with_absolute_paths(a.knobs), a.ext,
+      a.ext_timeout};
   SlurmOptions o = options;
   if (o.time.empty() && !shard_runs.empty()) {
     // each task's wall from the plan (its runs over its CPUs, at least its longest run)

@@ -177,6 +177,7 @@ std::string join(const std::vector<std::string>& v, const char* sep) {
 std::string grid_flags_text(const SlurmGridFlags& g) {
   std::vector<std::string> words;
   if (g.all) words.push_back("--all");
+  if (g.claims) words.push_back("--claims");
   if (!g.envs.empty()) words.insert(words.end(), {"--env", shell_quote(join(g.envs, ","))});
   if (!g.optimizers.empty()) words.insert(words.end(), {"--optimizer", shell_quote(join(g.optimizers, ","))});
   words.insert(words.end(), {"--seeds", std::to_string(g.seeds), "--budget", shell_quote(g.budget)});

@@ -15,6 +15,7 @@ namespace dsb {
 // the grid flags handed to every array task, exactly as given (already validated by the caller)
 struct SlurmGridFlags {
   bool all = false;
+  bool claims = false;  // --claims
   std::vector<std::string> envs, optimizers;
   int seeds = 1;
   std::string budget = "1000";
