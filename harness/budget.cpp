@@ -7,7 +7,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/number_text.hpp"
 #include "common/parallel.hpp"
+#include "common/unit_box.hpp"
 #include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
@@ -39,10 +41,9 @@ void BudgetedObjective::check_point(std::span<const double> x) const {
   if (static_cast<int>(x.size()) != env_.dim())
     throw std::logic_error("optimizer asked for a point of dimension " + std::to_string(x.size()) +
                            " on env '" + env_.name() + "' of dimension " + std::to_string(env_.dim()));
-  for (std::size_t i = 0; i < x.size(); ++i)
-    if (!(x[i] >= -1.0 && x[i] <= 1.0))
-      throw std::logic_error("optimizer asked for x[" + std::to_string(i) + "] = " +
-                             std::to_string(x[i]) + " outside [-1, 1]");
+  if (const auto i = first_outside_box(x); i >= 0)
+    throw std::logic_error("optimizer asked for x[" + std::to_string(i) + "] = " + number_text(x[i]) +
+                           " outside [-1, 1]");
 }
 
 double BudgetedObjective::record(std::span<const double> x, double loss, bool used_grad, double wall_s,

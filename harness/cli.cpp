@@ -159,11 +159,12 @@ CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
       throw UsageError("--ext-timeout must be seconds above 0 and at most 86400, got '" + a.ext_timeout + "'");
   }
   {
-    // parsed here, not by CLI11, which saturates 99999999999999999999 to INT64_MAX
+    // parsed here, not by CLI11, which saturates 99999999999999999999 to INT64_MAX; the range is
+    // the grid's to check (grid.cpp), as for every other caller
     std::int64_t b = 0;
     const char* end = a.budget.data() + a.budget.size();
     const auto [ptr, ec] = std::from_chars(a.budget.data(), end, b);
-    if (a.budget.empty() || ec != std::errc() || ptr != end || b < 1 || b > kMaxBudget)
+    if (a.budget.empty() || ec != std::errc() || ptr != end)
       throw UsageError("--budget must be a whole number from 1 to " + std::to_string(kMaxBudget) + ", got '" +
                        a.budget + "'");
     req.budget = b;

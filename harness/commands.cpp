@@ -12,6 +12,7 @@
 
 #include "common/error.hpp"
 #include "common/parallel.hpp"
+#include "common/unit_box.hpp"
 #include "envs/core/registry.hpp"
 #include "harness/output_path.hpp"
 #include "optimizers/core/registry.hpp"
@@ -79,9 +80,8 @@ std::vector<double> checked_point(const Env& env, const std::string& x_text, con
   const auto x = parse_number_list(option, x_text);
   if (static_cast<int>(x.size()) != env.dim())
     throw UsageError(fmt::format("{} has {} values, env '{}' needs {}", option, x.size(), env.name(), env.dim()));
-  for (std::size_t i = 0; i < x.size(); ++i)
-    if (x[i] < -1.0 || x[i] > 1.0)
-      throw UsageError(fmt::format("{}: value {} at position {} is outside [-1, 1]", option, x[i], i));
+  if (const auto i = first_outside_box(x); i >= 0)
+    throw UsageError(fmt::format("{}: value {} at position {} is outside [-1, 1]", option, x[i], i));
   return x;
 }
 

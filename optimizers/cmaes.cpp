@@ -7,11 +7,12 @@
 #include <limits>
 #include <numeric>
 #include <span>
-#include <sstream>
 #include <stdexcept>
 
 #include "common/det_math.hpp"
 #include "common/error.hpp"
+#include "common/number_text.hpp"
+#include "common/unit_box.hpp"
 #include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
@@ -21,13 +22,6 @@ namespace {
 constexpr double kEps = 1e-8;         // library _EPS: eigenvalue floor, negative-weight denominator
 constexpr double kSigmaMax = 1e32;    // library _SIGMA_MAX
 constexpr int kMaxPopulation = 1 << 28;  // IPOP growth stops here (int overflow guard only)
-
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
 
 [[noreturn]] void bad(const std::string& field, const std::string& why) {
   throw ConfigError("cmaes", field, why);
@@ -39,17 +33,17 @@ std::string num(double v) {
 // config
 
 void CmaesConfig::validate() const {
-  if (!(sigma0 > 0.0) || !std::isfinite(sigma0)) bad("sigma0", "must be a finite number > 0 (got " + num(sigma0) + ")");
+  if (!(sigma0 > 0.0) || !std::isfinite(sigma0)) bad("sigma0", "must be a finite number > 0 (got " + number_text(sigma0) + ")");
   if (population != 0 && population < 2)
     bad("population", "must be 0 (default 4 + floor(3 ln n)) or >= 2 (got " + std::to_string(population) + ")");
   if (max_resampling < 0) bad("max_resampling", "must be >= 0 (got " + std::to_string(max_resampling) + ")");
   if (!(ipop_factor >= 1.0) || !std::isfinite(ipop_factor))
-    bad("ipop_factor", "must be a finite number >= 1 (got " + num(ipop_factor) + ")");
-  if (!(tolfun >= 0.0) || !std::isfinite(tolfun)) bad("tolfun", "must be a finite number >= 0 (got " + num(tolfun) + ")");
+    bad("ipop_factor", "must be a finite number >= 1 (got " + number_text(ipop_factor) + ")");
+  if (!(tolfun >= 0.0) || !std::isfinite(tolfun)) bad("tolfun", "must be a finite number >= 0 (got " + number_text(tolfun) + ")");
   if (!(tolx_factor >= 0.0) || !std::isfinite(tolx_factor))
-    bad("tolx_factor", "must be a finite number >= 0 (got " + num(tolx_factor) + ")");
-  if (!(tolxup > 0.0)) bad("tolxup", "must be > 0 (got " + num(tolxup) + ")");
-  if (!(condition_max > 1.0)) bad("condition_max", "must be > 1 (got " + num(condition_max) + ")");
+    bad("tolx_factor", "must be a finite number >= 0 (got " + number_text(tolx_factor) + ")");
+  if (!(tolxup > 0.0)) bad("tolxup", "must be > 0 (got " + number_text(tolxup) + ")");
+  if (!(condition_max > 1.0)) bad("condition_max", "must be > 1 (got " + number_text(condition_max) + ")");
 }
 
 nlohmann::json CmaesConfig::to_json() const {
@@ -192,11 +186,7 @@ Eigen::VectorXd CmaState::sample(Rng& rng) const {
 
 Eigen::VectorXd CmaState::ask(Rng& rng) {
   if (!eigen_decomposition()) throw std::runtime_error("cmaes: eigendecomposition of C failed");
-  auto inside = [](const Eigen::VectorXd& x) {
-    for (Eigen::Index i = 0; i < x.size(); ++i)
-      if (!(x[i] >= -1.0 && x[i] <= 1.0)) return false;
-    return true;
-  };
+  auto inside = [](const Eigen::VectorXd& x) { return inside_box({x.data(), static_cast<std::size_t>(x.size())}); };
   // bounds (library): resample up to max_resampling times, then clip one more draw to the box
   for (int r = 0; r < max_resampling_; ++r) {
     Eigen::VectorXd x = sample(rng);

@@ -7,12 +7,12 @@
 #include <cmath>
 #include <exception>
 #include <span>
-#include <sstream>
 #include <stdexcept>
 
 #include <nlopt.hpp>
 
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 #include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
@@ -23,13 +23,6 @@ constexpr double kNoFinitePenalty = 1e10;   // penalty while no finite loss has 
 constexpr double kMaxPenalty = 1e300;       // the penalty never grows beyond this
 constexpr int kMaxIdleStarts = 3;           // starts in a row without an episode -> return
 constexpr double kSubBoxMinHalfWidth = 0.25;  // DIRECT-L restart sub-box half-width in [0.25, 1)
-
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
 
 struct AlgoInfo {
   const char* algorithm;
@@ -127,15 +120,15 @@ void NloptConfig::validate() const {
   const AlgoInfo& a = algo_or_throw(algorithm);
   const std::string owner = a.name;
   if (!(ftol_rel >= 0.0) || !std::isfinite(ftol_rel))
-    throw ConfigError(owner, "ftol_rel", "must be a finite number >= 0 (got " + num(ftol_rel) + ")");
+    throw ConfigError(owner, "ftol_rel", "must be a finite number >= 0 (got " + number_text(ftol_rel) + ")");
   if (!(xtol_rel >= 0.0) || !std::isfinite(xtol_rel))
-    throw ConfigError(owner, "xtol_rel", "must be a finite number >= 0 (got " + num(xtol_rel) + ")");
+    throw ConfigError(owner, "xtol_rel", "must be a finite number >= 0 (got " + number_text(xtol_rel) + ")");
   if (!(initial_step >= 0.0 && initial_step <= 1.0))
     throw ConfigError(owner, "initial_step",
-                      "must be in [0, 1] (0 = NLopt default; got " + num(initial_step) + ")");
+                      "must be in [0, 1] (0 = NLopt default; got " + number_text(initial_step) + ")");
   if (initial_step != 0.0 && a.id != nlopt::LN_BOBYQA)
     throw ConfigError(owner, "initial_step",
-                      "is used only by LN_BOBYQA and must be 0 here (got " + num(initial_step) + ")");
+                      "is used only by LN_BOBYQA and must be 0 here (got " + number_text(initial_step) + ")");
   if (population < 0)
     throw ConfigError(owner, "population",
                       "must be 0 (NLopt default 10 (n + 1)) or >= n + 1 (got " +

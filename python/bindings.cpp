@@ -27,6 +27,7 @@
 
 #include "common/error.hpp"
 #include "common/thread_team.hpp"
+#include "common/unit_box.hpp"
 #include "common/usable_cpus.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/registry.hpp"
@@ -56,9 +57,8 @@ std::vector<double> checked_point(const Env& env, const py::object& obj) {
   if (static_cast<int>(x.size()) != env.dim())
     throw py::value_error("x has " + std::to_string(x.size()) + " values, env '" + env.name() + "' needs " +
                           std::to_string(env.dim()));
-  for (std::size_t i = 0; i < x.size(); ++i)
-    if (!(x[i] >= -1.0 && x[i] <= 1.0))  // NaN fails too
-      throw py::value_error("x: value " + repr(x[i]) + " at position " + std::to_string(i) + " is outside [-1, 1]");
+  if (const auto i = first_outside_box(x); i >= 0)  // NaN fails too
+    throw py::value_error("x: value " + repr(x[i]) + " at position " + std::to_string(i) + " is outside [-1, 1]");
   return x;
 }
 

@@ -10,6 +10,8 @@
 
 #if DSB_HAVE_MUJOCO
 #include <mujoco/mujoco.h>
+
+#include "common/number_text.hpp"
 #endif
 
 namespace dsb::reference {
@@ -28,7 +30,7 @@ MujocoContactParams mujoco_contact_params(const ContactConfig& c, double mass) {
   // constant impedance close to 1: the constraint follows the reference acceleration
   p.impedance = 0.99;
   // Coulomb coefficient of the elliptic cone; MuJoCo 2.2's <pair> has no solreffriction, so its
-  // friction rows relax the slip with the same damping inside the cone (README: why its friction
+  // friction rows relax the slip with the same damping inside the cone (reference/README.md: why its friction
   // is weaker than ours during impacts)
   p.friction = c.mu;
   return p;
@@ -37,11 +39,7 @@ MujocoContactParams mujoco_contact_params(const ContactConfig& c, double mass) {
 namespace {
 
 // full-precision number for the MJCF text
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
+std::string num(double v) { return exact_number_text(v); }
 
 std::string vec(const Eigen::Vector3d& v) { return num(v.x()) + " " + num(v.y()) + " " + num(v.z()); }
 

@@ -248,11 +248,13 @@ TEST(PpoConfigTest, InvalidFieldsAreNamed) {
   EXPECT_NE(field_of([](PpoConfig& c) { c.hidden = {}; }).find("hidden"), std::string::npos);
   EXPECT_NE(field_of([](PpoConfig& c) { c.learning_rate = 0.0; }).find("learning_rate"), std::string::npos);
   EXPECT_EQ(field_of([](PpoConfig&) {}), "valid");
-  // a gradient-free optimizer that needs an RL view: refused on an env without one
+  // a gradient-free optimizer that needs an RL view: refused on an env without one, as sac is
+  // (rl_core.hpp), before any episode
   const auto sphere = make_env("sphere-10");
   BudgetedObjective f(*sphere, 3);
   Rng rng(1);
-  EXPECT_THROW(make_ppo()->minimize(f, rng), std::logic_error);
+  EXPECT_THROW(make_ppo()->minimize(f, rng), UsageError);
+  EXPECT_EQ(f.used(), 0);
   EXPECT_TRUE(optimizer_entry("ppo").needs_rl);
 }
 

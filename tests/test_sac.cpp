@@ -403,11 +403,11 @@ TEST(SacRun, SpendsExactlyTheBudgetAndIsBitIdenticalPerSeed) {
   ASSERT_EQ(a.losses.size(), b.losses.size());
   EXPECT_EQ(std::memcmp(a.losses.data(), b.losses.data(), a.losses.size() * sizeof(double)), 0);
   EXPECT_EQ(a.diagnostics, b.diagnostics);
-  EXPECT_EQ(a.diagnostics["actor_hash"], b.diagnostics["actor_hash"]);
-  EXPECT_NE(a.diagnostics["actor_hash"], c.diagnostics["actor_hash"]);
+  EXPECT_EQ(a.diagnostics["policy_hash"], b.diagnostics["policy_hash"]);
+  EXPECT_NE(a.diagnostics["policy_hash"], c.diagnostics["policy_hash"]);
   EXPECT_LT(a.diagnostics.dump().size(), 4096u);
   std::printf("seed 42: actor hash %s, alpha %.6g, %.2f ms per gradient step; seed 43: hash %s\n",
-              a.diagnostics["actor_hash"].get<std::string>().c_str(), a.diagnostics["alpha"].get<double>(),
-              1e3 * a.seconds / 300.0, c.diagnostics["actor_hash"].get<std::string>().c_str());
+              a.diagnostics["policy_hash"].get<std::string>().c_str(), a.diagnostics["alpha"].get<double>(),
+              1e3 * a.seconds / 300.0, c.diagnostics["policy_hash"].get<std::string>().c_str());
   std::printf("diagnostics: %s\n", a.diagnostics.dump().c_str());
 }

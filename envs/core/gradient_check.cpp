@@ -3,29 +3,24 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
+#include "common/unit_box.hpp"
 
 namespace dsb {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::string str(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
-
 void require_finite_nonnegative(const char* field, double v) {
   if (!std::isfinite(v) || v < 0.0)
-    throw ConfigError("gradcheck", field, "must be a finite number >= 0, got " + str(v));
+    throw ConfigError("gradcheck", field, "must be a finite number >= 0, got " + number_text(v));
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -36,10 +31,9 @@ void require_in_box(const Env& env, std::span<const double> x) {
   if (static_cast<int>(x.size()) != env.dim())
     throw std::invalid_argument("gradient check of '" + env.name() + "': x has size " +
                                 std::to_string(x.size()) + ", expected " + std::to_string(env.dim()));
-  for (std::size_t i = 0; i < x.size(); ++i)
-    if (!(x[i] >= -1.0 && x[i] <= 1.0))
-      throw std::invalid_argument("gradient check of '" + env.name() + "': x[" + std::to_string(i) +
-                                  "] = " + str(x[i]) + " is outside [-1, 1]");
+  if (const auto i = first_outside_box(x); i >= 0)
+    throw std::invalid_argument("gradient check of '" + env.name() + "': x[" + std::to_string(i) +
+                                "] = " + number_text(x[i]) + " is outside [-1, 1]");
 }
 
 // both NaN (the same blow-up), or within value_tolerance relative (0: bit-equal)
@@ -53,9 +47,9 @@ bool values_agree(double a, double b, double value_tolerance) {
 
 void GradientCheckOptions::validate() const {
   if (!(std::isfinite(step) && step > 0.0 && step < 0.1))
-    throw ConfigError("gradcheck", "step", "must be in (0, 0.1), got " + str(step));
+    throw ConfigError("gradcheck", "step", "must be in (0, 0.1), got " + number_text(step));
   if (!(std::isfinite(tolerance) && tolerance > 0.0))
-    throw ConfigError("gradcheck", "tolerance", "must be a finite number > 0, got " + str(tolerance));
+    throw ConfigError("gradcheck", "tolerance", "must be a finite number > 0, got " + number_text(tolerance));
   require_finite_nonnegative("relative_floor", relative_floor);
   require_finite_nonnegative("absolute_floor", absolute_floor);
   require_finite_nonnegative("value_tolerance", value_tolerance);
@@ -65,9 +59,9 @@ void GradientSurveyOptions::validate() const {
   check.validate();
   if (points < 1) throw ConfigError("gradcheck", "points", "must be >= 1, got " + std::to_string(points));
   if (!(std::isfinite(amplitude) && amplitude > 0.0 && amplitude <= 1.0))
-    throw ConfigError("gradcheck", "amplitude", "must be in (0, 1], got " + str(amplitude));
+    throw ConfigError("gradcheck", "amplitude", "must be in (0, 1], got " + number_text(amplitude));
   if (!(std::isfinite(large_step) && large_step >= 0.0 && large_step <= 0.5))
-    throw ConfigError("gradcheck", "large_step", "must be in [0, 0.5] (0 = off), got " + str(large_step));
+    throw ConfigError("gradcheck", "large_step", "must be in [0, 0.5] (0 = off), got " + number_text(large_step));
 }
 
 namespace {

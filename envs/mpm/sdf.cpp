@@ -1,11 +1,11 @@
 #include "envs/mpm/sdf.hpp"
 
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 
 namespace dsb::mpm {
 
@@ -198,17 +198,11 @@ double dispatch(const Shape& s, const Vec3& p, SdfEval* out) {
   throw std::invalid_argument("evaluate_sdf: unknown ShapeKind");
 }
 
-std::string num(double x) {
-  std::ostringstream os;
-  os << x;
-  return os.str();
-}
-
 void require(bool ok, const Shape& s, const char* field, const std::string& rule, double got) {
   if (!ok)
     throw ConfigError(
         "shape", field,
-        "must be " + rule + " for a " + shape_kind_name(s.kind) + ", got " + num(got));
+        "must be " + rule + " for a " + shape_kind_name(s.kind) + ", got " + number_text(got));
 }
 
 void require_positive(const Shape& s, const char* field, double x) {
@@ -245,7 +239,7 @@ void Shape::validate() const {
       require_positive(*this, "major_radius", major_radius);
       require_positive(*this, "radius", radius);
       require(radius <= major_radius, *this, "radius",
-              "<= major_radius (" + num(major_radius) + ")", radius);
+              "<= major_radius (" + number_text(major_radius) + ")", radius);
       return;
     case ShapeKind::box:
       require_positive(*this, "half_extents.x", half_extents.x());
@@ -255,17 +249,17 @@ void Shape::validate() const {
     case ShapeKind::bowl: {
       require_positive(*this, "radius", radius);
       require(std::isfinite(rim_height) && std::abs(rim_height) < radius, *this, "rim_height",
-              "in (-radius, radius) = (" + num(-radius) + ", " + num(radius) + ")", rim_height);
+              "in (-radius, radius) = (" + number_text(-radius) + ", " + number_text(radius) + ")", rim_height);
       require_positive(*this, "thickness", thickness);
       const double w = std::sqrt(radius * radius - rim_height * rim_height);
       require(thickness <= 2.0 * w, *this, "thickness",
-              "<= 2 sqrt(radius^2 - rim_height^2) = " + num(2.0 * w), thickness);
+              "<= 2 sqrt(radius^2 - rim_height^2) = " + number_text(2.0 * w), thickness);
       return;
     }
   }
   throw ConfigError(
       "shape", "kind",
-      "is not a known shape kind, got " + num(static_cast<double>(static_cast<int>(kind))));
+      "is not a known shape kind, got " + number_text(static_cast<double>(static_cast<int>(kind))));
 }
 
 SdfEval evaluate_sdf(const Shape& shape, const Vec3& p_local) {

@@ -14,6 +14,7 @@
 #include <string_view>
 
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 
 namespace dsb::mpm {
 
@@ -124,13 +125,6 @@ std::string node_str(long long i, long long j, long long k) {
 void append_int(std::string& s, long long v) {
   char buf[24];
   s.append(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
-}
-
-// as printf("%.17g") in the C locale (whatever the process's locale): 17 significant digits
-// identify every double, and from_chars reads them back to the same bits
-void append_double(std::string& s, double v) {
-  char buf[40];
-  s.append(buf, std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 17).ptr);
 }
 
 bool parse_int(std::string_view s, long long lo, long long hi, long long& out) {
@@ -308,7 +302,7 @@ void write_grid_gz(const std::string& path, const NodeGrid& g) {
         text += ' ';
         append_int(text, k);
         text += ' ';
-        append_double(text, v);
+        text += exact_number_text(v);
         text += '\n';
       }
   const std::string bytes = gzip(path, text);

@@ -20,7 +20,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -28,6 +27,7 @@
 
 #include "common/det_math.hpp"
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 
 namespace dsb {
 
@@ -45,13 +45,6 @@ constexpr double kLogLengthscaleMin = -6.907755278982137, kLogLengthscaleMax = 6
 constexpr double kLogOutputscaleMin = -9.210340371976182, kLogOutputscaleMax = 9.210340371976182;
 constexpr double kLogNoiseExcessMin = -27.631021115928547, kLogNoiseExcessMax = 6.907755278982137;
 constexpr double kMeanBound = 100.0;
-
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
 
 [[noreturn]] void bad(const std::string& field, const std::string& why) { throw ConfigError("gp", field, why); }
 
@@ -222,7 +215,7 @@ double* scratch(std::vector<double>& v, std::size_t n) {
 
 void GpConfig::validate() const {
   const auto positive = [](const char* field, double v) {
-    if (!(v > 0.0) || !std::isfinite(v)) bad(field, "must be a finite number > 0 (got " + num(v) + ")");
+    if (!(v > 0.0) || !std::isfinite(v)) bad(field, "must be a finite number > 0 (got " + number_text(v) + ")");
   };
   positive("lengthscale_prior_concentration", lengthscale_prior_concentration);
   positive("lengthscale_prior_rate", lengthscale_prior_rate);
@@ -231,12 +224,12 @@ void GpConfig::validate() const {
   positive("noise_prior_concentration", noise_prior_concentration);
   positive("noise_prior_rate", noise_prior_rate);
   if (!(noise_floor >= 0.0) || !std::isfinite(noise_floor))
-    bad("noise_floor", "must be a finite number >= 0 (got " + num(noise_floor) + ")");
+    bad("noise_floor", "must be a finite number >= 0 (got " + number_text(noise_floor) + ")");
   if (fit_attempts < 1) bad("fit_attempts", "must be >= 1 (got " + std::to_string(fit_attempts) + ")");
   if (fit_max_evaluations < 1)
     bad("fit_max_evaluations", "must be >= 1 (got " + std::to_string(fit_max_evaluations) + ")");
   if (!(min_variance >= 0.0) || !std::isfinite(min_variance))
-    bad("min_variance", "must be a finite number >= 0 (got " + num(min_variance) + ")");
+    bad("min_variance", "must be a finite number >= 0 (got " + number_text(min_variance) + ")");
 }
 
 nlohmann::json GpConfig::to_json() const {
@@ -309,7 +302,7 @@ void GaussianProcess::set_hyperparameters(const GpHyperparameters& h) {
   if (!(h.outputscale > 0.0) || !std::isfinite(h.outputscale))
     throw std::invalid_argument("gp: outputscale must be finite and > 0");
   if (!(h.noise >= cfg_.noise_floor) || !std::isfinite(h.noise))
-    throw std::invalid_argument("gp: noise must be finite and >= noise_floor " + num(cfg_.noise_floor));
+    throw std::invalid_argument("gp: noise must be finite and >= noise_floor " + number_text(cfg_.noise_floor));
   if (!std::isfinite(h.mean)) throw std::invalid_argument("gp: mean must be finite");
   hyper_ = h;
   if (!cfg_.constant_mean) hyper_.mean = 0.0;

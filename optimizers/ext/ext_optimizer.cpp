@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 #include "optimizers/ext/child_process.hpp"
 
 namespace dsb {
@@ -25,13 +26,6 @@ std::string quote_line(const std::string& line) {
 }
 
 std::string seconds_text(double s) { return Json(s).dump() + " s"; }
-
-// a coordinate as an error shows it: the shortest round-trip decimal, or NaN, inf, -inf
-std::string number_text(double v) {
-  if (std::isnan(v)) return "NaN";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  return Json(v).dump();
-}
 
 // A message as JSON. A binary ask whose "ask" is the first key ({"ask": "BASE64...", ...}, as
 // dsb_protocol.py writes it) skips the JSON lexer for its long string (base64 holds no quote or

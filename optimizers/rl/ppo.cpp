@@ -2,75 +2,67 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 #include <string>
-#include <string_view>
 
 #include "common/det_math.hpp"
 #include "common/error.hpp"
-#include "optimizers/core/diagnostics.hpp"
+#include "common/number_text.hpp"
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/network_adam.hpp"
+#include "optimizers/rl/rl_core.hpp"
 
 namespace dsb {
 namespace {
-
-std::string str(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
 
 void require(bool ok, const char* field, const std::string& why) {
   if (!ok) throw ConfigError("ppo", field, why);
 }
 
-std::vector<int> layer_sizes(int in, const std::vector<int>& hidden, int out) {
-  std::vector<int> sizes{in};
-  sizes.insert(sizes.end(), hidden.begin(), hidden.end());
-  sizes.push_back(out);
-  return sizes;
-}
-
-// FNV-1a 64 over the bytes of a parameter vector (what a run learned, in its diagnostics)
-std::uint64_t hash_params(std::span<const double> p, std::uint64_t h) {
-  return fnv1a64(std::string_view(reinterpret_cast<const char*>(p.data()), p.size() * sizeof(double)), h);
-}
-
 }  // namespace
 
 void PpoConfig::validate() const {
-  require(std::isfinite(learning_rate) && learning_rate > 0.0, "learning_rate", "must be > 0, got " + str(learning_rate));
+  require(std::isfinite(learning_rate) && learning_rate > 0.0, "learning_rate", "must be > 0, got " + number_text(learning_rate));
   require(n_steps >= 1, "n_steps", "must be >= 1, got " + std::to_string(n_steps));
   require(batch_size >= 1 && batch_size <= n_steps, "batch_size",
           "must be in 1..n_steps, got " + std::to_string(batch_size));
   require(n_epochs >= 1, "n_epochs", "must be >= 1, got " + std::to_string(n_epochs));
-  require(gamma >= 0.0 && gamma <= 1.0, "gamma", "must be in [0, 1], got " + str(gamma));
-  require(gae_lambda >= 0.0 && gae_lambda <= 1.0, "gae_lambda", "must be in [0, 1], got " + str(gae_lambda));
-  require(std::isfinite(clip_range) && clip_range > 0.0, "clip_range", "must be > 0, got " + str(clip_range));
-  require(std::isfinite(ent_coef) && ent_coef >= 0.0, "ent_coef", "must be >= 0, got " + str(ent_coef));
-  require(std::isfinite(vf_coef) && vf_coef >= 0.0, "vf_coef", "must be >= 0, got " + str(vf_coef));
-  require(std::isfinite(max_grad_norm) && max_grad_norm > 0.0, "max_grad_norm", "must be > 0, got " + str(max_grad_norm));
-  require(std::isfinite(adam_eps) && adam_eps > 0.0, "adam_eps", "must be > 0, got " + str(adam_eps));
-  require(std::isfinite(log_std_init), "log_std_init", "must be finite, got " + str(log_std_init));
+  require(gamma >= 0.0 && gamma <= 1.0, "gamma", "must be in [0, 1], got " + number_text(gamma));
+  require(gae_lambda >= 0.0 && gae_lambda <= 1.0, "gae_lambda", "must be in [0, 1], got " + number_text(gae_lambda));
+  require(std::isfinite(clip_range) && clip_range > 0.0, "clip_range", "must be > 0, got " + number_text(clip_range));
+  require(std::isfinite(ent_coef) && ent_coef >= 0.0, "ent_coef", "must be >= 0, got " + number_text(ent_coef));
+  require(std::isfinite(vf_coef) && vf_coef >= 0.0, "vf_coef", "must be >= 0, got " + number_text(vf_coef));
+  require(std::isfinite(max_grad_norm) && max_grad_norm > 0.0, "max_grad_norm", "must be > 0, got " + number_text(max_grad_norm));
+  require(std::isfinite(adam_eps) && adam_eps > 0.0, "adam_eps", "must be > 0, got " + number_text(adam_eps));
+  require(std::isfinite(log_std_init), "log_std_init", "must be finite, got " + number_text(log_std_init));
   require(!hidden.empty() && std::all_of(hidden.begin(), hidden.end(), [](int h) { return h >= 1; }), "hidden",
           "must be one or more layer widths >= 1");
+  failed_loss.validate("ppo");
 }
 
 nlohmann::json PpoConfig::to_json() const {
-  return {{"learning_rate", learning_rate}, {"n_steps", n_steps}, {"batch_size", batch_size},
+  nlohmann::json j = {{"learning_rate", learning_rate}, {"n_steps", n_steps}, {"batch_size", batch_size},
           {"n_epochs", n_epochs},           {"gamma", gamma},     {"gae_lambda", gae_lambda},
           {"clip_range", clip_range},       {"ent_coef", ent_coef}, {"vf_coef", vf_coef},
           {"max_grad_norm", max_grad_norm}, {"adam_eps", adam_eps}, {"log_std_init", log_std_init},
           {"hidden", hidden},               {"activation", "tanh"},
           {"networks", "separate policy and value MLPs"},
           {"reward", "sparse: -episode loss at the last decision; failed episode: -2 x largest finite loss so far"}};
+  // the failed-episode loss enters only when it is not the default, so the default config (and
+  // every run key made with it) is the one it always was
+  const FailedEpisodeLoss standard = PpoConfig{}.failed_loss;
+  if (failed_loss.factor != standard.factor || failed_loss.floor != standard.floor ||
+      failed_loss.before_any != standard.before_any) {
+    j["failed_loss_factor"] = failed_loss.factor;
+    j["failed_loss_floor"] = failed_loss.floor;
+    j["failed_loss_before_any"] = failed_loss.before_any;
+  }
+  return j;
 }
 
 PpoNetworks::PpoNetworks(int observation_dim, int action_dim, const PpoConfig& cfg)
-    : policy(layer_sizes(observation_dim, cfg.hidden, action_dim), Activation::tanh),
-      value(layer_sizes(observation_dim, cfg.hidden, 1), Activation::tanh),
+    : policy(mlp_layer_sizes(observation_dim, cfg.hidden, action_dim), Activation::tanh),
+      value(mlp_layer_sizes(observation_dim, cfg.hidden, 1), Activation::tanh),
       log_std(static_cast<std::size_t>(action_dim), cfg.log_std_init) {}
 
 void PpoNetworks::init(const PpoConfig& cfg, Rng& rng) {
@@ -171,13 +163,10 @@ class Ppo : public Optimizer {
   nlohmann::json diagnostics() const override { return diag_; }
 
   void minimize(Objective& f, Rng& rng) override {
-    if (!f.has_rl()) throw std::logic_error("ppo needs an env with an RL view (see `harness list`)");
+    require_rl_view(f, name_);
     diag_ = nlohmann::json::object();
-    block_losses_.clear();
-    worst_ = std::numeric_limits<double>::quiet_NaN();
-    episodes_ = updates_ = 0;
-    block_sum_ = 0.0;
-    block_n_ = 0;
+    episodes_ = EpisodeLosses(cfg_.failed_loss, kBlock);
+    updates_ = 0;
     last_ = {};
     const RlSpec spec = f.rl_spec();
     const int O = spec.observation_dim, A = spec.action_dim, N = cfg_.n_steps;
@@ -215,12 +204,10 @@ class Ppo : public Optimizer {
             clipped[k] = std::clamp(action[k], -1.0, 1.0);
           }
           const RlStep step = f.rl_step(clipped, next_obs);
-          reward_buf[t] = step.done ? reward_of(step.loss) : 0.0;
+          // sparse reward: -loss at the last decision (a failed episode's stand-in: rl_core.hpp)
+          reward_buf[t] = step.done ? -episodes_.finish_episode(step.loss) : 0.0;
           done_buf[t] = step.done ? 1.0 : 0.0;
-          if (step.done) {
-            open = false;
-            note_episode(step.loss);
-          }
+          if (step.done) open = false;
           obs.swap(next_obs);
         }
         // the value of where the rollout stopped (unused after a finished episode)
@@ -235,25 +222,7 @@ class Ppo : public Optimizer {
   }
 
  private:
-  // sparse reward at the last decision: -loss, or -2 x the largest finite loss so far for a failed episode
-  double reward_of(double loss) {
-    if (std::isfinite(loss)) {
-      worst_ = std::isnan(worst_) ? loss : std::max(worst_, loss);
-      return -loss;
-    }
-    return std::isnan(worst_) ? -2.0 : -2.0 * std::abs(worst_);
-  }
 
-  void note_episode(double loss) {
-    ++episodes_;
-    block_sum_ += std::isfinite(loss) ? loss : 0.0;
-    block_n_ += std::isfinite(loss) ? 1 : 0;
-    if (episodes_ % kBlock == 0) {
-      block_losses_.push_back(block_n_ > 0 ? block_sum_ / block_n_ : std::numeric_limits<double>::quiet_NaN());
-      block_sum_ = 0.0;
-      block_n_ = 0;
-    }
-  }
 
   void update(PpoNetworks& nets, NetworkAdam& adam_pi, NetworkAdam& adam_v, NetworkAdam& adam_ls,
               const Eigen::MatrixXd& obs_buf, const Eigen::MatrixXd& act_buf, const std::vector<double>& logp_buf,
@@ -296,32 +265,20 @@ class Ppo : public Optimizer {
   }
 
   void finish(const PpoNetworks& nets) {
-    std::uint64_t h = hash_params(nets.policy.params(), 0xcbf29ce484222325ULL);
-    h = hash_params(nets.value.params(), h);
-    h = hash_params(nets.log_std, h);
-    char hex[17];
-    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-    diag_["episodes"] = episodes_;
+    episodes_.put_diagnostics(diag_);
     diag_["updates"] = updates_;
-    diag_["policy_hash"] = hex;
+    diag_["policy_hash"] = params_digest({nets.policy.params(), nets.value.params(), nets.log_std});
     diag_["log_std"] = nets.log_std;
     diag_["last_update"] = {{"policy_loss", last_.policy_loss}, {"value_loss", last_.value_loss},
                             {"clip_fraction", last_.clip_fraction}, {"approx_kl", last_.approx_kl}};
-    diag_["mean_loss_block"] = kBlock;
-    put_capped(diag_, "mean_loss_per_block", block_losses_, [](double v, std::size_t) {
-      return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
-    });
   }
 
   static constexpr int kBlock = 20;  // episodes per point of the learning curve
   PpoConfig cfg_;
   std::string name_ = "ppo";
   nlohmann::json diag_ = nlohmann::json::object();
-  double worst_ = std::numeric_limits<double>::quiet_NaN();
-  std::int64_t episodes_ = 0, updates_ = 0;
-  double block_sum_ = 0.0;
-  int block_n_ = 0;
-  std::vector<double> block_losses_;
+  EpisodeLosses episodes_{FailedEpisodeLoss{}, kBlock};
+  std::int64_t updates_ = 0;
   PpoLoss last_;
 };
 

@@ -17,8 +17,9 @@
 // 0 at every decision but the last, minus the episode loss at the last.
 // Where it departs: an episode's end is terminal (no bootstrap: the loss is the whole payoff and
 // nothing follows the fixed horizon); a failed episode (+inf loss) is rewarded with -2 x the
-// largest finite loss seen so far in the run (-2 before any), so a blow-up is the worst outcome
-// without an infinite reward; the rollout that the budget cuts short is not trained on.
+// largest finite loss seen so far in the run (-2 before any; PpoConfig::failed_loss, the rule in
+// rl_core.hpp), so a blow-up is the worst outcome without an infinite reward; the rollout that
+// the budget cuts short is not trained on.
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -30,6 +31,7 @@
 
 #include "optimizers/core/optimizer.hpp"
 #include "optimizers/rl/mlp.hpp"
+#include "optimizers/rl/rl_core.hpp"
 
 namespace dsb {
 
@@ -47,6 +49,8 @@ struct PpoConfig {
   double adam_eps = 1e-5;  // SB3 sets it for on-policy algorithms
   double log_std_init = 0.0;
   std::vector<int> hidden = {64, 64, 64};  // the seed's 3 layers of 64 (policy and value alike)
+  // a failed episode stands for -2 x the largest finite loss so far, -2 before any (chosen here)
+  FailedEpisodeLoss failed_loss{.factor = 2.0, .floor = 0.0, .before_any = 2.0};
   // throws ConfigError("ppo", field, why)
   void validate() const;
   nlohmann::json to_json() const;

@@ -2,59 +2,21 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <sstream>
 #include <stdexcept>
-#include <string_view>
 
 #include "common/det_math.hpp"
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 #include "common/rng.hpp"
 #include "optimizers/core/diagnostics.hpp"
 #include "optimizers/rl/network_adam.hpp"
 #include "optimizers/rl/replay_buffer.hpp"
+#include "optimizers/rl/rl_core.hpp"
 
 namespace dsb {
 namespace {
 
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
-
 [[noreturn]] void bad(const std::string& field, const std::string& why) { throw ConfigError("sac", field, why); }
-
-std::string hex64(std::uint64_t h) {
-  char buf[19];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
-}
-
-std::uint64_t hash_params(std::span<const double> p) {
-  return fnv1a64(std::string_view(reinterpret_cast<const char*>(p.data()), p.size() * sizeof(double)));
-}
-
-// Observations of a blown-up simulation may be NaN, infinite or huge; the networks would turn them
-// into NaN parameters. Each component is replaced: NaN -> 0, otherwise clamped to
-// [-kObsLimit, kObsLimit]. Returns how many components were changed.
-constexpr double kObsLimit = 1e6;
-int sanitize_observation(std::span<double> obs) {
-  int changed = 0;
-  for (double& o : obs) {
-    const double c = std::isnan(o) ? 0.0 : std::clamp(o, -kObsLimit, kObsLimit);
-    if (c != o || std::isnan(o)) o = c, ++changed;
-  }
-  return changed;
-}
-
-std::vector<int> layer_sizes(int in, const std::vector<int>& hidden, int out) {
-  std::vector<int> s{in};
-  s.insert(s.end(), hidden.begin(), hidden.end());
-  s.push_back(out);
-  return s;
-}
 
 class Sac : public Optimizer {
  public:
@@ -84,21 +46,16 @@ class Sac : public Optimizer {
   std::vector<std::vector<double>> critic_grads_;
 
   // diagnostics
-  std::int64_t episodes_ = 0, failed_ = 0, timesteps_ = 0, gradient_steps_ = 0, obs_sanitized_ = 0;
-  std::int64_t block_size_ = 1;
-  double worst_finite_ = -INFINITY;
-  std::vector<double> block_sum_;        // sum of finite losses per block of episodes
-  std::vector<std::int64_t> block_n_;    // finite episodes per block
+  EpisodeLosses episodes_{FailedEpisodeLoss{}, 1};
+  std::int64_t timesteps_ = 0, gradient_steps_ = 0, obs_sanitized_ = 0;
   double last_critic_loss_ = NAN, last_actor_loss_ = NAN, last_alpha_loss_ = NAN;
   std::size_t buffer_capacity_ = 0;
 };
 
 void Sac::minimize(Objective& f, Rng& rng) {
   // reset everything a previous run left
-  episodes_ = failed_ = timesteps_ = gradient_steps_ = obs_sanitized_ = 0;
-  worst_finite_ = -INFINITY;
-  block_sum_.clear();
-  block_n_.clear();
+  timesteps_ = gradient_steps_ = obs_sanitized_ = 0;
+  episodes_ = EpisodeLosses(cfg_.failed_loss(), 1);
   last_critic_loss_ = last_actor_loss_ = last_alpha_loss_ = NAN;
   actor_.reset();
   critics_.clear();
@@ -106,7 +63,7 @@ void Sac::minimize(Objective& f, Rng& rng) {
   buffer_.reset();
   buffer_capacity_ = 0;
 
-  if (!f.has_rl()) throw UsageError("sac: the objective has no RL view (pair sac with an RL env)");
+  require_rl_view(f, name_);
   const RlSpec spec = f.rl_spec();
   obs_dim_ = spec.observation_dim;
   act_dim_ = spec.action_dim;
@@ -114,10 +71,10 @@ void Sac::minimize(Objective& f, Rng& rng) {
     throw std::logic_error("sac: RL spec with an empty observation, action or episode");
 
   // networks: actor (mean, log_std), n critics; torch default init in that order; targets = copies
-  actor_ = std::make_unique<Mlp>(layer_sizes(obs_dim_, cfg_.net_arch, 2 * act_dim_), Activation::relu);
+  actor_ = std::make_unique<Mlp>(mlp_layer_sizes(obs_dim_, cfg_.net_arch, 2 * act_dim_), Activation::relu);
   init_torch_default(*actor_, rng);
   for (int k = 0; k < cfg_.n_critics; ++k) {
-    critics_.emplace_back(layer_sizes(obs_dim_ + act_dim_, cfg_.net_arch, 1), Activation::relu);
+    critics_.emplace_back(mlp_layer_sizes(obs_dim_ + act_dim_, cfg_.net_arch, 1), Activation::relu);
     init_torch_default(critics_.back(), rng);
   }
   targets_ = critics_;
@@ -139,8 +96,9 @@ void Sac::minimize(Objective& f, Rng& rng) {
       remaining > cfg_.buffer_size / spec.decisions ? cfg_.buffer_size : remaining * spec.decisions;
   buffer_capacity_ = static_cast<std::size_t>(std::min(cfg_.buffer_size, std::max<std::int64_t>(can_fill, 1)));
   buffer_ = std::make_unique<ReplayBuffer>(buffer_capacity_, obs_dim_, act_dim_);
-  block_size_ = std::max<std::int64_t>(1, (remaining + std::int64_t(kDiagnosticsListCap) - 1) /
-                                              std::int64_t(kDiagnosticsListCap));
+  // the learning curve: at most kDiagnosticsListCap blocks over the remaining budget
+  episodes_ = EpisodeLosses(cfg_.failed_loss(), (remaining + std::int64_t(kDiagnosticsListCap) - 1) /
+                                                    std::int64_t(kDiagnosticsListCap));
 
   std::vector<double> obs(obs_dim_), next_obs(obs_dim_), action(act_dim_);
   Eigen::VectorXd x(obs_dim_);
@@ -166,20 +124,8 @@ void Sac::minimize(Objective& f, Rng& rng) {
       obs_sanitized_ += sanitize_observation(next_obs);
       double reward = 0.0;
       if (st.done) {
-        // sparse reward: -loss at the final decision; failed episodes get a finite penalty
-        double loss = st.loss;
-        const std::size_t b = static_cast<std::size_t>(episodes_ / block_size_);
-        if (block_sum_.size() <= b) block_sum_.resize(b + 1, 0.0), block_n_.resize(b + 1, 0);
-        if (std::isfinite(loss)) {
-          worst_finite_ = std::max(worst_finite_, loss);
-          block_sum_[b] += loss;
-          ++block_n_[b];
-        } else {
-          ++failed_;
-          loss = std::max(cfg_.failed_loss_factor * worst_finite_, cfg_.failed_loss_floor);
-        }
-        reward = -loss;
-        ++episodes_;
+        // sparse reward: -loss at the final decision (a failed episode's stand-in: rl_core.hpp)
+        reward = -episodes_.finish_episode(st.loss);
       }
       // the episode's end is terminal: done = 1, no bootstrap past the final loss
       buffer_->add(obs, action, reward, next_obs, st.done);
@@ -228,9 +174,7 @@ void Sac::train(Rng& rng, int gradient_steps) {
 }
 
 nlohmann::json Sac::diagnostics() const {
-  nlohmann::json d = {{"episodes", episodes_},
-                      {"failed_episodes", failed_},
-                      {"timesteps", timesteps_},
+  nlohmann::json d = {{"timesteps", timesteps_},
                       {"gradient_steps", gradient_steps_},
                       {"buffer_capacity", buffer_capacity_},
                       {"observations_sanitized", obs_sanitized_},
@@ -239,14 +183,8 @@ nlohmann::json Sac::diagnostics() const {
                       {"last_critic_loss", std::isfinite(last_critic_loss_) ? nlohmann::json(last_critic_loss_) : nlohmann::json(nullptr)},
                       {"last_actor_loss", std::isfinite(last_actor_loss_) ? nlohmann::json(last_actor_loss_) : nlohmann::json(nullptr)},
                       {"last_alpha_loss", std::isfinite(last_alpha_loss_) ? nlohmann::json(last_alpha_loss_) : nlohmann::json(nullptr)},
-                      {"actor_hash", actor_ ? nlohmann::json(hex64(hash_params(actor_->params()))) : nlohmann::json(nullptr)},
-                      {"loss_block", block_size_}};
-  std::vector<std::size_t> blocks(block_sum_.size());
-  for (std::size_t b = 0; b < blocks.size(); ++b) blocks[b] = b;
-  // mean finite episode loss per block of loss_block episodes (null when all of a block failed)
-  put_capped(d, "block_mean_loss", blocks, [&](std::size_t b, std::size_t) {
-    return block_n_[b] > 0 ? nlohmann::json(block_sum_[b] / static_cast<double>(block_n_[b])) : nlohmann::json(nullptr);
-  });
+                      {"policy_hash", actor_ ? nlohmann::json(params_digest({actor_->params()})) : nlohmann::json(nullptr)}};
+  episodes_.put_diagnostics(d);
   return d;
 }
 
@@ -254,13 +192,13 @@ nlohmann::json Sac::diagnostics() const {
 
 void SacConfig::validate() const {
   auto pos_finite = [](double v) { return v > 0.0 && std::isfinite(v); };
-  if (!pos_finite(learning_rate)) bad("learning_rate", "must be a finite number > 0 (got " + num(learning_rate) + ")");
-  if (!pos_finite(adam_eps)) bad("adam_eps", "must be a finite number > 0 (got " + num(adam_eps) + ")");
+  if (!pos_finite(learning_rate)) bad("learning_rate", "must be a finite number > 0 (got " + number_text(learning_rate) + ")");
+  if (!pos_finite(adam_eps)) bad("adam_eps", "must be a finite number > 0 (got " + number_text(adam_eps) + ")");
   if (buffer_size < 1) bad("buffer_size", "must be >= 1 (got " + std::to_string(buffer_size) + ")");
   if (learning_starts < 0) bad("learning_starts", "must be >= 0 (got " + std::to_string(learning_starts) + ")");
   if (batch_size < 1) bad("batch_size", "must be >= 1 (got " + std::to_string(batch_size) + ")");
-  if (!(tau > 0.0 && tau <= 1.0)) bad("tau", "must lie in (0, 1] (got " + num(tau) + ")");
-  if (!(gamma >= 0.0 && gamma <= 1.0)) bad("gamma", "must lie in [0, 1] (got " + num(gamma) + ")");
+  if (!(tau > 0.0 && tau <= 1.0)) bad("tau", "must lie in (0, 1] (got " + number_text(tau) + ")");
+  if (!(gamma >= 0.0 && gamma <= 1.0)) bad("gamma", "must lie in [0, 1] (got " + number_text(gamma) + ")");
   if (train_freq < 1) bad("train_freq", "must be >= 1 (got " + std::to_string(train_freq) + ")");
   if (gradient_steps < 1) bad("gradient_steps", "must be >= 1 (got " + std::to_string(gradient_steps) + ")");
   if (target_update_interval < 1)
@@ -269,11 +207,11 @@ void SacConfig::validate() const {
   if (net_arch.empty()) bad("net_arch", "must list at least one hidden layer");
   for (int h : net_arch)
     if (h < 1) bad("net_arch", "layer sizes must be >= 1 (got " + std::to_string(h) + ")");
-  if (!pos_finite(ent_coef_init)) bad("ent_coef_init", "must be a finite number > 0 (got " + num(ent_coef_init) + ")");
-  if (!(failed_loss_factor >= 1.0) || !std::isfinite(failed_loss_factor))
-    bad("failed_loss_factor", "must be a finite number >= 1 (got " + num(failed_loss_factor) + ")");
+  if (!pos_finite(ent_coef_init)) bad("ent_coef_init", "must be a finite number > 0 (got " + number_text(ent_coef_init) + ")");
+  // the floor is also the stand-in before any finite loss, so it must be > 0
   if (!pos_finite(failed_loss_floor))
-    bad("failed_loss_floor", "must be a finite number > 0 (got " + num(failed_loss_floor) + ")");
+    bad("failed_loss_floor", "must be a finite number > 0 (got " + number_text(failed_loss_floor) + ")");
+  failed_loss().validate("sac");
 }
 
 nlohmann::json SacConfig::to_json() const {

@@ -36,7 +36,8 @@
 //     whole payoff and nothing follows it; `ppo` treats the end the same way;
 //   - the terminal reward enters as the reward of the last decision's transition (above);
 //   - a failed episode (loss +inf or NaN) is rewarded -max(failed_loss_factor * worst finite loss
-//     seen so far in the run, failed_loss_floor), a large finite penalty so the critics stay finite;
+//     seen so far in the run, failed_loss_floor), -failed_loss_floor before any finite loss: a
+//     large finite penalty so the critics stay finite (the rule: rl_core.hpp, shared with `ppo`);
 //   - observation components that are NaN become 0 and all are clamped to [-1e6, 1e6] before the
 //     networks or the buffer see them (a blown-up simulation's state would otherwise make every
 //     parameter NaN); diagnostics count the changed components ("observations_sanitized");
@@ -53,6 +54,7 @@
 #include <nlohmann/json.hpp>
 
 #include "optimizers/core/optimizer.hpp"
+#include "optimizers/rl/rl_core.hpp"
 #include "optimizers/rl/sac_update.hpp"
 
 namespace dsb {
@@ -72,7 +74,8 @@ struct SacConfig {
   std::vector<int> net_arch = {64, 64, 64};  // the seed (SB3: [256, 256])
   double ent_coef_init = 1.0;            // SB3 "auto": initial alpha
   double failed_loss_factor = 2.0;       // penalty for a failed episode (chosen here)
-  double failed_loss_floor = 1.0;        // ... at least this loss
+  double failed_loss_floor = 1.0;        // ... at least this loss, and this loss before any finite one
+  FailedEpisodeLoss failed_loss() const { return {failed_loss_factor, failed_loss_floor, failed_loss_floor}; }
   // throws ConfigError naming the field
   void validate() const;
   nlohmann::json to_json() const;
