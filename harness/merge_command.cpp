@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "common/error.hpp"
+#include "harness/run_status.hpp"
 #include "harness/schema.hpp"
 #include "harness/store.hpp"
 
@@ -81,7 +82,7 @@ struct RunRecord {
   std::vector<Row> evals;        // kEvalColumns, by episode
   std::vector<Row> journal;      // seq, kind, input_hash, payload (running runs)
   std::vector<Row> prefix;       // the same, of a done run's kept seed-free episodes
-  std::string status() const { return run[7].s; }
+  RunStatus status() const { return stored_status(run[7].s).value_or(RunStatus::running); }
   std::int64_t committed() const { return static_cast<std::int64_t>(evals.size()); }
   RunKey key() const {
     return {run[0].s, run[1].s, static_cast<int>(run[2].i), run[3].i, run[4].s, run[5].s, run[16].s};
@@ -183,7 +184,7 @@ bool consistent(const RunRecord& a, const RunRecord& b) {
 }
 
 // rank of a status: done > failed > running
-int rank(const std::string& status) { return status == "done" ? 2 : status == "failed" ? 1 : 0; }
+int rank(RunStatus status) { return status == RunStatus::done ? 2 : status == RunStatus::failed ? 1 : 0; }
 
 // every stored byte of a copy, in a fixed order: the last tiebreak between copies, so that which
 // copy survives never depends on the order of the inputs
@@ -272,8 +273,8 @@ MergeCounts merge_inputs(Store& store, const std::vector<std::string>& inputs) {
       while (all.step()) ids.push_back(all.column_int(0));
       for (const std::int64_t id : ids) {
         RunRecord theirs = read_run(db, id, version);
-        if (theirs.status() != "running") theirs.journal.clear();  // only an unfinished run resumes
-        if (theirs.status() != "done") theirs.prefix.clear();      // only a done run keeps a prefix
+        if (theirs.status() != RunStatus::running) theirs.journal.clear();  // only an unfinished run resumes
+        if (theirs.status() != RunStatus::done) theirs.prefix.clear();      // only a done run keeps a prefix
         const RunKey key = theirs.key();
         const auto existing = find_run(out, key);
         if (!existing) {
@@ -284,7 +285,7 @@ MergeCounts merge_inputs(Store& store, const std::vector<std::string>& inputs) {
         }
         const RunRecord ours = read_run(out, *existing, kSchemaVersion);
         const std::string other = source.count(key) ? "'" + source[key] + "'" : "the output";
-        const bool both_done = theirs.status() == "done" && ours.status() == "done";
+        const bool both_done = theirs.status() == RunStatus::done && ours.status() == RunStatus::done;
         if (!consistent(theirs, ours) || (both_done && !same_result(theirs, ours)))
           throw UsageError("merge: run " + key.text() + " in '" + in + "' conflicts with its copy from " + other +
                            " (same key, different evals); nothing was written");

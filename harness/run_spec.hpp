@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "harness/replay.hpp"
+#include "harness/run_status.hpp"
 #include "optimizers/ext/ext_optimizer.hpp"
 
 namespace dsb {
@@ -38,7 +39,7 @@ struct EvalRecord {
 };
 
 struct RunResult {
-  std::string status;  // "done" or "failed" (execute_run also: "interrupted", "diverged")
+  RunStatus status = RunStatus::done;  // done or failed (execute_run also: interrupted, diverged)
   std::int64_t episodes = 0;
   std::int64_t failed_episodes = 0;
   double best_loss = 0.0;  // NaN when no episode succeeded

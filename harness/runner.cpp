@@ -30,23 +30,23 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
   }
   Rng rng(spec.rng_seed);
   objective.watch_draws(&rng);
-  result.status = "done";
+  result.status = RunStatus::done;
   try {
     optimizer.minimize(objective, rng);
   } catch (const BudgetExhausted&) {
     // the normal end: the budget is spent (or a stop request, below)
   } catch (const ReplayDiverged& e) {
-    result.status = "diverged";
+    result.status = RunStatus::diverged;
     result.error = e.what();
   } catch (const std::exception& e) {
-    result.status = "failed";
+    result.status = RunStatus::failed;
     result.error = e.what();
     // an error after a stop request is the stop's doing (an external optimizer killed by it):
     // the run commits and resumes like any other
     if (objective.stop_if_requested()) result.error.clear();
   }
   // an optimizer may catch a stop like the budget's end and return: the objective knows
-  if (objective.interrupted()) result.status = "interrupted";
+  if (objective.interrupted()) result.status = RunStatus::interrupted;
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.episodes = objective.used();
   result.failed_episodes = objective.failed_episodes();
@@ -173,7 +173,7 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
           CommitListener listener(store, start.run_id, start.committed_episodes);
           RunControl control{&listener, &stop, std::move(start.journal), start.journal_episodes, tape_memory_bytes};
           r = execute_run(p.spec, *env, *opt, &progress.episodes_of(w), &team, &control);
-          if (r.status != "diverged" || attempt > 0) break;
+          if (r.status != RunStatus::diverged || attempt > 0) break;
           if (progress_out)
             std::fprintf(progress_out, "\nharness: %s: %s; running it again from the start\n", p.key.text().c_str(),
                          r.error.c_str());
@@ -188,16 +188,16 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
           n_shared.fetch_add(1);
           n_shared_episodes.fetch_add(shared_episodes);
         }
-        if (r.status == "interrupted") {
+        if (r.status == RunStatus::interrupted) {
           n_interrupted.fetch_add(1);
           run_ended(i);
           continue;  // committed; the next harness resumes it
         }
-        if (r.status == "diverged") r.status = "failed";
+        if (r.status == RunStatus::diverged) r.status = RunStatus::failed;
         store.finish_run(start.run_id, r);
         run_ended(i);
-        (r.status == "done" ? n_done : n_failed).fetch_add(1);
-        progress.run_finished(w, r.status != "done", run_cost_s[i]);
+        (r.status == RunStatus::done ? n_done : n_failed).fetch_add(1);
+        progress.run_finished(w, r.status != RunStatus::done, run_cost_s[i]);
         if (on_run_finished) {
           std::lock_guard lock(finished_mutex);
           on_run_finished();

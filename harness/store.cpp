@@ -290,7 +290,9 @@ void Store::finish_run(std::int64_t run_id, const RunResult& r) {
   Statement del(db_.handle(), "DELETE FROM evals WHERE run_id=?");
   del.bind(1, run_id).run();
   insert_evals(db_, run_id, r.evals);
-  if (r.status == "done") keep_seed_free_prefix(run_id, r);
+  if (r.status != RunStatus::done && r.status != RunStatus::failed)
+    throw std::logic_error("finish_run: a run ends done or failed");
+  if (r.status == RunStatus::done) keep_seed_free_prefix(run_id, r);
   // what only a resume needs goes with the run's end
   Statement del_journal(db_.handle(), "DELETE FROM replay WHERE run_id=?");
   del_journal.bind(1, run_id).run();
@@ -298,7 +300,7 @@ void Store::finish_run(std::int64_t run_id, const RunResult& r) {
     UPDATE runs SET status=?, episodes=?, failed_episodes=?, best_loss=?, best_x=?, wall_s=?,
                     error=?, finished_at=?, diagnostics=?, seed_free_episodes=?, seed_free_calls=?
                 WHERE run_id=?)sql");
-  upd.bind(1, r.status).bind(2, r.episodes).bind(3, r.failed_episodes).bind(4, r.best_loss);
+  upd.bind(1, std::string(stored_text(r.status))).bind(2, r.episodes).bind(3, r.failed_episodes).bind(4, r.best_loss);
   if (r.best_x.empty())
     upd.bind_null(5);
   else

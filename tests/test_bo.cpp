@@ -31,7 +31,7 @@ std::vector<double> bo_best_losses(const std::string& env_name, std::int64_t bud
   for (int s = 0; s < seeds; ++s) {
     auto bo = make_optimizer("bo");
     const RunResult r = execute_run({env_name, "bo", s, budget, per_run_seed(env_name, "bo", s)}, *env, *bo);
-    EXPECT_EQ(r.status, "done") << r.error;
+    EXPECT_EQ(r.status, RunStatus::done) << r.error;
     EXPECT_EQ(r.episodes, budget);
     best.push_back(r.best_loss);
   }

@@ -84,7 +84,7 @@ TEST(ExecuteRun, FullBudgetAndIdenticalReruns) {
   auto opt1 = make_optimizer("cmaes"), opt2 = make_optimizer("cmaes");
   const RunResult a = execute_run(spec, *env, *opt1);
   const RunResult b = execute_run(spec, *env, *opt2);
-  EXPECT_EQ(a.status, "done");
+  EXPECT_EQ(a.status, RunStatus::done);
   EXPECT_EQ(a.episodes, 120);
   ASSERT_EQ(a.evals.size(), b.evals.size());
   for (std::size_t i = 0; i < a.evals.size(); ++i) EXPECT_EQ(a.evals[i].loss, b.evals[i].loss);
@@ -101,7 +101,7 @@ TEST(ExecuteRun, OptimizerErrorBecomesAFailedRun) {
   } env;
   auto gd = make_optimizer("gd");
   const RunResult r = execute_run({"fragile", "gd", 0, 10, 1}, env, *gd);
-  EXPECT_EQ(r.status, "failed");
+  EXPECT_EQ(r.status, RunStatus::failed);
   EXPECT_NE(r.error.find("solver diverged"), std::string::npos);
 }
 
@@ -180,7 +180,7 @@ TEST(ExecuteRun, RunsAreBitIdenticalForAnyTeamSize) {
       results.push_back(execute_run(spec, *env, *opt, nullptr, &team));
     }
     for (const auto& r : results) {
-      ASSERT_EQ(r.status, "done") << opt_name << ": " << r.error;
+      ASSERT_EQ(r.status, RunStatus::done) << opt_name << ": " << r.error;
       ASSERT_EQ(r.evals.size(), results[0].evals.size());
       for (std::size_t i = 0; i < r.evals.size(); ++i)
         ASSERT_EQ(r.evals[i].loss, results[0].evals[i].loss) << opt_name << " episode " << i;

@@ -34,7 +34,7 @@ class StoreTest : public dsb::testing::TempDirTest {
   static RunKey key(int seed) { return {"sphere-2", "random", seed, 3, "aaaa", "bbbb", "0.1.0"}; }
   static RunResult result() {
     RunResult r;
-    r.status = "done";
+    r.status = RunStatus::done;
     r.episodes = 3;
     r.failed_episodes = 1;
     r.best_loss = 0.5;
@@ -391,7 +391,7 @@ TEST_F(StoreTest, ARunningRunKeepsItsCommittedEpisodesAndJournalUntilItIsDone) {
   const auto id = again.begin_run(key(1), 1, {}, {}).run_id;
   again.append_progress(id, evals, 0, journal);
   RunResult failed = result();
-  failed.status = "failed";
+  failed.status = RunStatus::failed;
   again.finish_run(id, failed);
   const RunStart redo = again.begin_run(key(1), 1, {}, {});
   EXPECT_EQ(redo.committed_episodes, 0);
