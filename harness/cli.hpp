@@ -1,5 +1,5 @@
 #pragma once
-// Command line of the `harness` program. Returns the exit code (README "Reliability"):
+// Command line of the `harness` program. Returns the exit code (docs/commands.md "Reliability"):
 //   0    success; for a grid: every run of it is done
 //   1    a check failed, or a runtime error (a store that cannot be written, a failed report)
 //   2    bad input: one line on stderr naming the bad value; nothing stored is touched

@@ -15,7 +15,7 @@
 // the best-so-far loss (IOH's default trigger, on_improvement): "<evaluations> <raw_y>".
 // One folder per algorithm, since one meta file names one algorithm.
 //
-// Mapping (README, "IOHanalyzer export"):
+// Mapping (docs/reports.md "IOHanalyzer export"):
 // - function = env: function_name the env name, function_id its 1-based position in the sorted
 //   function names of the exported database (ids are stable for one database, not across
 //   databases: the name is the key). An env name stored with more than one env config hash is one

@@ -1,7 +1,7 @@
 #pragma once
 // `harness export --format ioh`: the database's 'done' runs in IOHprofiler's analyzer format (the
 // JSON-meta "v2" layout that IOHexperimenter's Analyzer logger writes), for IOHanalyzer. Format,
-// mapping and rules: export_ioh.cpp's header comment and the README (section "IOHanalyzer export").
+// mapping and rules: export_ioh.cpp's header comment and docs/reports.md ("IOHanalyzer export").
 #include <cstdint>
 #include <filesystem>
 #include <string>

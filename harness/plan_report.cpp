@@ -149,7 +149,7 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
                                                          1.0, static_cast<double>(plan.pending.size())));
   if (wall > 24.0 * 3600.0 || shards > 1)
     out << fmt::format("  on a Slurm cluster: harness slurm {} --shards {} --dir slurm-run && bash slurm-run/submit.sh "
-                       "({} array tasks of about {} on one core each; README \"Running on a Slurm cluster\")\n",
+                       "({} array tasks of about {} on one core each; docs/running.md, \"Running on a Slurm cluster\")\n",
                        ctx.grid_flags, shards, shards, human_duration(std::max(total / shards, longest)));
 }
 

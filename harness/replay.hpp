@@ -1,5 +1,5 @@
 #pragma once
-// Mid-run resume by replay (README "Running on a Slurm cluster"). While a run goes, the budget wrapper
+// Mid-run resume by replay (docs/running.md "Running on a Slurm cluster"). While a run goes, the budget wrapper
 // journals every objective call: what kind of call it was, a digest of its input (the point, the
 // action) and what it returned (loss, metric, gradient, observation). The journal is committed
 // with the episodes every few seconds. A resumed run starts again from its seed: the optimizer

@@ -71,7 +71,7 @@ int command_check(const std::string& db_path, const std::string& baseline_path) 
     return 0;
   }
   std::cout << "check: database '" << db_path << "' differs from baseline '" << baseline_path
-            << "'. If the change is intended, regenerate the baseline (README: regression CI) and say why in the commit.\n";
+            << "'. If the change is intended, regenerate the baseline (docs/reports.md, \"Regression CI on result tables\") and say why in the commit.\n";
   return 1;
 }
 

@@ -18,7 +18,7 @@ std::vector<std::size_t> cheapest_first(const std::vector<double>& run_cost_s);
 // starting when the earliest worker is free), and each lead is then pulled earlier by its own
 // estimated seconds, so that it ends about when its group's followers are due. Light envs still
 // come first and report early; an expensive lead runs beside them a little ahead of its
-// followers. On the full grid's plan (README "Quick start") this keeps cheapest first's early
+// followers. On the full grid's plan (docs/running.md) this keeps cheapest first's early
 // reports and leads first's end. Without sharing (or without leads): cheapest first.
 std::vector<std::size_t> run_order(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
                                    bool share, int jobs);

@@ -1,5 +1,5 @@
 #pragma once
-// The database schema (README "Database"): its version, the SQL of the newest version, and the
+// The database schema (docs/database.md "Database"): its version, the SQL of the newest version, and the
 // chain of in-place migrations that brings an older harness database up to it.
 //
 // Versions:

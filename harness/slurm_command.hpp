@@ -1,5 +1,5 @@
 #pragma once
-// `harness slurm`: writes the scripts that run a grid as a Slurm job array (README "Running on a
+// `harness slurm`: writes the scripts that run a grid as a Slurm job array (docs/running.md, "Running on a
 // Slurm cluster"): DIR/array.sbatch (task I of N runs shard I/N of the grid in a node-local SQLite file,
 // resumes from and copies back to DIR/shards/shard-I.sqlite, also when a time limit sends TERM),
 // DIR/merge.sbatch (`harness merge` of the N shards into DIR/results.sqlite) and DIR/submit.sh

@@ -1,5 +1,5 @@
 #pragma once
-// The results database (schema: harness/schema.hpp, README "Database"): runs, evals, configs, meta,
+// The results database (schema: harness/schema.hpp, docs/database.md "Database"): runs, evals, configs, meta,
 // replay. WAL mode, one writer: a Store holds an exclusive lock on the file itself (harness/
 // file_lock.hpp: a flock every path to the file meets, released by the kernel when the process
 // ends, however it ends), so a second harness on the same file is refused with a message naming

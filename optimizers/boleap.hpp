@@ -31,7 +31,7 @@ struct BoLeapConfig {
   // sigma_1 in the normalized box (half-width 1); C_1 = I. The paper's sigma_1 = 1.0 is in its
   // parameters' own units, whose bounds it does not give; 1.0 here spans the whole box, so the
   // "semi-local" population is global (in 400-D most coordinates of a sample land near or beyond a
-  // face and are clipped). 0.3 (chosen here, scripts/knob-study.sh, README "BO-Leap's and
+  // face and are clipped). 0.3 (chosen here, scripts/knob-study.sh, docs/results.md, "BO-Leap's and
   // RandDescents' knobs"): rastrigin-10 median 12.4 vs 31.0 at 1.0, 5/5 seeds better.
   double sigma0 = 0.3;
   int max_descent_steps = 10;   // J (chosen here; paper: not given)

@@ -60,7 +60,7 @@
 // variants depend on the CPU's FMA/AVX2), but only ISRES, ESCH, MLSL, ORIG_DIRECT and, in some
 // trust-region paths, COBYLA and NEWUOA call them; the four algorithms here (and LD_LBFGS inside
 // bo) make no such call (counted with an LD_PRELOAD shim over a grid of every env). Check any
-// algorithm added here the same way (README, Determinism).
+// algorithm added here the same way (docs/determinism.md "Determinism").
 //
 // Gradients: the callback calls Objective::value_and_grad only when NLopt passes a gradient
 // buffer (LD_LBFGS), otherwise Objective::value; the derivative-free adapters never ask for one.

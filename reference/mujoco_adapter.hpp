@@ -12,7 +12,7 @@
 //     MuJoCo gets the generalized force on the slide joint that produces a_cart = (u - v)/dt
 //     exactly, computed each step from its own mass matrix and bias forces (see MujocoCartpole).
 //   - contact: ours is a penalty spring-damper; MuJoCo's is a soft constraint. The mapping of
-//     ke, kd, mu to solref / solimp / friction is mujoco_contact_params() (README explains it).
+//     ke, kd, mu to solref / solimp / friction is mujoco_contact_params() (reference/README.md explains it).
 //   - the ball has no spin in our envs: MuJoCo's ball is a body with slide joints only (3 in
 //     bounce, 2 in the pinball plane), so it cannot rotate at all.
 // The MJCF is generated from the env configs, never kept by hand, and compiled from memory
@@ -53,7 +53,7 @@ Eigen::Vector3d from_mujoco(const Eigen::Vector3d& mj);
 // soft-contact parameters standing in for our penalty law (ContactConfig) on a ball of `mass`
 struct MujocoContactParams {
   double stiffness = 0.0;  // solref[0] = -stiffness (direct format), 1/s^2 (= ke / m)
-  double damping = 0.0;    // solref[1] = -damping, 1/s (= kd / (2 m): see README)
+  double damping = 0.0;    // solref[1] = -damping, 1/s (= kd / (2 m): see reference/README.md)
   double impedance = 0.0;  // solimp d0 = dwidth (constant impedance)
   double friction = 0.0;   // sliding friction coefficient (= mu)
 };

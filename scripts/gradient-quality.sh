@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Gradient quality per env: `harness gradcheck` over every env of `harness list`, one CSV row each
-# (scripts/gradient_quality_csv.py writes the rows; definitions in README.md, "Gradient quality").
+# (scripts/gradient_quality_csv.py writes the rows; definitions in docs/gradient-quality.md "Gradient quality").
 #   scripts/gradient-quality.sh BUILD_DIR OUT.csv [--points N] [--particle-points M] [--seed S]
 # Points uniform in [-0.5, 0.5]^d from --seed (default 0); N points per env (default 50), M per
 # particle env (default 3). The particle envs (fluid, plb-NAME: minutes per gradient at 50 env

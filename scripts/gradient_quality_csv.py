@@ -4,7 +4,7 @@
 usage: gradient_quality_csv.py OUT.csv ENV=FILE.json [ENV=FILE.json ...]
 
 ENV is the env of `harness list`; the JSON's own env is the one surveyed (fluid-h5 for fluid).
-Columns (definitions in README.md, "Gradient quality"): fractions of the points, with 4 decimals;
+Columns (definitions in docs/gradient-quality.md "Gradient quality"): fractions of the points, with 4 decimals;
 gradient norms and the median large-step ratio with 6 significant digits. Standard library only.
 """
 import csv

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Landscape gallery: `harness landscape` over every env of `harness list`, one CSV per 2-D slice,
 # named OUTDIR/<variant>_<i>_<j>.csv for `harness report --landscapes OUTDIR` (its gallery.html shows
-# them side by side with the gradient quality table; README "Landscape gallery").
+# them side by side with the gradient quality table; docs/gradient-quality.md "Landscape gallery").
 #   scripts/landscape-gallery.sh OUTDIR [--build BUILD_DIR] [--envs NAME,NAME] [--res N] [--list]
 # --build: the build folder (default: build/ of this source tree); --envs: only these envs of
 # `harness list`; --res: N x N points for every slice instead of the table's (a quick look, the test);
@@ -11,7 +11,7 @@
 #
 # Which slices (dims as the seed's Figures 8-15 where it gives them, else the first two dims) and
 # at which resolution (the particle envs at their 5-env-step variants and a coarse grid, so that the
-# whole gallery takes 12 to 18 minutes on one core: 706 s of CPU measured; README "Landscape gallery"):
+# whole gallery takes 12 to 18 minutes on one core: 706 s of CPU measured; docs/gradient-quality.md "Landscape gallery"):
 #
 #   env                     variant            dims (i,j)          res   why
 #   pinball-1x2             pinball-1x2        0,1                 61    seed Fig. 9 left

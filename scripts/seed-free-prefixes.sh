@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# How long each optimizer's seed-free prefix is (README "Sharing across seeds"): the episodes a
+# How long each optimizer's seed-free prefix is (docs/determinism.md "Sharing across seeds"): the episodes a
 # run simulates before its optimizer's first random draw, which every other seed of the same
 # env, optimizer, configs and budget replays instead of simulating. The prefix does not depend on
 # the seed, so one seed per (env, optimizer) measures it.

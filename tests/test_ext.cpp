@@ -188,7 +188,7 @@ TEST_F(ExtCli, ScipyExamplesBesideBuiltInsGiveTheSameDatabaseOnRerunAndForAnyJob
                                                     "c.hash=r.opt_config_hash WHERE r.optimizer='ext:lbfgsb' LIMIT 1");
   EXPECT_NE(config.find("examples/ext/scipy_lbfgsb.py"), std::string::npos) << config;
   EXPECT_NE(config.find("\"version\":\"1 (scipy "), std::string::npos) << config;
-  // the medians beside the built-ins (README, "Benchmark your own optimizer")
+  // the medians beside the built-ins (docs/optimizers.md "Benchmark your own optimizer")
   for (const auto& r : rows(db("a.sqlite"), "SELECT env, optimizer, group_concat(best_loss, ' ') FROM "
                                             "(SELECT * FROM runs ORDER BY best_loss) GROUP BY env, optimizer"))
     std::cout << "final best (2 seeds, 60 episodes): " << r << "\n";

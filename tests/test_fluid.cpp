@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 using mpm::Vec3;
 
 // forward/back then up/down speed of each segment: down beside the cube, forward along the floor
-// with the bowl's lip under the cube, then up (found by hand, see README "fluid")
+// with the bowl's lip under the cube, then up (found by hand, see docs/envs.md "fluid")
 const std::vector<double> kScoop = {0.5, -1.0, 0.6, -1.0, 0.5, 0.2, -0.3, 1.0, -0.3, 1.0};
 
 const mpm::FluidEnv& fluid(const std::string& name) {

@@ -1,4 +1,4 @@
-// What the harness guarantees to a user who makes mistakes (README "Reliability"), each through
+// What the harness guarantees to a user who makes mistakes (docs/commands.md "Reliability"), each through
 // the real `harness` program on real files, the earlier ways each one lost or mixed results
 // re-run: no command writes over a database (whatever path names it) or over another file
 // without --force; one writer per database file whatever the path; canonical env names; exit

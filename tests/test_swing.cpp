@@ -170,7 +170,7 @@ TEST(SwingScene, StretchDuringTheSwingStaysModest) {
     }
     std::printf("every patch at x = %+.0f (k = %.1f N/m): largest structural strain while held %.3f\n", x,
                 k[0], worst);
-    EXPECT_LT(worst, 0.6);  // measured 0.56, 0.27, 0.15: a stretchy cloth at the soft end (README "swing")
+    EXPECT_LT(worst, 0.6);  // measured 0.56, 0.27, 0.15: a stretchy cloth at the soft end (docs/engine-cloth.md "swing")
   }
 }
 

@@ -65,7 +65,7 @@ std::unique_ptr<dsb::Env> make_unshifted(const std::string& name) {
   return dsb::make_synthetic_env(name, config);
 }
 
-// sphere-10's x_opt rounded to 3 decimals, as the README quotes it
+// sphere-10's x_opt rounded to 3 decimals, as docs/envs.md quotes it
 const std::string kSphere10XoptQuoted =
     "3.645, -0.705, 2.918, 0.974, -3.471, -3.426, 3.353, 3.285, 1.955, 2.000";
 
@@ -379,7 +379,7 @@ TEST(SyntheticOptimum, ShiftRule) {
       for (const auto& other : seen) EXPECT_NE(config->x_opt, other);
       seen.push_back(config->x_opt);
     }
-  // the value quoted in the README (sphere-10, rounded to 3 decimals)
+  // the value quoted in docs/envs.md (sphere-10, rounded to 3 decimals)
   const auto sphere10 = dsb::synthetic_config_from_name("sphere-10")->x_opt;
   std::string quoted;
   for (double v : sphere10) {

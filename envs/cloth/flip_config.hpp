@@ -3,8 +3,8 @@
 // square pancake, a soft mass-spring sheet, lies in a round pan of radius 20 cm; the pan moves in
 // the vertical x-y plane and tilts about z (3 DOF: x, y, tilt) along 5 waypoints, and the pancake
 // should end flipped over in the pan. Every constant below is "chosen here" (the seed gives only
-// the pan radius, the 3 DOF, the 5 x 3 = 15 params, the interpolation and the corner loss); README
-// table "flip".
+// the pan radius, the 3 DOF, the 5 x 3 = 15 params, the interpolation and the corner loss); the env
+// table in docs/envs.md, row "flip".
 //
 // Axes: y up, x right, z front; tilt rotates the pan about +z through its centre (positive: the +x
 // side rises). At t = 0 the pan is at pose (0, 0, 0), its flat bottom the disc y = 0, r <=

@@ -4,8 +4,8 @@
 // lift), is released mid-swing and lands on the floor y = 0. Two parameterisations (swing_env.hpp):
 // 16 log-stiffnesses of 4 x 4 patches (fixed motion, cloth at rest at the start), or the cloth's
 // 3-D initial velocity (fixed stiffness). Every constant below is "chosen here" (the seed gives
-// only the cloth size, the two held corners, the patch layout and the three losses); README table
-// "swing".
+// only the cloth size, the two held corners, the patch layout and the three losses); the env table
+// in docs/envs.md, row "swing".
 //
 // Axes: y up, floor y = 0. The cloth starts flat and horizontal at start_height, spanning
 // x in [-width/2, width/2], z in [-height, 0]; the held corners are the two vertices of the front

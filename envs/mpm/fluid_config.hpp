@@ -4,7 +4,7 @@
 // high), the 2-DOF ladle (forward/back and up/down speeds), 5 segments (10 params) and the loss
 //   max(0, y_w - y_cube) + 3 |xz_cube - xz_ladle| + |xz_cube - xz_axis|,  y_w = 0.2,
 // heights measured from the tank floor. Everything else is chosen here, in SI units (m, s, kg,
-// Pa), and stored with every run; README's env table repeats it with the reasons.
+// Pa), and stored with every run; the env table in docs/envs.md repeats it with the reasons.
 //
 // Geometry: the tank's inner faces are the grid's walls (PlasticineLab's 3-cell boundary): with
 // dx = 0.02 m and 26 nodes per axis the walls are at 3 dx = 0.06 m and (26 - 3) dx = 0.46 m, so the

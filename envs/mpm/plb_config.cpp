@@ -22,7 +22,7 @@ PlbConfig plb_config(const std::string& name) {
   // The paper raised the weight of the term that pulls the manipulators towards the plasticine
   // (value not given). Chosen here: 100. At the start the weighted density and SDF terms are 0.9
   // (writer) to 13 (rope, triplemove) per env step, while a manipulator 0.1 away adds 0.01 x the
-  // contact weight (measured, README): with PlasticineLab's 1 the only term whose gradient moves
+  // contact weight (measured: docs/plasticinelab.md): with PlasticineLab's 1 the only term whose gradient moves
   // an idle manipulator is about 1% of the loss; with 100 it is of the same order, and it
   // vanishes on contact.
   c.contact_weight = 100.0;

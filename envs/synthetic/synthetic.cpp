@@ -207,7 +207,7 @@ const Spec* find_spec(std::string_view key) {
   return nullptr;
 }
 
-// The shifted minimizer of a scalable family on [-5, 5]^D (README "Environments"):
+// The shifted minimizer of a scalable family on [-5, 5]^D (docs/envs.md "Environments"):
 // x_opt_i = 5 k_i / 2^20 with k_i uniform on the integers of [-838860, 838860] (0.8 * 2^20), so
 // x_opt_i lies in [-4, 4], at least 1 from every face; a coordinate with |x_opt_i| < 0.5 is drawn
 // again (no coordinate near the centre, where gd and the NLopt local methods start). The 2^-20

@@ -5,7 +5,7 @@
 // them affinely to the physical point z = centre + halfwidth * x, returns g(z) and
 // dg/dx = dg/dz * halfwidth.
 //
-// The five scalable families are shifted as COCO does (README "Environments"):
+// The five scalable families are shifted as COCO does (docs/envs.md "Environments"):
 // g(z) = f(z - x_opt + z*), z* = f's classic minimizer in every coordinate (0; rosenbrock 1;
 // styblinski -2.903534027771178), so g's minimizer is x_opt and its minimum f* is unchanged.
 // x_opt is drawn once per (function, D) from a fixed seed: each coordinate uniform on a 2^-20 grid

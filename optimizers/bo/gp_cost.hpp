@@ -1,6 +1,6 @@
 #pragma once
 // The GP optimizers' own seconds per run, for `harness plan` (optimizers/core/optimizer_costs.hpp),
-// on one core of the reference machine (README "Performance").
+// on one core of the reference machine (docs/performance.md "Performance").
 #include <cstdint>
 
 #include "optimizers/bo/bo.hpp"

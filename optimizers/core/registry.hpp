@@ -29,7 +29,7 @@ struct OptimizerEntry {
   std::function<std::unique_ptr<Optimizer>(const KnobSettings&)> make_with = {};
   std::vector<std::string> knobs = {};  // the keys make_with accepts
   SeedUse seed_use = SeedUse::at_start;
-  // the mean share of a 1,000-episode run's episodes before its first draw, measured (README
+  // the mean share of a 1,000-episode run's episodes before its first draw, measured (docs/determinism.md,
   // "Sharing across seeds"): what `harness plan` counts as free for a group's later seeds
   double typical_seed_free_share = 0.0;
   OptimizerCosts costs = {};  // its own work beyond its episodes

@@ -1,6 +1,6 @@
 """The "Gradient quality" table: one row per env from the CSV of scripts/gradient-quality.sh
 (`harness gradcheck --json` at seeded random points of each env; definitions in
-captions.GRADIENT_QUALITY and README.md, "Gradient quality")."""
+captions.GRADIENT_QUALITY and docs/gradient-quality.md "Gradient quality")."""
 from __future__ import annotations
 
 import os

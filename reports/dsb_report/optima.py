@@ -2,7 +2,7 @@
 data/known_optima.csv: family, f_star, f_star_per_dim, source. A fixed-dimension family (branin,
 hartmann6) is the env of that name with f* = f_star; a scalable family NAME is the env NAME-D with
 f* = f_star + f_star_per_dim * D (styblinski-D: -39.16616570377142 D; sphere, rosenbrock,
-rastrigin, ackley: 0, shifted as COCO does, README "Environments"). The values come from
+rastrigin, ackley: 0, shifted as COCO does, docs/envs.md "Environments"). The values come from
 envs/synthetic/synthetic.cpp (known_optimum). Envs without a row have no known optimum."""
 from __future__ import annotations
 

@@ -6,7 +6,7 @@
 //   - 1,000 gradient episodes at 1,000 seeded points (what gd spends on a 1,000-episode budget;
 //     goal < 60 s per task), and the peak resident memory of a process that runs one.
 // Benchmarks named *Full run the 1,000-episode loops; the smoke test (filter -Full) runs the rest
-// briefly. The table printed at the end is the README's cloth table.
+// briefly. The table printed at the end is the cloth table of docs/performance.md.
 #include <cmath>
 #include <cstdio>
 #include <memory>

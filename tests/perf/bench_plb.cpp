@@ -7,7 +7,7 @@
 //   - peak resident memory of a process that builds the task and runs one gradient episode, in
 //     both modes.
 // Benchmarks named *Full* run whole episodes once; the smoke test (filter -Full) runs plb-pinch-h5.
-// The table printed at the end is the README's per-task table.
+// The table printed at the end is the per-task table of docs/performance.md.
 #include <cmath>
 #include <cstdio>
 #include <memory>

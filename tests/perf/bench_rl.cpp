@@ -9,7 +9,7 @@
 //     budgeted objective, minus 2,100 env steps;
 //   - sac end to end: a run of 3 cartpole3 episodes (300 decisions: 100 random ones, then one
 //     gradient step of batch 256 per decision), minus its env steps, per gradient step.
-// The table printed at the end is the README's.
+// The table printed at the end is docs/performance.md's.
 #include <cstdio>
 #include <memory>
 #include <string>
