@@ -13,9 +13,9 @@
 #include "common/error.hpp"
 #include "common/parallel.hpp"
 #include "common/unit_box.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/output_path.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 
 namespace dsb {
 

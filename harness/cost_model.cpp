@@ -11,8 +11,8 @@
 
 #include "common/error.hpp"
 #include "common/parallel.hpp"
-#include "envs/core/registry.hpp"
-#include "optimizers/core/registry.hpp"
+#include "envs/registry.hpp"
+#include "optimizers/registry.hpp"
 
 namespace dsb {
 namespace {

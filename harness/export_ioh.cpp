@@ -48,7 +48,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/sqlite_db.hpp"
 
 namespace dsb {

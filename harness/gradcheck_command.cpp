@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/commands.hpp"
 
 namespace dsb {

@@ -6,11 +6,11 @@
 
 #include "common/config_hash.hpp"
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/grid.hpp"
 #include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 
 namespace dsb {
 namespace {

@@ -10,7 +10,7 @@
 
 #include "harness/output_path.hpp"
 #include "harness/run_order.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 
 namespace dsb {
 namespace {

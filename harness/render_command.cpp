@@ -10,7 +10,7 @@
 
 #include "common/error.hpp"
 #include "common/parallel.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/commands.hpp"
 #include "harness/output_path.hpp"
 #include "harness/schema.hpp"

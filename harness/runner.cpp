@@ -7,14 +7,14 @@
 #include <optional>
 #include <thread>
 
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/budget.hpp"
 #include "harness/fault_injection.hpp"
 #include "harness/grid.hpp"
 #include "harness/interrupt.hpp"
 #include "harness/plan.hpp"
 #include "harness/progress.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 
 namespace dsb {
 

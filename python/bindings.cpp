@@ -30,7 +30,7 @@
 #include "common/unit_box.hpp"
 #include "common/usable_cpus.hpp"
 #include "envs/core/env.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 
 namespace py = pybind11;
 

@@ -7,12 +7,12 @@
 
 #include <gtest/gtest.h>
 
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/runner.hpp"
 #include "optimizers/bo/acquisition.hpp"
 #include "optimizers/bo/bo.hpp"
 #include "optimizers/bo/gp_cost.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 #include "tests/support/function_objective.hpp"
 
 namespace dsb {

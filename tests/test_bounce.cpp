@@ -10,7 +10,7 @@
 
 #include "common/rng.hpp"
 #include "envs/core/gradient_check.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "envs/rigid/bounce_env.hpp"
 #include "envs/rigid/contact.hpp"
 

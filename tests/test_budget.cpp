@@ -6,12 +6,12 @@
 #include <gtest/gtest.h>
 
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
-#include "harness/grid.hpp"
+#include "envs/registry.hpp"
 #include "envs/synthetic/synthetic.hpp"
 #include "harness/budget.hpp"
+#include "harness/grid.hpp"
 #include "harness/runner.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 #include "tests/support/reach_env.hpp"
 
 namespace dsb {

@@ -8,7 +8,7 @@
 
 #include "common/rng.hpp"
 #include "envs/core/gradient_check.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "envs/rigid/cartpole_env.hpp"
 
 namespace dsb {

@@ -8,7 +8,7 @@
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
 #include "envs/core/lazy_model.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/grid.hpp"
 
 namespace dsb {

@@ -25,10 +25,10 @@
 #include "envs/cloth/pan_surface.hpp"
 #include "envs/core/gradient_check.hpp"
 #include "envs/core/lazy_model.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "support/harness_process.hpp"
-#include "tests/support/contact_window.hpp"
 #include "support/temp_dir_test.hpp"
+#include "tests/support/contact_window.hpp"
 
 namespace dsb {
 namespace {

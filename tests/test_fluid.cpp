@@ -15,9 +15,9 @@
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
 #include "envs/core/gradient_check.hpp"
-#include "envs/core/registry.hpp"
 #include "envs/mpm/fluid_env.hpp"
 #include "envs/mpm/fluid_scene.hpp"
+#include "envs/registry.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
 

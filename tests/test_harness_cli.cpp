@@ -20,9 +20,9 @@
 #include <sqlite3.h>
 
 #include "envs/core/gradient_check.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/grid.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
 

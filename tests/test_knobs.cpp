@@ -8,8 +8,8 @@
 #include "common/config_hash.hpp"
 #include "common/error.hpp"
 #include "optimizers/boleap.hpp"
-#include "optimizers/core/registry.hpp"
 #include "optimizers/gd.hpp"
+#include "optimizers/registry.hpp"
 #include "tests/support/function_objective.hpp"
 #include "tests/support/test_functions.hpp"
 

@@ -22,12 +22,12 @@
 #include "common/config_hash.hpp"
 #include "common/error.hpp"
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
 #include "envs/mpm/npy_array.hpp"
 #include "envs/mpm/plb_env.hpp"
 #include "envs/mpm/plb_scene.hpp"
 #include "envs/mpm/plb_target_file.hpp"
 #include "envs/mpm/target_grid.hpp"
+#include "envs/registry.hpp"
 #include "support/harness_process.hpp"
 
 namespace dsb {

@@ -7,8 +7,8 @@
 #include <gtest/gtest.h>
 
 #include "optimizers/core/adam.hpp"
-#include "optimizers/core/registry.hpp"
 #include "optimizers/gd.hpp"
+#include "optimizers/registry.hpp"
 #include "tests/support/function_objective.hpp"
 #include "tests/support/test_functions.hpp"
 

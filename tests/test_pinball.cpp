@@ -11,7 +11,7 @@
 
 #include "common/rng.hpp"
 #include "envs/core/gradient_check.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "envs/rigid/contact.hpp"
 #include "envs/rigid/pinball_env.hpp"
 

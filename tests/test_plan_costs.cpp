@@ -22,7 +22,7 @@
 #include "harness/progress.hpp"
 #include "harness/run_order.hpp"
 #include "harness/slurm_command.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 #include "support/harness_process.hpp"
 #include "support/sqlite_rows.hpp"
 #include "support/temp_dir_test.hpp"

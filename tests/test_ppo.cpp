@@ -14,9 +14,9 @@
 
 #include "common/error.hpp"
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/budget.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/ppo.hpp"
 #include "support/harness_process.hpp"

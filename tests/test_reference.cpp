@@ -14,7 +14,7 @@
 
 #include "common/error.hpp"
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "envs/rigid/bounce_env.hpp"
 #include "envs/rigid/cartpole_env.hpp"
 #include "envs/rigid/pinball_env.hpp"

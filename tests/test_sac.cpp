@@ -16,7 +16,7 @@
 #include "common/rng.hpp"
 #include "envs/core/env.hpp"
 #include "harness/budget.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 #include "optimizers/rl/network_adam.hpp"
 #include "optimizers/rl/replay_buffer.hpp"
 #include "optimizers/rl/sac.hpp"

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/budget.hpp"
 #include "support/harness_process.hpp"
 #include "support/sqlite_rows.hpp"

@@ -23,10 +23,10 @@
 #include "envs/cloth/swing_env.hpp"
 #include "envs/core/gradient_check.hpp"
 #include "envs/core/lazy_model.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "support/harness_process.hpp"
-#include "tests/support/contact_window.hpp"
 #include "support/temp_dir_test.hpp"
+#include "tests/support/contact_window.hpp"
 
 namespace dsb {
 namespace {

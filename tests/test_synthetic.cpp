@@ -16,7 +16,7 @@
 #include "common/error.hpp"
 #include "common/rng.hpp"
 #include "envs/core/gradient_check.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "envs/synthetic/synthetic.hpp"
 
 namespace {

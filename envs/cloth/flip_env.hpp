@@ -37,8 +37,8 @@
 #include "envs/cloth/flip_config.hpp"
 #include "envs/cloth/pan_surface.hpp"
 #include "envs/core/env.hpp"
+#include "envs/core/env_family.hpp"
 #include "envs/core/lazy_model.hpp"
-#include "envs/core/registry.hpp"
 
 namespace dsb::cloth {
 

@@ -36,8 +36,8 @@
 #include "envs/cloth/cloth_model.hpp"
 #include "envs/cloth/swing_config.hpp"
 #include "envs/core/env.hpp"
+#include "envs/core/env_family.hpp"
 #include "envs/core/lazy_model.hpp"
-#include "envs/core/registry.hpp"
 
 namespace dsb::cloth {
 

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "envs/core/env.hpp"
+#include "envs/core/env_family.hpp"
 #include "envs/core/lazy_model.hpp"
-#include "envs/core/registry.hpp"
 #include "envs/mpm/fluid_config.hpp"
 #include "envs/mpm/mpm_model.hpp"
 #include "envs/mpm/mpm_workspace.hpp"

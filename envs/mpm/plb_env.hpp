@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "envs/core/env.hpp"
+#include "envs/core/env_family.hpp"
 #include "envs/core/lazy_model.hpp"
-#include "envs/core/registry.hpp"
 #include "envs/mpm/mpm_workspace.hpp"
 #include "envs/mpm/plb_config.hpp"
 #include "envs/mpm/plb_loss.hpp"

@@ -12,8 +12,8 @@
 #include <Eigen/Dense>
 
 #include "envs/core/env.hpp"
+#include "envs/core/env_family.hpp"
 #include "envs/core/lazy_model.hpp"
-#include "envs/core/registry.hpp"
 #include "envs/rigid/bounce_config.hpp"
 
 namespace dsb {

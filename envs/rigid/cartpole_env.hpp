@@ -8,8 +8,8 @@
 #include <string>
 
 #include "envs/core/env.hpp"
+#include "envs/core/env_family.hpp"
 #include "envs/core/lazy_model.hpp"
-#include "envs/core/registry.hpp"
 #include "envs/rigid/cartpole_config.hpp"
 #include "envs/rigid/cartpole_dynamics.hpp"
 

@@ -18,8 +18,8 @@
 #include <Eigen/Dense>
 
 #include "envs/core/env.hpp"
+#include "envs/core/env_family.hpp"
 #include "envs/core/lazy_model.hpp"
-#include "envs/core/registry.hpp"
 #include "envs/rigid/pinball_config.hpp"
 
 namespace dsb {

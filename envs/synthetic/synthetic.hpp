@@ -19,7 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "envs/core/registry.hpp"
+#include "envs/core/env_family.hpp"
 
 namespace dsb {
 

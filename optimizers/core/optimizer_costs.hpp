@@ -1,6 +1,6 @@
 #pragma once
 // What an optimizer costs beyond its episodes, declared where it is registered
-// (optimizers/core/registry.cpp) so that `harness plan`, the order of a grid and the progress
+// (optimizers/registry.cpp) so that `harness plan`, the order of a grid and the progress
 // line's ETA need no optimizer's name. Seconds on one core of the reference machine (docs/performance.md,
 // "Performance": the CPU model there); the harness scales nothing.
 #include <cstdint>

@@ -6,11 +6,11 @@
 
 #include <benchmark/benchmark.h>
 
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/runner.hpp"
 #include "optimizers/bo/acquisition.hpp"
 #include "optimizers/bo/gp.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 #include "tests/perf/timing_reporter.hpp"
 
 namespace {

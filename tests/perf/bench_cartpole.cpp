@@ -14,9 +14,9 @@
 
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/runner.hpp"
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 #include "tests/perf/allocation_counter.hpp"
 #include "tests/perf/timing_reporter.hpp"
 

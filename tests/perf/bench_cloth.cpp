@@ -17,7 +17,7 @@
 
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "tests/perf/child_peak_rss.hpp"
 #include "tests/perf/timing_reporter.hpp"
 

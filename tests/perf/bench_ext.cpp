@@ -14,7 +14,7 @@
 
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/budget.hpp"
 #include "optimizers/ext/ext_optimizer.hpp"
 #include "tests/perf/timing_reporter.hpp"

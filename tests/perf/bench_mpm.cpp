@@ -29,7 +29,7 @@
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
 #include "envs/mpm/episode.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "tests/perf/allocation_counter.hpp"
 #include "tests/perf/timing_reporter.hpp"
 #include "tests/support/mpm_scenes.hpp"

@@ -18,10 +18,10 @@
 
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
 #include "envs/mpm/episode.hpp"
 #include "envs/mpm/plb_env.hpp"
 #include "envs/mpm/plb_tasks.hpp"
+#include "envs/registry.hpp"
 #include "tests/perf/child_peak_rss.hpp"
 #include "tests/perf/timing_reporter.hpp"
 

@@ -18,7 +18,7 @@
 #include <benchmark/benchmark.h>
 
 #include "common/rng.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 #include "harness/budget.hpp"
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/network_adam.hpp"

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "common/parallel.hpp"
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 
 namespace dsb::perf {
 

@@ -1,4 +1,4 @@
-#include "envs/core/registry.hpp"
+#include "envs/registry.hpp"
 
 #include <map>
 #include <mutex>

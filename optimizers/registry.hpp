@@ -1,13 +1,13 @@
 #pragma once
-// Optimizers by name; one registration line each in optimizers/core/registry.cpp.
+// Optimizers by name; one registration line each in optimizers/registry.cpp.
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "optimizers/core/knobs.hpp"
-#include "optimizers/core/optimizer_costs.hpp"
 #include "optimizers/core/optimizer.hpp"
+#include "optimizers/core/optimizer_costs.hpp"
 
 namespace dsb {
 

@@ -1,4 +1,4 @@
-#include "optimizers/core/registry.hpp"
+#include "optimizers/registry.hpp"
 
 #include "common/error.hpp"
 #include "optimizers/bo/bo.hpp"

@@ -1,6 +1,6 @@
 #pragma once
-// Envs by name. A family owns a name pattern (e.g. "sphere-D" for any D) and a factory; the
-// registry lists families in envs/core/registry.cpp, one registration line each.
+// Envs by name. A family (envs/core/env_family.hpp) owns a name pattern (e.g. "sphere-D" for any D)
+// and a factory; the registry lists the families in envs/registry.cpp, one registration line each.
 #include <functional>
 #include <memory>
 #include <optional>
@@ -8,22 +8,10 @@
 #include <vector>
 
 #include "envs/core/env.hpp"
+#include "envs/core/env_family.hpp"
 #include "envs/core/env_options.hpp"
 
 namespace dsb {
-
-struct EnvFamily {
-  std::string pattern;                    // shown by `harness list`, e.g. "rosenbrock-D"
-  std::string description;
-  std::vector<std::string> grid_names;    // the members `--all` runs
-  // returns an env when the name belongs to this family; throws UsageError for a member name
-  // with a bad parameter (e.g. "sphere-0")
-  std::function<std::unique_ptr<Env>(const std::string& name)> try_make;
-  // the options its envs take (--set ENV.KEY=VALUE; empty: none), and the factory that applies
-  // them to a member name (called with keys of `options` only, at least one)
-  std::vector<EnvOptionInfo> options = {};
-  std::function<std::unique_ptr<Env>(const std::string& name, const EnvOptions& options)> make_with_options = {};
-};
 
 const std::vector<EnvFamily>& env_families();
 

@@ -1,0 +1,28 @@
+#pragma once
+// An env family: a name pattern (e.g. "sphere-D" for any D) and the factory of its members. Each
+// family's header declares one (cartpole_family(), plb_family(), ...); the registry one folder up
+// (envs/registry.cpp) lists them, so a family never includes the registry.
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "envs/core/env.hpp"
+#include "envs/core/env_options.hpp"
+
+namespace dsb {
+
+struct EnvFamily {
+  std::string pattern;                    // shown by `harness list`, e.g. "rosenbrock-D"
+  std::string description;
+  std::vector<std::string> grid_names;    // the members `--all` runs
+  // returns an env when the name belongs to this family; throws UsageError for a member name
+  // with a bad parameter (e.g. "sphere-0")
+  std::function<std::unique_ptr<Env>(const std::string& name)> try_make;
+  // the options its envs take (--set ENV.KEY=VALUE; empty: none), and the factory that applies
+  // them to a member name (called with keys of `options` only, at least one)
+  std::vector<EnvOptionInfo> options = {};
+  std::function<std::unique_ptr<Env>(const std::string& name, const EnvOptions& options)> make_with_options = {};
+};
+
+}  // namespace dsb
