@@ -131,12 +131,23 @@ std::unique_ptr<Optimizer> make_run_optimizer(const RunSpec& spec) {
   return make_optimizer(spec.optimizer, spec.knobs);
 }
 
+namespace {
+
+// "NAME.KNOB=VALUE" for the first registered optimizer with knobs (the harness names no optimizer)
+std::string knob_example() {
+  for (const auto& e : optimizer_entries())
+    if (!e.knobs.empty()) return e.name + "." + e.knobs.front() + "=VALUE";
+  return "OPTIMIZER.KNOB=VALUE";
+}
+
+}  // namespace
+
 void parse_knob_setting(const std::string& text, std::map<std::string, KnobSettings>& knobs) {
   const auto dot = text.find('.');
   const auto eq = text.find('=');
   if (dot == std::string::npos || eq == std::string::npos || dot == 0 || eq < dot + 2 || eq + 1 == text.size())
-    throw UsageError("--set wants OPTIMIZER.KNOB=VALUE or ENV.KEY=VALUE (e.g. boleap.sigma0=0.3, "
-                     "plb-pinch.target=Pinch3D-v1.npy), got '" + text + "'");
+    throw UsageError("--set wants OPTIMIZER.KNOB=VALUE or ENV.KEY=VALUE (e.g. " + knob_example() +
+                     ", plb-pinch.target=Pinch3D-v1.npy), got '" + text + "'");
   const std::string opt = text.substr(0, dot), key = text.substr(dot + 1, eq - dot - 1);
   if (!knobs[opt].emplace(key, text.substr(eq + 1)).second)
     throw UsageError("--set " + opt + "." + key + " given twice");

@@ -27,7 +27,7 @@ struct GridRequest {
   double ext_timeout_s = kExtDefaultTimeoutS;  // per reply of an external optimizer (--ext-timeout)
 };
 
-// "boleap.sigma0=0.3" into knobs["boleap"]["sigma0"] = "0.3" (an env's option the same way:
+// "OPT.KNOB=0.3" into knobs["OPT"]["KNOB"] = "0.3" (an env's option the same way:
 // "plb-pinch.target=F.npy"); UsageError naming a malformed one or a key given twice
 void parse_knob_setting(const std::string& text, std::map<std::string, KnobSettings>& knobs);
 
