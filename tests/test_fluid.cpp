@@ -16,7 +16,7 @@
 #include "common/rng.hpp"
 #include "envs/core/gradient_check.hpp"
 #include "envs/mpm/fluid_env.hpp"
-#include "envs/mpm/fluid_scene.hpp"
+#include "envs/mpm/fluid_model.hpp"
 #include "envs/registry.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
@@ -55,9 +55,9 @@ TEST(Fluid, SceneIsResolved) {
 
 TEST(Fluid, HandFoundScoopLiftsTheCubeAboveTheRim) {
   const auto& env = fluid("fluid");
-  const auto frames = env.trajectory(kScoop, serial_team());
+  const auto points = env.trajectory(kScoop, serial_team());
   const double floor = env.fluid_config().floor_y();
-  const double start = frames.front().cube.y() - floor, end = frames.back().cube.y() - floor;
+  const double start = points.front().cube.y() - floor, end = points.back().cube.y() - floor;
   EXPECT_LT(start, 0.05) << "the cube starts on the floor";
   EXPECT_GT(end, env.fluid_config().rim_height) << "and ends above the tank's rim";
   // without the ladle moving the cube stays on the floor

@@ -24,7 +24,7 @@
 #include "common/rng.hpp"
 #include "envs/mpm/npy_array.hpp"
 #include "envs/mpm/plb_env.hpp"
-#include "envs/mpm/plb_scene.hpp"
+#include "envs/mpm/plb_model.hpp"
 #include "envs/mpm/plb_target_file.hpp"
 #include "envs/mpm/target_grid.hpp"
 #include "envs/registry.hpp"

@@ -23,7 +23,7 @@
 #include "envs/mpm/episode.hpp"
 #include "envs/mpm/plb_env.hpp"
 #include "envs/mpm/plb_loss.hpp"
-#include "envs/mpm/plb_scene.hpp"
+#include "envs/mpm/plb_model.hpp"
 #include "envs/mpm/plb_target_file.hpp"
 #include "envs/mpm/target_grid.hpp"
 
@@ -42,7 +42,7 @@ class NoLoss : public EpisodeObjective {
 // the reference motion's final grid mass on the scene's nodes
 NodeGrid generate(const PlbTask& task, ThreadTeam& team) {
   const PlbConfig cfg = plb_config(task.name);
-  const MpmModel model = build_plb_scene(cfg);
+  const MpmModel model = build_plb_mpm_model(cfg);
   MpmWorkspace ws(model);
   const auto actions = plb_reference_actions(task, cfg.env_steps);
   const double loss = run_episode(model, ws, team, actions, cfg.env_steps, NoLoss{});

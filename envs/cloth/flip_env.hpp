@@ -72,7 +72,7 @@ class FlipEnv : public Env {
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
   bool renderable() const override { return true; }
-  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // render_cloth.cpp
+  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_cloth.cpp
 
   const FlipConfig& flip_config() const { return cfg_; }
   const FlipModel& model() const { return model_.get(); }

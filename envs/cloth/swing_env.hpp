@@ -78,7 +78,7 @@ class SwingEnv : public Env {
   // one action per episode: the params (see above)
   std::unique_ptr<RlEnv> make_rl() const override;
   bool renderable() const override { return true; }
-  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // render_cloth.cpp
+  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_cloth.cpp
 
   const SwingConfig& swing_config() const { return cfg_; }
   SwingParams params() const { return params_; }

@@ -7,7 +7,7 @@
 #include "common/parallel.hpp"
 #include "envs/core/horizon_name.hpp"
 #include "envs/mpm/episode.hpp"
-#include "envs/mpm/fluid_scene.hpp"
+#include "envs/mpm/fluid_model.hpp"
 #include "envs/mpm/substep.hpp"
 
 namespace dsb::mpm {
@@ -136,18 +136,18 @@ double FluidEnv::rollout_with_grad(std::span<const double> x, std::span<double> 
   return loss;
 }
 
-std::vector<FluidEnv::Frame> FluidEnv::trajectory(std::span<const double> x, ThreadTeam& team) const {
+std::vector<FluidEnv::TrajectoryPoint> FluidEnv::trajectory(std::span<const double> x, ThreadTeam& team) const {
   MpmWorkspace ws(model());
   std::vector<double> a;
   actions(x, a);
   ws.reset_state(model());
-  std::vector<Frame> frames{{cube_centre(model(), ws.particles), ws.poses[0].p}};
+  std::vector<TrajectoryPoint> points{{cube_centre(model(), ws.particles), ws.poses[0].p}};
   for (int k = 0; k < cfg_.env_steps; ++k) {
     for (int s = 0; s < cfg_.mpm.substeps; ++s)
       substep(model(), ws, team, a.data() + static_cast<std::size_t>(k) * kActionsPerStep, nullptr);
-    frames.push_back({cube_centre(model(), ws.particles), ws.poses[0].p});
+    points.push_back({cube_centre(model(), ws.particles), ws.poses[0].p});
   }
-  return frames;
+  return points;
 }
 
 EnvFamily fluid_family() {

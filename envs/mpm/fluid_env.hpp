@@ -31,7 +31,7 @@ class FluidEnv : public Env {
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
   bool renderable() const override { return true; }
-  std::vector<dsb::Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // render_mpm.cpp
+  std::vector<dsb::Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_mpm.cpp
   // the cube's height above the tank floor after the last rollout in ws (NaN if it blew up)
   double episode_metric(const Workspace& ws) const override;
 
@@ -41,10 +41,10 @@ class FluidEnv : public Env {
   // handle y), each segment's two params held for its env steps
   void actions(std::span<const double> x, std::vector<double>& out) const;
   // the cube's centre and the bowl's position after every env step (index 0 = the start)
-  struct Frame {
+  struct TrajectoryPoint {
     Vec3 cube, bowl;
   };
-  std::vector<Frame> trajectory(std::span<const double> x, ThreadTeam& team) const;
+  std::vector<TrajectoryPoint> trajectory(std::span<const double> x, ThreadTeam& team) const;
 
  protected:
   double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override;

@@ -16,7 +16,7 @@
 #include "envs/mpm/mpm_workspace.hpp"
 #include "envs/mpm/plb_config.hpp"
 #include "envs/mpm/plb_loss.hpp"
-#include "envs/mpm/plb_scene.hpp"
+#include "envs/mpm/plb_model.hpp"
 
 namespace dsb::mpm {
 
@@ -34,7 +34,7 @@ class PlbEnv : public Env {
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
   bool renderable() const override { return true; }
-  std::vector<dsb::Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // render_mpm.cpp
+  std::vector<dsb::Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_mpm.cpp
   double episode_metric(const Workspace& ws) const override;
 
   const PlbConfig& plb_config() const { return cfg_; }

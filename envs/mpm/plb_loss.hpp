@@ -2,7 +2,7 @@
 // PlasticineLab's loss (its task loss) and its adjoint: after every env step
 //   L_t = w_sdf sum_I d_I m_I + w_density sum_I |m_I - t_I| + w_contact sum_k (min_p max(sdf_k(x_p), 0))^2
 // with m the grid mass (P2G of each particle's mass with the simulation's own B-spline), t the
-// target, d the distance to the target (plb_scene.hpp), k over the manipulators; the trajectory
+// target, d the distance to the target (plb_model.hpp), k over the manipulators; the trajectory
 // objective sums L_t over the env steps. The soft IoU of the last state is kept as the episode's
 // second metric.
 #include <limits>
@@ -11,7 +11,7 @@
 #include "envs/mpm/episode.hpp"
 #include "envs/mpm/grid.hpp"
 #include "envs/mpm/plb_config.hpp"
-#include "envs/mpm/plb_scene.hpp"
+#include "envs/mpm/plb_model.hpp"
 
 namespace dsb::mpm {
 

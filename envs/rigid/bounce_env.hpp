@@ -68,7 +68,7 @@ class BounceEnv : public Env {
   nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   bool renderable() const override { return true; }
-  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // render_rigid.cpp
+  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_rigid.cpp
 
   const BounceConfig& bounce_config() const { return cfg_; }
   const BounceModel& model() const { return model_.get(); }

@@ -34,7 +34,7 @@ class CartpoleEnv : public Env {
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
   bool renderable() const override { return true; }
-  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // render_rigid.cpp
+  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_rigid.cpp
 
   const CartpoleConfig& cartpole_config() const { return cfg_; }
   const CartpoleModel& model() const { return model_.get(); }

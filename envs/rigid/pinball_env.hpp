@@ -99,7 +99,7 @@ class PinballEnv : public Env {
   nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   bool renderable() const override { return true; }
-  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // render_rigid.cpp
+  std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_rigid.cpp
 
   const PinballConfig& pinball_config() const { return cfg_; }
   const PinballModel& model() const { return model_.get(); }

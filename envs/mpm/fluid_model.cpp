@@ -1,4 +1,4 @@
-#include "envs/mpm/fluid_scene.hpp"
+#include "envs/mpm/fluid_model.hpp"
 
 #include <cmath>
 

@@ -1,5 +1,5 @@
 #pragma once
-// A PlasticineLab task's model: the MPM scene (plasticine sampled from the task's shapes with our
+// A PlasticineLab task's model: the MPM model (plasticine sampled from the task's shapes with our
 // seeded RNG, PlasticineLab's material and constants, the manipulators) and the target with its
 // distance field, built once per env.
 #include <string>
@@ -19,9 +19,9 @@ struct PlbModel {
   std::vector<int> movable;        // primitives with commands (the contact term's)
 };
 
-// The scene alone (what the reference motion runs on).
-MpmModel build_plb_scene(const PlbConfig& cfg);
-// The scene and the target: cfg.target_file's when it has one, else read from plb_target_path(cfg.task).
+// The MPM model alone, without the target (what the reference motion runs on).
+MpmModel build_plb_mpm_model(const PlbConfig& cfg);
+// The MPM model and the target: cfg.target_file's when it has one, else read from plb_target_path(cfg.task).
 PlbModel build_plb_model(const PlbConfig& cfg);
 
 std::string plb_target_path(const std::string& task);  // <data dir>/targets/plb-<task>.txt.gz

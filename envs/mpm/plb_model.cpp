@@ -1,4 +1,4 @@
-#include "envs/mpm/plb_scene.hpp"
+#include "envs/mpm/plb_model.hpp"
 
 #include <cmath>
 
@@ -28,7 +28,7 @@ Vec3 sample(const PlbShape& s, Rng& rng) {
 
 }  // namespace
 
-MpmModel build_plb_scene(const PlbConfig& cfg) {
+MpmModel build_plb_mpm_model(const PlbConfig& cfg) {
   cfg.validate();
   const PlbTask& task = *find_plb_task(cfg.task);
   MpmModel m;
@@ -60,12 +60,12 @@ std::string plb_target_path(const std::string& task) { return data_dir() + "/tar
 
 PlbModel build_plb_model(const PlbConfig& cfg) {
   PlbModel model;
-  model.mpm = build_plb_scene(cfg);
+  model.mpm = build_plb_mpm_model(cfg);
   model.target = cfg.target_file ? cfg.target_file->grid : read_grid_gz(plb_target_path(cfg.task));
   const auto& n = model.mpm.layout.n;
   if (model.target.n != n)
     throw UsageError("target " + (cfg.target_file ? std::string("file") : plb_target_path(cfg.task)) + " has " +
-                     std::to_string(model.target.n[0]) + " nodes per axis, the scene's grid " + std::to_string(n[0]));
+                     std::to_string(model.target.n[0]) + " nodes per axis, the model's grid " + std::to_string(n[0]));
   model.target_sdf = distance_to_mass(model.target, cfg.target_threshold, cfg.mpm.dx);
   for (double v : model.target.values) {
     model.target_sum += v;

@@ -1,6 +1,6 @@
 #pragma once
 #include <limits>
-// The `fluid` scene (fluid_config.hpp) as an MPM model, and its loss.
+// The `fluid` task (fluid_config.hpp) as an MPM model, and its loss.
 #include "envs/mpm/episode.hpp"
 #include "envs/mpm/fluid_config.hpp"
 #include "envs/mpm/mpm_model.hpp"
