@@ -133,6 +133,7 @@ EnvInfo swing_info(std::string name, SwingParams params, const SwingConfig& cfg)
   // `harness calibrate` on the 2-core EPYC (binary f21b88f), the six swing envs: a gradient episode
   // 21-44 ms on one core, a forward one 8.3-13 ms
   info.cost_hint_s = 0.03;
+  info.smoothness = Smoothness::piecewise;  // the floor's contact
   info.cost_hint_forward_s = 0.011;
   return info;
 }

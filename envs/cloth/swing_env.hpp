@@ -77,6 +77,8 @@ class SwingEnv : public Env {
   std::unique_ptr<Workspace> make_workspace() const override;
   // one action per episode: the params (see above)
   std::unique_ptr<RlEnv> make_rl() const override;
+  // x itself: the one action is the params
+  std::vector<double> rl_actions(std::span<const double> x) const override { return {x.begin(), x.end()}; }
   bool renderable() const override { return true; }
   std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_cloth.cpp
 

@@ -25,6 +25,19 @@
 
 namespace dsb {
 
+// How the loss behaves inside a gradient check's window (h = 1e-6, normalized units): what the env
+// contract (tests/test_env_contract.cpp) may demand of the analytic gradient.
+enum class Smoothness {
+  // differentiable at almost every point at that scale: central differences match the gradient
+  // (the synthetic functions, the cartpoles, the particle envs' short-horizon variants)
+  smooth,
+  // contact switches that such a window often straddles (penalty contacts turning on and off, the
+  // cloth's floor and pan): the gradient is the derivative of the piece x lies in and may differ
+  // from the differences across a switch, so only its direction is held to them, statistically
+  // (the rigid contact envs and the cloth envs; docs/gradient-quality.md measures how often)
+  piecewise,
+};
+
 // What listing, grid expansion, sharding, planning and resume need to know, without a model.
 struct EnvInfo {
   std::string name;
@@ -37,6 +50,7 @@ struct EnvInfo {
   double cost_hint_s = 0.0;
   std::string metric;          // name of an optional second per-episode metric ("" for none)
   double cost_hint_forward_s = 0.0;  // the same of a forward episode (0: cost_hint_s)
+  Smoothness smoothness = Smoothness::smooth;
 };
 
 // Per-step interface for RL (reset / observe / step) over the same dynamics as loss().
@@ -104,6 +118,12 @@ class Env {
 
   // nullptr when the env has no per-step interface
   virtual std::unique_ptr<RlEnv> make_rl() const { return nullptr; }
+  // The RL actions whose episode is loss(x)'s: (horizon x action_dim) row by row, each in [-1, 1].
+  // Stepped through a fresh make_rl() view, they end with final_loss() == loss(x), bit for bit, or
+  // within rl_replay_tolerance() relative (of max(1, |loss|)) where the env says so. Empty when the
+  // env has no per-step interface.
+  virtual std::vector<double> rl_actions(std::span<const double> /*x*/) const { return {}; }
+  virtual double rl_replay_tolerance() const { return 0.0; }
 
   // Pictures of the rollout at x (`harness render`): the state after each of frame_steps(steps, n)
   // with the target drawn into every frame, recorded from the env's own rollout. Envs that are not

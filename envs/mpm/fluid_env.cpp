@@ -104,6 +104,16 @@ void FluidEnv::actions(std::span<const double> x, std::vector<double>& out) cons
   }
 }
 
+std::vector<double> FluidEnv::rl_actions(std::span<const double> x) const {
+  const int per = cfg_.steps_per_segment();
+  std::vector<double> a(static_cast<std::size_t>(cfg_.env_steps) * 2);
+  for (int k = 0; k < cfg_.env_steps; ++k) {
+    a[2 * static_cast<std::size_t>(k)] = x[2 * (k / per)];
+    a[2 * static_cast<std::size_t>(k) + 1] = x[2 * (k / per) + 1];
+  }
+  return a;
+}
+
 double FluidEnv::rollout(std::span<const double> x, Workspace& workspace, ThreadTeam& team) const {
   auto& ws = static_cast<FluidWorkspace&>(workspace);
   actions(x, ws.actions);

@@ -30,6 +30,8 @@ class FluidEnv : public Env {
   nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
+  // each env step's (forward/back, up/down) speeds: its segment's two params
+  std::vector<double> rl_actions(std::span<const double> x) const override;
   bool renderable() const override { return true; }
   std::vector<dsb::Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_mpm.cpp
   // the cube's height above the tank floor after the last rollout in ws (NaN if it blew up)

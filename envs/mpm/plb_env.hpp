@@ -33,6 +33,12 @@ class PlbEnv : public Env {
   nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
+  // each env step's commands: its segment's params (actions())
+  std::vector<double> rl_actions(std::span<const double> x) const override {
+    std::vector<double> a;
+    actions(x, a);
+    return a;
+  }
   bool renderable() const override { return true; }
   std::vector<dsb::Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_mpm.cpp
   double episode_metric(const Workspace& ws) const override;

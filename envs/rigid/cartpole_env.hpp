@@ -6,6 +6,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "envs/core/env.hpp"
 #include "envs/core/env_family.hpp"
@@ -33,6 +34,8 @@ class CartpoleEnv : public Env {
   nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
+  // x itself: the params are every step's normalized controls, as the RL view's actions are
+  std::vector<double> rl_actions(std::span<const double> x) const override { return {x.begin(), x.end()}; }
   bool renderable() const override { return true; }
   std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_rigid.cpp
 

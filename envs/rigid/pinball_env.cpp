@@ -117,6 +117,7 @@ EnvInfo pinball_info(std::string name, const PinballConfig& cfg) {
   // `harness calibrate` on the 2-core EPYC (binary f21b88f): 86-123 us a gradient episode (1,920
   // steps against 2 to 16 paddles), 67-94 us a forward one
   info.cost_hint_s = 1.0e-4;
+  info.smoothness = Smoothness::piecewise;  // paddle and wall contacts
   info.cost_hint_forward_s = 8e-5;
   return info;
 }
