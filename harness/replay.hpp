@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstring>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -19,14 +20,59 @@ namespace dsb {
 
 enum class ReplayKind : int { value = 0, value_and_grad = 1, rl_reset = 2, rl_step = 3 };
 
+// Thrown when a resumed run asks for something other than its journal's next entry (another
+// binary, or a bug), or an entry's payload is not the size its kind has: the runner then restarts
+// the run from nothing.
+struct ReplayDiverged : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 struct ReplayEntry {
   ReplayKind kind = ReplayKind::value;
   std::uint64_t input_hash = 0;
-  // value:          {raw loss, metric, wall_s}
-  // value_and_grad: {raw loss, metric, wall_s, gradient (dim)}
-  // rl_reset:       {observation}
-  // rl_step:        {done, raw final loss, wall_s of the episode, observation}
+  // the answer, flattened (the database's BLOB); read and written only through the answer types
+  // below: value and value_and_grad an EpisodeAnswer, rl_reset an observation, rl_step an RlStepAnswer
   std::vector<double> payload;
+};
+
+// What a value or value_and_grad call returned: {loss, metric, wall_s} then, for value_and_grad,
+// the gradient (dim values). The loss is the env's raw number (NaN or infinite when it failed).
+struct EpisodeAnswer {
+  double loss = 0.0, metric = 0.0, wall_s = 0.0;
+  std::vector<double> gradient;  // empty for a value call
+
+  std::vector<double> payload() const {
+    std::vector<double> p = {loss, metric, wall_s};
+    p.insert(p.end(), gradient.begin(), gradient.end());
+    return p;
+  }
+  // gradient_size: 0 for a value entry, the env's dim for a value_and_grad one
+  static EpisodeAnswer from(const ReplayEntry& e, std::size_t gradient_size) {
+    if (e.payload.size() != 3 + gradient_size)
+      throw ReplayDiverged("resume: a journal answer of " + std::to_string(e.payload.size()) + " values, expected " +
+                           std::to_string(3 + gradient_size));
+    return {e.payload[0], e.payload[1], e.payload[2], {e.payload.begin() + 3, e.payload.end()}};
+  }
+};
+
+// What an RL decision returned: {done (1 or 0), the episode's raw final loss (0 until done), the
+// episode's wall_s (0 until done)} then the observation.
+struct RlStepAnswer {
+  bool done = false;
+  double loss = 0.0, wall_s = 0.0;
+  std::vector<double> observation;
+
+  std::vector<double> payload() const {
+    std::vector<double> p = {done ? 1.0 : 0.0, loss, wall_s};
+    p.insert(p.end(), observation.begin(), observation.end());
+    return p;
+  }
+  static RlStepAnswer from(const ReplayEntry& e, std::size_t observation_size) {
+    if (e.payload.size() != 3 + observation_size)
+      throw ReplayDiverged("resume: a journal RL step of " + std::to_string(e.payload.size()) + " values, expected " +
+                           std::to_string(3 + observation_size));
+    return {e.payload[0] != 0.0, e.payload[1], e.payload[2], {e.payload.begin() + 3, e.payload.end()}};
+  }
 };
 
 // A run's seed-free prefix: its episodes before the optimizer's first draw from the run's Rng
