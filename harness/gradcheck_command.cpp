@@ -5,12 +5,16 @@
 #include <iostream>
 #include <string>
 
+#include <memory>
+
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "common/error.hpp"
 #include "envs/registry.hpp"
-#include "harness/commands.hpp"
+#include "envs/core/gradient_check.hpp"
+#include "harness/command.hpp"
 
 namespace dsb {
 namespace {
@@ -174,6 +178,27 @@ int command_gradcheck(const std::string& env_name, const GradientSurveyOptions& 
   else
     print_table(env_name, env->dim(), options, survey);
   return survey.passed ? 0 : 1;
+}
+
+Command gradcheck_command() {
+  return {"gradcheck", "analytic gradient vs central differences, with statistics", [](CLI::App& app) {
+            struct Args {
+              std::string env;
+              GradientSurveyOptions survey;
+              bool json = false;
+            };
+            auto a = std::make_shared<Args>();
+            app.add_option("--env", a->env, "env name")->required();
+            app.add_option("--points", a->survey.points, "number of seeded random points (default 3)");
+            app.add_option("--seed", a->survey.seed, "seed of the points (default 0)");
+            app.add_option("--amplitude", a->survey.amplitude, "points uniform in [-a, a]^d (default 0.5)");
+            app.add_option("--step", a->survey.check.step, "central-difference step (default 1e-6)");
+            app.add_option("--tol", a->survey.check.tolerance, "largest accepted relative error (default 1e-4)");
+            app.add_option("--large-step", a->survey.large_step,
+                           "step along the gradient of the large-step direction check (default 0.05, 0 = off)");
+            app.add_flag("--json", a->json, "one JSON object (per-point worst errors and the summary)");
+            return [a] { return command_gradcheck(a->env, a->survey, a->json); };
+          }};
 }
 
 }  // namespace dsb

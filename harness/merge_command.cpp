@@ -12,9 +12,11 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include "common/error.hpp"
+#include "harness/command.hpp"
 #include "harness/run_status.hpp"
 #include "harness/schema.hpp"
 #include "harness/store.hpp"
@@ -330,6 +332,16 @@ int command_merge(const std::string& into, const std::vector<std::string>& input
       "copies, {} further copies kept\n",
       inputs.size(), into, n.added, n.identical, n.replaced, n.kept);
   return 0;
+}
+
+Command merge_command() {
+  return {"merge", "combine shard databases by run key (conflicting runs refused)", [](CLI::App& app) {
+            auto into = std::make_shared<std::string>();
+            auto inputs = std::make_shared<std::vector<std::string>>();
+            app.add_option("--into", *into, "the merged database (created or added to)")->required();
+            app.add_option("inputs", *inputs, "shard databases to merge")->required();
+            return [into, inputs] { return command_merge(*into, *inputs); };
+          }};
 }
 
 }  // namespace dsb

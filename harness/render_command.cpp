@@ -1,5 +1,7 @@
 #include "harness/render_command.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -11,7 +13,8 @@
 #include "common/error.hpp"
 #include "common/parallel.hpp"
 #include "envs/registry.hpp"
-#include "harness/commands.hpp"
+#include "harness/command.hpp"
+#include "harness/point_text.hpp"
 #include "harness/output_path.hpp"
 #include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
@@ -71,6 +74,20 @@ int command_render(const RenderArgs& a) {
   std::cout << fmt::format("render: {} at {}: {} frames (t = {:.3f} .. {:.3f} s) -> {} ({} bytes)\n", a.env, source,
                            frames.size(), frames.front().time, frames.back().time, a.out, bytes.size());
   return 0;
+}
+
+Command render_command() {
+  return {"render", "pictures of a rollout at a few time points (PNG strip or animated GIF)", [](CLI::App& app) {
+            auto a = std::make_shared<RenderArgs>();
+            app.add_option("--env", a->env, "env name (a simulated env)")->required();
+            app.add_option("--x", a->x, "comma-separated parameters in [-1, 1]");
+            app.add_option("--best-of", a->best_of, "harness database: render the best_x of the env's best done run");
+            app.add_option("--out", a->out, "FILE.png (frames side by side) or FILE.gif (animation)")->required();
+            app.add_option("--frames", a->frames, "time points from the start to the end (default 5)");
+            app.add_option("--width", a->width, "pixels per frame (default 320)");
+            app.add_flag("--force", a->force, "write over an existing file (never over a database)");
+            return [a] { return command_render(*a); };
+          }};
 }
 
 }  // namespace dsb

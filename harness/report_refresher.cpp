@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "harness/commands.hpp"
+#include "harness/report_command.hpp"
 
 namespace dsb {
 

@@ -9,6 +9,9 @@
 #include <ostream>
 #include <sstream>
 
+#include <filesystem>
+
+#include "common/error.hpp"
 #include "harness/sqlite_db.hpp"
 
 namespace dsb {
@@ -149,6 +152,16 @@ void print_diff(const TableDiff& d, std::ostream& out, std::size_t limit) {
   };
   list("missing from the database (in the baseline):", d.missing);
   list("added in the database (not in the baseline):", d.added);
+}
+
+std::vector<ResultRow> result_table_of_file(const std::string& db_path) {
+  if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
+  try {
+    Database db(db_path, Database::Mode::read_only);
+    return read_result_table(db);
+  } catch (const StoreError& e) {
+    throw UsageError(std::string("--db: ") + e.what());
+  }
 }
 
 }  // namespace dsb

@@ -35,6 +35,8 @@ struct BaselineError : std::runtime_error {
 
 // every episode of every 'done' run, sorted by (env, optimizer, seed, budget, episode)
 std::vector<ResultRow> read_result_table(Database& db);
+// the same of a database file, read-only; UsageError "--db: ..." when it is missing or unreadable
+std::vector<ResultRow> result_table_of_file(const std::string& db_path);
 std::vector<ResultRow> read_result_csv(const std::string& path);  // throws BaselineError
 void write_result_csv(const std::vector<ResultRow>& rows, std::ostream& out);
 

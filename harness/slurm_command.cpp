@@ -13,7 +13,14 @@
 
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
+
 #include "common/error.hpp"
+#include "harness/command.hpp"
+#include "harness/cost_model.hpp"
+#include "harness/grid_args.hpp"
+#include "harness/plan.hpp"
+#include "harness/run_order.hpp"
 
 namespace dsb {
 namespace {
@@ -343,6 +350,60 @@ int command_slurm(const SlurmGridFlags& grid, std::size_t grid_runs, const std::
   out << fmt::format("  sbatch --dependency=afterok:$ID --kill-on-invalid-dep=yes {}\n",
                      shell_quote(d + "/merge.sbatch"));
   return 0;
+}
+
+namespace {
+
+// `harness slurm`: the grid is checked like a run's before anything is written; the runs of each
+// shard are counted from the run keys (metadata only)
+int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
+  const CheckedRun run = check_run_args(a, false);
+  std::vector<std::int64_t> shard_runs;
+  if (options.shards >= 1 && options.shards <= kMaxSlurmShards) {
+    shard_runs.assign(options.shards, 0);
+    for (const PlannedRun& p : plan_grid(run.grid, {}, harness_version()).pending) ++shard_runs[shard_of(p.key, options.shards)];
+  }
+  // the tasks run in another folder: a target file's path goes to them absolute
+  const SlurmGridFlags flags{
+      a.all, a.claims, a.envs, a.optimizers, a.seeds, a.budget, settings_with_absolute_paths(a.knobs), a.ext,
+      a.ext_timeout};
+  SlurmOptions o = options;
+  if (o.time.empty() && !shard_runs.empty()) {
+    // each task's wall from the plan (its runs over its CPUs, at least its longest run)
+    GridPlan plan = plan_grid(run.grid, {}, harness_version());
+    estimate_sharing(plan, {});
+    const std::vector<double> cost = run_costs(plan, CostModel{});
+    std::vector<double> total(static_cast<std::size_t>(o.shards), 0.0), longest(total);
+    for (std::size_t i = 0; i < plan.pending.size(); ++i) {
+      const auto s = static_cast<std::size_t>(shard_of(plan.pending[i].key, o.shards));
+      total[s] += cost[i];
+      longest[s] = std::max(longest[s], cost[i]);
+    }
+    double worst = 0.0;
+    for (std::size_t s = 0; s < total.size(); ++s)
+      worst = std::max(worst, std::max(total[s] / std::max(1, o.cpus_per_task), longest[s]));
+    o.time = slurm_time_limit(worst);
+    o.time_note = fmt::format("the plan's longest task, {}, x {} + {} min; --time overrides", human_duration(worst),
+                              kSlurmTimeMargin, kSlurmTimeExtraS / 60);
+  }
+  return command_slurm(flags, run.grid.size(), shard_runs, o, running_binary_path(), std::cout);
+}
+
+}  // namespace
+
+Command slurm_command() {
+  return {"slurm", "write sbatch scripts that run the grid as a Slurm job array, then merge", [](CLI::App& app) {
+            auto args = std::make_shared<RunArgs>();
+            auto opts = std::make_shared<SlurmOptions>();
+            add_grid_options(app, *args);
+            app.add_option("--shards", opts->shards, "array tasks N: task I runs shard I/N")->required();
+            app.add_option("--dir", opts->dir, "folder for the scripts, logs, shard databases and results.sqlite")
+                ->required();
+            app.add_option("--cpus-per-task", opts->cpus_per_task, "CPUs per task, its --jobs (default 1)");
+            app.add_option("--time", opts->time, "time limit per task, e.g. 12:00:00 (default: the cluster's)");
+            app.add_option("--partition", opts->partition, "Slurm partition (default: the cluster's)");
+            return [args, opts] { return command_slurm_scripts(*args, *opts); };
+          }};
 }
 
 }  // namespace dsb

@@ -1,0 +1,62 @@
+// `harness calibrate`: times one episode of each env of a grid on this machine (cached for plan and ETAs).
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "common/error.hpp"
+#include "envs/core/lazy_model.hpp"
+#include "harness/command.hpp"
+#include "harness/cost_model.hpp"
+#include "harness/grid_args.hpp"
+#include "harness/plan.hpp"
+#include "harness/plan_report.hpp"
+#include "harness/store.hpp"
+
+namespace dsb {
+namespace {
+
+// `harness calibrate [grid flags] [--force]`: times the grid's envs on this machine, caches them
+int command_calibrate(const RunArgs& a, bool force) {
+  const CheckedRun run = check_run_args(a, false);
+  const GridPlan plan = plan_grid(run.grid, {}, harness_version(), run.shard);
+  CostModel costs;
+  std::cout << fmt::format("{:<26} {:>12} {:>12} {:>10}  {}\n", "env", "forward s", "gradient s", "decisions",
+                           "source");
+  std::map<std::string, EnvOptions> options;  // of each env of the grid (one set per env name)
+  for (const auto& spec : run.grid) options[spec.env] = spec.env_options;
+  for (const auto& [name, config] : plan.env_configs) {
+    EpisodeCost c = costs.episode(name, config.hash);
+    const bool measure = force || !c.measured;
+    if (measure) {
+      std::cerr << "harness: timing " << name << " ..." << std::endl;
+      c = costs.calibrate(name, config.hash, run.tape_memory_bytes, options[name]);
+      costs.save();  // after each env: an interrupted calibration keeps what it measured
+    }
+    std::cout << fmt::format("{:<26} {:>12.4g} {:>12.4g} {:>10}  {}\n", name, c.forward_s, c.gradient_s, c.decisions,
+                             measure ? "measured now" : "cached");
+  }
+  std::cout << "cost cache: " << costs.path() << "\n";
+  return 0;
+}
+
+}  // namespace
+
+Command calibrate_command() {
+  return {"calibrate", "time one episode of each env of a grid on this machine (cached for plan and ETAs)",
+          [](CLI::App& app) {
+            auto args = std::make_shared<RunArgs>();
+            auto force = std::make_shared<bool>(false);
+            add_grid_options(app, *args);
+            app.add_flag("--force", *force, "measure again envs already in the cache");
+            return [args, force] { return command_calibrate(*args, *force); };
+          }};
+}
+
+}  // namespace dsb

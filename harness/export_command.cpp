@@ -1,0 +1,83 @@
+// `harness export`: the database's result table as a baseline CSV, or its runs in IOHprofiler's format.
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+
+#include "common/error.hpp"
+#include "harness/command.hpp"
+#include "harness/export_ioh.hpp"
+#include "harness/output_path.hpp"
+#include "harness/report_command.hpp"
+#include "harness/result_table.hpp"
+#include "harness/sqlite_db.hpp"
+
+namespace dsb {
+namespace {
+
+// --out for ioh is a folder that does not exist yet (created) or an empty folder, so an export
+// never mixes with other files; with force, another folder (files of the export's names replaced)
+int export_ioh(const std::string& db_path, const std::string& out_path, bool force) {
+  if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
+  check_output_folder("--out", out_path, force, [](const std::string&) { return false; });
+  std::error_code ec;
+  const std::filesystem::path out(out_path);
+  std::vector<IohRun> runs;
+  try {
+    Database db(db_path, Database::Mode::read_only);
+    runs = read_ioh_runs(db);
+  } catch (const StoreError& e) {
+    const std::string why = e.what();  // SQLite's message, without the statement it quotes
+    throw UsageError("--db: cannot read '" + db_path + "': " + why.substr(0, why.find(" in: ")));
+  }
+  std::filesystem::create_directories(out, ec);
+  if (ec || !std::filesystem::is_directory(out))
+    throw UsageError("--out: cannot create folder '" + out_path + "'" + (ec ? ": " + ec.message() : ""));
+  const IohExportSummary s = write_ioh_export(runs, out);
+  std::cerr << "harness: wrote " << s.runs << " runs (" << s.rows << " rows) of " << s.algorithms
+            << " algorithms on " << s.functions << " functions to " << out_path << " (IOHprofiler format)";
+  if (s.runs_left_out > 0) std::cerr << "; left out " << s.runs_left_out << " runs without a finite loss";
+  std::cerr << "\n";
+  return 0;
+}
+
+int command_export(const std::string& db_path, const std::string& out_path, const std::string& format,
+                   bool force) {
+  if (format != "csv" && format != "ioh") throw UsageError("--format must be csv or ioh, got '" + format + "'");
+  if (format == "ioh") return export_ioh(db_path, out_path, force);
+  check_output_file("--out", out_path, force);  // before the database is read: a refusal costs nothing
+  const auto rows = result_table_of_file(db_path);
+  OutputFile out("--out", out_path, force);
+  write_result_csv(rows, out.stream());
+  out.commit();
+  std::cerr << "harness: wrote " << rows.size() << " rows to " << out_path << "\n";
+  return 0;
+}
+
+}  // namespace
+
+Command export_command() {
+  return {"export", "write the database's result table as a baseline CSV, or its runs in IOHprofiler's format",
+          [](CLI::App& app) {
+            struct Args {
+              std::string db, out, format = "csv";
+              bool force = false;
+            };
+            auto a = std::make_shared<Args>();
+            app.add_option("--db", a->db, "results database")->required();
+            app.add_option("--out", a->out, "CSV file to write (csv), or a new or empty folder (ioh)")->required();
+            app.add_option("--format", a->format, "csv (default: the baseline result table) or ioh (IOHanalyzer)");
+            app.add_flag("--force", a->force,
+                         "write over an existing file, or into a folder with other files (never over a database)");
+            return [a] { return command_export(a->db, a->out, a->format, a->force); };
+          }};
+}
+
+}  // namespace dsb

@@ -1,0 +1,112 @@
+// `harness run` (and bare flags: harness --all --seeds 5): runs a grid into the database, resuming
+// what an earlier command left, with an optional report kept up to date.
+#include <csignal>
+#include <functional>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "common/error.hpp"
+#include "envs/core/lazy_model.hpp"
+#include "harness/command.hpp"
+#include "harness/cost_model.hpp"
+#include "harness/grid_args.hpp"
+#include "harness/plan.hpp"
+#include "harness/plan_report.hpp"
+#include "harness/store.hpp"
+#include "harness/cli.hpp"
+#include "harness/interrupt.hpp"
+#include "harness/report_command.hpp"
+#include "harness/report_refresher.hpp"
+#include "harness/run_order.hpp"
+#include "harness/runner.hpp"
+
+namespace dsb {
+namespace {
+
+int command_run(const RunArgs& a, const std::string& report_dir) {
+  const CheckedRun run = check_run_args(a, true);
+  if (!report_dir.empty()) check_report_folder(report_dir, false, "--report");
+
+  std::unique_ptr<Store> store;
+  try {
+    store = std::make_unique<Store>(a.db, Provenance{harness_version(), DSB_GIT_SHA, host_name()});
+  } catch (const StoreError& e) {
+    throw UsageError(std::string("--db: ") + e.what());
+  }
+  GridPlan plan = plan_grid(run.grid, store->done_keys(), harness_version(), run.shard);
+  if (!a.no_sharing) estimate_sharing(plan, kept_prefixes_of_file(a.db));
+  use_measured_walls(plan, measured_walls_of_file(a.db));
+  const CostModel costs;
+  if (!a.quiet) {
+    std::ostringstream text;
+    print_plan(text, plan, costs, plan_context(a, run));
+    std::fputs(text.str().c_str(), stderr);
+  }
+  // cheapest runs first, so partial reports come early, each sharing group's lead pulled ahead of
+  // its followers (run_order.hpp; each run's result does not depend on order)
+  const std::vector<double> cost = run_costs(plan, costs);
+  std::vector<PlannedRun> pending;
+  std::vector<double> pending_cost;
+  for (const std::size_t i : run_order(plan.pending, cost, !a.no_sharing, run.jobs)) {
+    pending.push_back(plan.pending[i]);
+    pending_cost.push_back(cost[i]);
+  }
+  std::FILE* progress = a.quiet ? nullptr : stderr;
+  install_stop_handlers();
+  std::unique_ptr<ReportRefresher> reports;
+  if (!report_dir.empty()) reports = std::make_unique<ReportRefresher>(a.db, report_dir);
+  const auto s = run_grid(pending, pending_cost, plan.skipped, *store, run.jobs, a.threads, progress,
+                          reports ? std::function<void()>([&] { reports->run_finished(); }) : std::function<void()>(),
+                          !a.no_sharing, run.tape_memory_bytes);
+  if (s.shared_runs > 0)
+    std::fprintf(stderr,
+                 "harness: %lld runs took %lld episodes from an earlier seed's run (the episodes before the "
+                 "optimizer's first draw, replayed: the same bits as simulating them)\n",
+                 static_cast<long long>(s.shared_runs), static_cast<long long>(s.shared_episodes));
+  if (s.resumed > 0)
+    std::fprintf(stderr, "harness: resumed %lld interrupted runs, %lld of their episodes replayed from the database\n",
+                 static_cast<long long>(s.resumed), static_cast<long long>(s.replayed_episodes));
+  std::fprintf(stderr, "harness: %lld runs in the grid: %lld already done, %lld done now, %lld failed; database %s\n",
+               static_cast<long long>(plan.runs), static_cast<long long>(s.skipped), static_cast<long long>(s.done),
+               static_cast<long long>(s.failed), a.db.c_str());
+  if (reports) reports->final_build();
+  if (const int sig = stop_signal(); sig != 0) {
+    std::fprintf(stderr,
+                 "harness: stopped by %s: %lld runs in progress committed their finished episodes; run the same "
+                 "command again to resume them\n",
+                 sig == SIGINT ? "SIGINT" : sig == SIGHUP ? "SIGHUP" : "SIGTERM", static_cast<long long>(s.interrupted));
+    return 128 + sig;
+  }
+  if (s.failed > 0) {
+    std::fprintf(stderr,
+                 "harness: %lld runs failed (exit status %d); they are stored with their errors, `harness plan` with "
+                 "the same flags and --db lists them, and the same command runs them again\n",
+                 static_cast<long long>(s.failed), kExitRunsFailed);
+    return kExitRunsFailed;
+  }
+  return 0;
+}
+
+}  // namespace
+
+Command run_command() {
+  return {"run", "run a grid (also implied by bare flags: harness --all --seeds 5)", [](CLI::App& app) {
+            auto args = std::make_shared<RunArgs>();
+            auto report = std::make_shared<std::string>();
+            add_run_options(app, *args);
+            app.add_option("--report", *report,
+                           "keep a comparison report of the grid in this folder (new, empty, or an earlier report), "
+                           "rebuilt as runs finish");
+            return [args, report] { return command_run(*args, *report); };
+          }};
+}
+
+}  // namespace dsb
