@@ -56,7 +56,7 @@ struct WorldParts {
   World world{&dispatcher, &broadphase, &solver, &config};
 };
 
-// contact solving for the ball scenes: the impact is the restitution impulse alone; Bullet's
+// contact solving for the ball setups: the impact is the restitution impulse alone; Bullet's
 // default Baumgarte push-out (erp 0.2 of the penetration per step, baked into the velocity for
 // shallow penetrations) would add up to a metre per second to every rebound
 void impulse_only_contacts(btDiscreteDynamicsWorld& world) {
@@ -237,7 +237,7 @@ std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(const CartpoleEnv& e
   return tips;
 }
 
-// ------------------------------ ball scenes (bounce, pinball) ------------------------------
+// ------------------------------ ball setups (bounce, pinball) ------------------------------
 
 namespace {
 

@@ -2,7 +2,7 @@
 // Bullet 3 (double precision, `bullet-float64`) models of the rigid envs. This adapter owns every
 // convention change between our envs and Bullet:
 //   - frame: Bullet's usual frame is ours (y-up, gravity along -y), so points map unchanged; the
-//     planar scenes lie in z = 0 and our counter-clockwise angles are rotations about +z.
+//     planar setups lie in z = 0 and our counter-clockwise angles are rotations about +z.
 //   - cartpoles: a btMultiBody with a fixed base, a prismatic cart link along x and one revolute
 //     link per rod. Bullet's joint coordinates are relative, like MuJoCo's: phi_i is the running
 //     sum. Joint torques go in with addJointTorque (joint space, as ours). The cart is

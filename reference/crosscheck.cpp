@@ -19,7 +19,7 @@ namespace reference {
 namespace {
 
 // compares two rollouts of one vector and folds the worst case into the row
-void compare(const Rollout& a, const Rollout& b, const CrosscheckScene& scene,
+void compare(const Rollout& a, const Rollout& b, const CrosscheckSetup& setup,
              std::span<const double> x, int index, CrosscheckRow& row) {
   const std::size_t n = std::min(a.position.size(), b.position.size());
   double deviation = 0.0;
@@ -32,8 +32,8 @@ void compare(const Rollout& a, const Rollout& b, const CrosscheckScene& scene,
   double free_flight = 0.0, rebound = 0.0;
   int impact = 0, bounces = 0;
   if (row.contact) {
-    const ContactEvents ea = contact_events(a, scene.gravity(), scene.dt());
-    const ContactEvents eb = contact_events(b, scene.gravity(), scene.dt());
+    const ContactEvents ea = contact_events(a, setup.gravity(), setup.dt());
+    const ContactEvents eb = contact_events(b, setup.gravity(), setup.dt());
     // both engines are in free flight up to the earlier first impact (states 0 .. that step)
     const int free_end = ea.first_impact < 0   ? eb.first_impact
                          : eb.first_impact < 0 ? ea.first_impact
@@ -44,10 +44,10 @@ void compare(const Rollout& a, const Rollout& b, const CrosscheckScene& scene,
     impact = (ea.first_impact < 0) != (eb.first_impact < 0)
                  ? 1 << 20
                  : std::abs(ea.first_impact - eb.first_impact);
-    bounces = std::abs(scene.floor_bounces(x, a, ea) - scene.floor_bounces(x, b, eb));
+    bounces = std::abs(setup.floor_bounces(x, a, ea) - setup.floor_bounces(x, b, eb));
     // compared where both have a first impact on a flat surface
     if (ea.first_impact >= 0 && eb.first_impact >= 0) {
-      const double d = std::abs(scene.rebound(x, a, ea) - scene.rebound(x, b, eb));
+      const double d = std::abs(setup.rebound(x, a, ea) - setup.rebound(x, b, eb));
       if (!std::isnan(d)) rebound = d;
     }
   }
@@ -97,12 +97,12 @@ std::string format_count(int v, int tol) {
 
 std::vector<CrosscheckRow> crosscheck(const std::vector<std::string>& envs) {
   const std::vector<std::string>& names = envs.empty() ? crosscheck_envs() : envs;
-  for (const auto& name : names) make_scene(name);  // unknown names fail before any work
+  for (const auto& name : names) make_setup(name);  // unknown names fail before any work
   std::vector<CrosscheckRow> rows;
   const bool mj = mujoco_available(), bt = bullet_available();
   for (const auto& name : names) {
-    const auto owned = make_scene(name);
-    CrosscheckScene& scene = *owned;
+    const auto owned = make_setup(name);
+    CrosscheckSetup& setup = *owned;
     std::vector<std::string> pairs;
     if (mj) pairs.push_back("ours-mujoco");
     if (bt) pairs.push_back("ours-bullet");
@@ -112,21 +112,21 @@ std::vector<CrosscheckRow> crosscheck(const std::vector<std::string>& envs) {
       CrosscheckRow row;
       row.env = name;
       row.engines = p;
-      row.contact = scene.contact();
-      row.tol = scene.tolerances(p);
+      row.contact = setup.contact();
+      row.tol = setup.tolerances(p);
       env_rows.push_back(row);
     }
     const auto xs = crosscheck_vectors(name);
     for (std::size_t k = 0; k < xs.size(); ++k) {
-      const Rollout ours = scene.ours(xs[k]);
+      const Rollout ours = setup.ours(xs[k]);
       std::optional<Rollout> m, b;
-      if (mj) m = scene.mujoco(xs[k]);
-      if (bt) b = scene.bullet(xs[k]);
+      if (mj) m = setup.mujoco(xs[k]);
+      if (bt) b = setup.bullet(xs[k]);
       for (auto& row : env_rows) {
         const int i = static_cast<int>(k);
-        if (row.engines == "ours-mujoco") compare(ours, *m, scene, xs[k], i, row);
-        if (row.engines == "ours-bullet") compare(ours, *b, scene, xs[k], i, row);
-        if (row.engines == "mujoco-bullet") compare(*m, *b, scene, xs[k], i, row);
+        if (row.engines == "ours-mujoco") compare(ours, *m, setup, xs[k], i, row);
+        if (row.engines == "ours-bullet") compare(ours, *b, setup, xs[k], i, row);
+        if (row.engines == "mujoco-bullet") compare(*m, *b, setup, xs[k], i, row);
       }
     }
     rows.insert(rows.end(), env_rows.begin(), env_rows.end());

@@ -4,19 +4,19 @@
 // engines is compared on what the models share (reference/README.md explains each quantity and
 // tolerance):
 //   - cartpoles (no contact): the tip position over the whole horizon and the final loss;
-//   - contact scenes: the ball's free flight before the first impact (the same semi-implicit
+//   - contact setups: the ball's free flight before the first impact (the same semi-implicit
 //     recursion in every engine), the step of the first impact, the first impact's rebound, the
 //     number of ground bounces and the final position (the contact models differ: penalty vs
 //     soft constraint vs impulses, so some of these are reported without a tolerance).
 // `harness crosscheck [--env NAME]` prints the table through run_crosscheck().
-// The parts: events.hpp (contact events of a rollout), scene.hpp (each env's scene in every
+// The parts: events.hpp (contact events of a rollout), setup.hpp (each env's setup in every
 // engine, its seeded vectors and tolerances), this file (the rows and the table).
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "reference/events.hpp"
-#include "reference/scene.hpp"
+#include "reference/setup.hpp"
 
 namespace dsb {
 
@@ -36,7 +36,7 @@ struct CrosscheckRow {
   int vectors = 0;
   double deviation = 0.0, free_flight = 0.0, loss = 0.0, final_position = 0.0, rebound = 0.0;
   int first_impact = 0, bounces = 0;
-  bool contact = false;  // a contact scene (free flight, impact and bounce columns apply)
+  bool contact = false;  // a contact setup (free flight, impact and bounce columns apply)
   Tolerances tol;
   bool pass = true;
   std::string failure;   // which quantity failed first, with the parameter vector's index

@@ -14,7 +14,7 @@ namespace dsb::reference {
 struct Rollout {
   std::string engine;                     // "ours", "mujoco" or "bullet"
   std::vector<Eigen::Vector3d> position;  // tip (cartpoles) or ball centre per state (steps + 1); z = 0 in 2-D
-  std::vector<Eigen::Vector3d> velocity;  // ball velocity per state (contact scenes; empty for cartpoles)
+  std::vector<Eigen::Vector3d> velocity;  // ball velocity per state (contact setups; empty for cartpoles)
   double final_loss = std::numeric_limits<double>::quiet_NaN();  // the env's loss of the final state
 };
 

@@ -43,10 +43,10 @@ std::string num(double v) { return exact_number_text(v); }
 
 std::string vec(const Eigen::Vector3d& v) { return num(v.x()) + " " + num(v.y()) + " " + num(v.z()); }
 
-// a point of the planar scenes (our x, y; z = 0) in MuJoCo's frame
+// a point of the planar setups (our x, y; z = 0) in MuJoCo's frame
 Eigen::Vector3d planar(double x, double y) { return to_mujoco(Eigen::Vector3d(x, y, 0.0)); }
 
-// <option> shared by every scene: semi-implicit Euler at the env's dt, gravity along -z
+// <option> shared by every setup: semi-implicit Euler at the env's dt, gravity along -z
 std::string option(double dt, double gravity, bool contacts) {
   std::string s = "  <option timestep=\"" + num(dt) + "\" gravity=\"0 0 " + num(-gravity) +
                   "\" integrator=\"Euler\" cone=\"elliptic\">\n";

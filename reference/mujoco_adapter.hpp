@@ -3,7 +3,7 @@
 // envs and MuJoCo, and nothing outside it needs to know them:
 //   - frame: ours is y-up (gravity along -y); MuJoCo's is z-up. A point (x, y, z) of ours is
 //     (x, -z, y) in MuJoCo (a rotation by +90 degrees about x, so handedness is kept); the planar
-//     scenes (cartpoles, pinball) live in MuJoCo's x-z plane, and our counter-clockwise angle
+//     setups (cartpoles, pinball) live in MuJoCo's x-z plane, and our counter-clockwise angle
 //     (about +z of ours) is a rotation about MuJoCo's -y axis.
 //   - cartpole angles: ours are absolute link angles from hanging down; MuJoCo's hinges are
 //     relative (joint) angles, so phi_i = theta_1 + ... + theta_i. Our joint torque tau_j acts on

@@ -95,7 +95,7 @@ TEST(FlipConfig, InvalidFieldsAreNamed) {
   expect_field(c, "floor_height");
 }
 
-TEST(FlipScene, StableAndAStillPanLeavesThePancakeWhereItIs) {
+TEST(FlipModel, StableAndAStillPanLeavesThePancakeWhereItIs) {
   const auto& env = flip();
   const auto& m = env.model();
   const double w_dt = cloth::frequency_bound(m.cloth, m.stiffness) * env.flip_config().dt;

@@ -1,4 +1,4 @@
-// `fluid` (envs/mpm/fluid_*): the scene is resolved, a hand-found scoop lifts the cube out, the
+// `fluid` (envs/mpm/fluid_*): the model is resolved, a hand-found scoop lifts the cube out, the
 // gradient agrees with central differences over the whole box, the RL view observes the cube and
 // the ladle, and the harness runs and stores it. The env contract (test_env_contract.cpp) checks
 // the rest: both paths, threads, the RL replay, frames and the config.
@@ -36,7 +36,7 @@ const mpm::FluidEnv& fluid(const std::string& name) {
   return static_cast<const mpm::FluidEnv&>(*shared_env(name));
 }
 
-TEST(Fluid, SceneIsResolved) {
+TEST(Fluid, ModelIsResolved) {
   const auto& env = fluid("fluid");
   const auto& c = env.fluid_config();
   const double dx = c.mpm.dx;

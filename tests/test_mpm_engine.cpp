@@ -14,7 +14,7 @@
 #include "envs/mpm/material.hpp"
 #include "envs/mpm/primitive.hpp"
 #include "envs/mpm/substep.hpp"
-#include "support/mpm_scenes.hpp"
+#include "support/mpm_models.hpp"
 
 namespace dsb {
 namespace {
@@ -119,7 +119,7 @@ TEST(MpmClosedForm, FreeFallFollowsTheDiscreteRecursion) {
 }
 
 TEST(MpmGrid, PaddingBelowTheDomainChangesNothingButAllowsParticlesDownToZero) {
-  // pad = 1 adds a layer of nodes below position 0; a scene away from it runs as without (to
+  // pad = 1 adds a layer of nodes below position 0; a model away from it runs as without (to
   // round-off: the blocks, hence the particles' memory order and the scatter's summation order,
   // shift by one node), and particles may start below dx (PlasticineLab's shapes start at y = 0)
   auto run = [](int pad, double bottom) {

@@ -1,5 +1,5 @@
 // The MPM engine's reverse pass: action and initial-state gradients against central
-// differences on a small scene with every material and every primitive (short horizon, where
+// differences on a small model with every material and every primitive (short horizon, where
 // differences are trustworthy), the checkpointed adjoint against the full-history one, and the
 // same bits for any number of threads.
 #include <cmath>
@@ -10,14 +10,14 @@
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
 #include "envs/mpm/episode.hpp"
-#include "support/mpm_scenes.hpp"
+#include "support/mpm_models.hpp"
 
 namespace dsb {
 namespace {
 
 using mpm::Mat3;
 using mpm::Vec3;
-using testing::every_primitive_scene;
+using testing::every_primitive_model;
 
 std::vector<double> random_actions(const mpm::MpmModel& m, int env_steps, std::uint64_t seed) {
   Rng rng(seed);
@@ -28,7 +28,7 @@ std::vector<double> random_actions(const mpm::MpmModel& m, int env_steps, std::u
 
 TEST(MpmGradient, ActionsMatchCentralDifferencesWithEveryPrimitive) {
   const int env_steps = 2;
-  const auto m = every_primitive_scene(5);
+  const auto m = every_primitive_model(5);
   const testing::SmoothObjective objective;
   mpm::MpmWorkspace ws(m);
   for (std::uint64_t seed : {11u, 12u}) {
@@ -65,7 +65,7 @@ TEST(MpmGradient, ActionsMatchCentralDifferencesWithEveryPrimitive) {
 
 TEST(MpmGradient, InitialStateMatchesCentralDifferences) {
   const int env_steps = 2;
-  auto m = every_primitive_scene(5);
+  auto m = every_primitive_model(5);
   const testing::SmoothObjective objective;
   const auto a = random_actions(m, env_steps, 21);
   mpm::MpmWorkspace ws(m);
@@ -116,7 +116,7 @@ TEST(MpmGradient, AnyTapeBudgetGivesTheSameBits) {
   // the reverse pass recomputes the env steps it did not tape from their checkpoints; that
   // repeats the forward pass exactly, so every budget gives the same loss, gradient and adjoints
   const int env_steps = 4;
-  const auto m = every_primitive_scene(4);
+  const auto m = every_primitive_model(4);
   const testing::SmoothObjective objective;
   const auto a = random_actions(m, env_steps, 31);
   mpm::MpmWorkspace ws(m);
@@ -146,7 +146,7 @@ TEST(MpmGradient, AnyTapeBudgetGivesTheSameBits) {
 
 TEST(MpmGradient, SameBitsForAnyNumberOfThreads) {
   const int env_steps = 3;
-  const auto m = every_primitive_scene(4);
+  const auto m = every_primitive_model(4);
   const testing::SmoothObjective objective;
   const auto a = random_actions(m, env_steps, 41);
   std::vector<double> loss(3);

@@ -1,5 +1,5 @@
 // The MPM engine's lanes paths (envs/mpm/lane_path.hpp) give the scalar path's bits: a forward and
-// a gradient episode on a small scene with every material and every primitive, through each path
+// a gradient episode on a small model with every material and every primitive, through each path
 // the CPU has, on one and two threads, compared byte for byte (particles, loss, gradient with
 // respect to the actions, the initial state and the poses); and the scalar path still gives the
 // bits recorded before the lanes existed.
@@ -16,7 +16,7 @@
 #include "common/rng.hpp"
 #include "envs/mpm/episode.hpp"
 #include "envs/mpm/lane_path.hpp"
-#include "support/mpm_scenes.hpp"
+#include "support/mpm_models.hpp"
 
 namespace dsb {
 namespace {
@@ -37,8 +37,8 @@ struct EpisodeBits {
 
 constexpr int kEnvSteps = 3;
 
-const mpm::MpmModel& scene() {
-  static const mpm::MpmModel m = testing::every_primitive_scene(4);
+const mpm::MpmModel& every_primitive() {
+  static const mpm::MpmModel m = testing::every_primitive_model(4);
   return m;
 }
 
@@ -61,7 +61,7 @@ Mat3 random_deformation(Rng& rng) {
 // Random states: 3,000 particles in bodies of 1 to 11 that cycle through a plastic material that
 // flows at small strains, one that hardly flows, an elastic one and a fluid, so that every chunk
 // of lanes mixes materials; random v, C, F (random_deformation) and J.
-const mpm::MpmModel& random_scene() {
+const mpm::MpmModel& random_model() {
   static const mpm::MpmModel m = [] {
     auto m = testing::empty_model(32, 1.0 / 32, 4e-4, 2, Vec3(0.0, -5.0, 0.0));
     m.materials = {testing::plastic(400.0, 0.2, 4.0), testing::plastic(5e3, 0.2, 500.0), testing::elastic(300.0, 0.3),
@@ -113,7 +113,7 @@ EpisodeBits run(const mpm::MpmModel& m, int env_steps, LanePath path, int thread
   return r;
 }
 
-EpisodeBits run(LanePath path, int threads) { return run(scene(), kEnvSteps, path, threads); }
+EpisodeBits run(LanePath path, int threads) { return run(every_primitive(), kEnvSteps, path, threads); }
 
 template <class T>
 std::string_view bytes(const std::vector<T>& v) {
@@ -174,11 +174,11 @@ TEST(MpmLanes, Avx2PathGivesTheScalarBits) {
 
 // Each path from random states: one env step of two substeps, forward and gradient.
 TEST(MpmLanes, EveryPathGivesTheScalarBitsFromRandomStates) {
-  const EpisodeBits want = run(random_scene(), 1, LanePath::scalar, 1);
+  const EpisodeBits want = run(random_model(), 1, LanePath::scalar, 1);
   ASSERT_TRUE(std::isfinite(want.loss));
   ASSERT_TRUE(std::isfinite(want.grad_loss));
-  expect_same_bits(run(random_scene(), 1, LanePath::sse2, 1), want, "sse2");
-  if (mpm::lane_path_available(LanePath::avx2)) expect_same_bits(run(random_scene(), 1, LanePath::avx2, 1), want, "avx2");
+  expect_same_bits(run(random_model(), 1, LanePath::sse2, 1), want, "sse2");
+  if (mpm::lane_path_available(LanePath::avx2)) expect_same_bits(run(random_model(), 1, LanePath::avx2, 1), want, "avx2");
 }
 
 TEST(MpmLanes, PathsByName) {

@@ -1,4 +1,4 @@
-// The PlasticineLab tasks (envs/mpm/plb_*): scenes as the facts give them, gradients against
+// The PlasticineLab tasks (envs/mpm/plb_*): models as the facts give them, gradients against
 // central differences at a short horizon, targets near PlasticineLab's, the loss measuring the
 // task, the RL view, the second metric, and the harness running them.
 #include <cmath>
@@ -41,7 +41,7 @@ const Expected kExpected[] = {{"assembly", 30, 10000, 5e3, 0.2, 100, 100},   {"p
                               {"table", 15, 10000, 5e3, 0.05, 50, 0.3},     {"torus", 15, 10000, 5e3, 0.2, 50, 100},
                               {"triplemove", 90, 9999, 5e3, 0.2, 200, 1.5}, {"writer", 15, 10000, 5e3, 0.2, 50, 100}};
 
-TEST(Plb, ScenesAsPlasticineLabDefinesThem) {
+TEST(Plb, ModelsAsPlasticineLabDefinesThem) {
   EXPECT_EQ(mpm::plb_tasks().size(), 8u);
   for (const auto& e : kExpected) {
     SCOPED_TRACE(e.task);

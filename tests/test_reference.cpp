@@ -1,6 +1,6 @@
 // reference/: MuJoCo 2.2 and Bullet 3 models of the rigid envs against our simulators, with the
 // real libraries. The cross-check's tolerances as tests: contact-free cartpoles to 1e-6 (MuJoCo,
-// the requirement) and 1e-9 (Bullet, from its measured 1e-13); contact scenes on what the models
+// the requirement) and 1e-9 (Bullet, from its measured 1e-13); contact setups on what the models
 // share (free flight, first impact, first rebound, ground bounces, Bullet's final position); the
 // MJCF follows the config; the event detector on hand-made rollouts. A build without an engine
 // skips that engine's tests.
@@ -37,12 +37,12 @@ namespace {
 const std::vector<std::string> kContactEnvs = {"bounce", "pinball-1x2", "pinball-4x4"};
 
 // one engine's rollout of every seeded vector of an env
-std::vector<Rollout> rollouts(CrosscheckScene& scene, const std::string& engine) {
+std::vector<Rollout> rollouts(CrosscheckSetup& setup, const std::string& engine) {
   std::vector<Rollout> out;
-  for (const auto& x : crosscheck_vectors(scene.env())) {
-    if (engine == "ours") out.push_back(scene.ours(x));
-    if (engine == "mujoco") out.push_back(scene.mujoco(x));
-    if (engine == "bullet") out.push_back(scene.bullet(x));
+  for (const auto& x : crosscheck_vectors(setup.env())) {
+    if (engine == "ours") out.push_back(setup.ours(x));
+    if (engine == "mujoco") out.push_back(setup.mujoco(x));
+    if (engine == "bullet") out.push_back(setup.bullet(x));
   }
   return out;
 }
@@ -135,9 +135,9 @@ TEST(ReferenceMujoco, CartpoleMjcfComesFromTheConfig) {
 TEST(ReferenceMujoco, CartpoleTipMatchesOursToOneMicrometre) {
   REQUIRE_MUJOCO();
   for (const std::string env : {"cartpole1", "cartpole3"}) {
-    const auto owned = make_scene(env);
-    CrosscheckScene& scene = *owned;
-    const double worst = worst_deviation(rollouts(scene, "ours"), rollouts(scene, "mujoco"));
+    const auto owned = make_setup(env);
+    CrosscheckSetup& setup = *owned;
+    const double worst = worst_deviation(rollouts(setup, "ours"), rollouts(setup, "mujoco"));
     EXPECT_LE(worst, 1e-6) << env;  // the requirement, over the whole 100-step horizon
     EXPECT_EQ(crosscheck_tolerances(env, "ours-mujoco").deviation, 1e-6);
     RecordProperty(env + "_mujoco_tip_deviation", std::to_string(worst));
@@ -176,9 +176,9 @@ TEST(ReferenceMujoco, CartpoleStateReadsBackInOurConventions) {
 TEST(ReferenceBullet, CartpoleTipMatchesOurs) {
   REQUIRE_BULLET();
   for (const std::string env : {"cartpole1", "cartpole3"}) {
-    const auto owned = make_scene(env);
-    CrosscheckScene& scene = *owned;
-    const double worst = worst_deviation(rollouts(scene, "ours"), rollouts(scene, "bullet"));
+    const auto owned = make_setup(env);
+    CrosscheckSetup& setup = *owned;
+    const double worst = worst_deviation(rollouts(setup, "ours"), rollouts(setup, "bullet"));
     // measured 1.1e-13 (btMultiBody steps semi-implicit Euler like ours, in double precision)
     EXPECT_LE(worst, crosscheck_tolerances(env, "ours-bullet").deviation) << env;
     EXPECT_EQ(crosscheck_tolerances(env, "ours-bullet").deviation, 1e-9);
@@ -243,7 +243,7 @@ TEST(ReferenceCartpole, EnginesFollowTheEnvsParameterMap) {
   }
 }
 
-// ---------------------------------- contact scenes ------------------------------------------
+// ---------------------------------- contact setups ------------------------------------------
 
 TEST(ReferenceContact, EventDetectorOnHandMadeRollouts) {
   const double dt = 1.0 / 480.0;
@@ -332,16 +332,16 @@ TEST(ReferenceContact, MujocoPinballPaddlesAreTheConfigsCapsules) {
 // before the first impact every engine runs the same semi-implicit Euler recursion
 TEST(ReferenceContact, FreeFlightIsExactAndImpactsStartTogether) {
   for (const auto& env : kContactEnvs) {
-    const auto owned = make_scene(env);
-    CrosscheckScene& scene = *owned;
-    const auto ours = rollouts(scene, "ours");
+    const auto owned = make_setup(env);
+    CrosscheckSetup& setup = *owned;
+    const auto ours = rollouts(setup, "ours");
     for (const std::string engine : {"mujoco", "bullet"}) {
       if ((engine == "mujoco" && !mujoco_available()) || (engine == "bullet" && !bullet_available()))
         continue;
-      const auto theirs = rollouts(scene, engine);
+      const auto theirs = rollouts(setup, engine);
       for (std::size_t k = 0; k < ours.size(); ++k) {
-        const ContactEvents eo = contact_events(ours[k], scene.gravity(), scene.dt());
-        const ContactEvents et = contact_events(theirs[k], scene.gravity(), scene.dt());
+        const ContactEvents eo = contact_events(ours[k], setup.gravity(), setup.dt());
+        const ContactEvents et = contact_events(theirs[k], setup.gravity(), setup.dt());
         ASSERT_GE(eo.first_impact, 0) << env << " vector " << k << " never touches anything";
         EXPECT_LE(std::abs(eo.first_impact - et.first_impact), 1) << env << " " << engine << " " << k;
         const int last = std::min(eo.first_impact, et.first_impact);
@@ -357,23 +357,23 @@ TEST(ReferenceContact, FreeFlightIsExactAndImpactsStartTogether) {
 // halved) and Bullet's restitution impulse (equivalent_restitution) agree on flat faces
 TEST(ReferenceContact, FirstReboundAgreesOnFlatFaces) {
   for (const auto& env : kContactEnvs) {
-    const auto owned = make_scene(env);
-    CrosscheckScene& scene = *owned;
+    const auto owned = make_setup(env);
+    CrosscheckSetup& setup = *owned;
     const auto xs = crosscheck_vectors(env);
     int compared = 0;
     for (const auto& x : xs) {
-      const Rollout ours = scene.ours(x);
-      const double e_ours = scene.rebound(x, ours, contact_events(ours, scene.gravity(), scene.dt()));
+      const Rollout ours = setup.ours(x);
+      const double e_ours = setup.rebound(x, ours, contact_events(ours, setup.gravity(), setup.dt()));
       if (std::isnan(e_ours)) continue;  // a paddle's rounded end
       ++compared;
       EXPECT_GT(e_ours, 0.85) << env;
       if (mujoco_available()) {
-        const Rollout mj = scene.mujoco(x);
-        EXPECT_NEAR(scene.rebound(x, mj, contact_events(mj, scene.gravity(), scene.dt())), e_ours, 0.03) << env;
+        const Rollout mj = setup.mujoco(x);
+        EXPECT_NEAR(setup.rebound(x, mj, contact_events(mj, setup.gravity(), setup.dt())), e_ours, 0.03) << env;
       }
       if (bullet_available()) {
-        const Rollout bt = scene.bullet(x);
-        EXPECT_NEAR(scene.rebound(x, bt, contact_events(bt, scene.gravity(), scene.dt())), e_ours, 0.03) << env;
+        const Rollout bt = setup.bullet(x);
+        EXPECT_NEAR(setup.rebound(x, bt, contact_events(bt, setup.gravity(), setup.dt())), e_ours, 0.03) << env;
       }
     }
     EXPECT_GE(compared, static_cast<int>(xs.size()) / 2) << env;
@@ -383,28 +383,28 @@ TEST(ReferenceContact, FirstReboundAgreesOnFlatFaces) {
 // clear throws (not grazing, no bounce at the horizon, no corner): the same number of ground
 // bounces in every engine; Bullet's final position within 0.75 m of ours
 TEST(ReferenceContact, BounceCountsAndFinalPositions) {
-  const auto owned = make_scene("bounce");
-  CrosscheckScene& scene = *owned;
+  const auto owned = make_setup("bounce");
+  CrosscheckSetup& setup = *owned;
   const auto xs = crosscheck_vectors("bounce");
   ASSERT_EQ(xs.size(), 24u);
   int several = 0, walls = 0;
   for (std::size_t k = 0; k < xs.size(); ++k) {
     const auto& x = xs[k];
     EXPECT_TRUE(bounce_throw_is_clear(BounceConfig{}, x));
-    const Rollout ours = scene.ours(x);
-    const ContactEvents eo = contact_events(ours, scene.gravity(), scene.dt());
-    const int n = scene.floor_bounces(x, ours, eo);
+    const Rollout ours = setup.ours(x);
+    const ContactEvents eo = contact_events(ours, setup.gravity(), setup.dt());
+    const int n = setup.floor_bounces(x, ours, eo);
     EXPECT_GE(n, 1);
     several += n >= 2;
     walls += eo.bounces > n;
     if (mujoco_available()) {
-      const Rollout mj = scene.mujoco(x);
-      EXPECT_EQ(scene.floor_bounces(x, mj, contact_events(mj, scene.gravity(), scene.dt())), n) << k;
+      const Rollout mj = setup.mujoco(x);
+      EXPECT_EQ(setup.floor_bounces(x, mj, contact_events(mj, setup.gravity(), setup.dt())), n) << k;
     }
     if (bullet_available()) {
-      const Rollout bt = scene.bullet(x);
-      const ContactEvents eb = contact_events(bt, scene.gravity(), scene.dt());
-      EXPECT_EQ(scene.floor_bounces(x, bt, eb), n) << k;
+      const Rollout bt = setup.bullet(x);
+      const ContactEvents eb = contact_events(bt, setup.gravity(), setup.dt());
+      EXPECT_EQ(setup.floor_bounces(x, bt, eb), n) << k;
       EXPECT_EQ(eb.bounces, eo.bounces) << k;  // wall bounces too: both have Coulomb friction
       EXPECT_LE((bt.position.back() - ours.position.back()).norm(), 0.75) << k;
     }
@@ -447,19 +447,19 @@ TEST(Crosscheck, OneEnvIsDeterministicAndUnknownNamesAreUsageErrors) {
   EXPECT_THROW(run_crosscheck({"sphere-10"}, c), UsageError);
 }
 
-// each scene's env is the one the harness runs: the registry's env of that name, same config
-TEST(Crosscheck, EveryScenesEnvIsTheRegistrysEnv) {
+// each setup's env is the one the harness runs: the registry's env of that name, same config
+TEST(Crosscheck, EverySetupsEnvIsTheRegistrysEnv) {
   ASSERT_EQ(crosscheck_envs(), (std::vector<std::string>{"cartpole1", "cartpole3", "bounce",
                                                           "pinball-1x2", "pinball-4x4"}));
   for (const auto& name : crosscheck_envs()) {
-    const auto scene = make_scene(name);
+    const auto setup = make_setup(name);
     const auto env = make_env(name);
-    EXPECT_EQ(scene->env(), name);
-    EXPECT_EQ(scene->our_env().name(), name);
-    EXPECT_EQ(scene->our_env().config(), env->config()) << name;
-    EXPECT_EQ(scene->dim(), env->dim()) << name;
+    EXPECT_EQ(setup->env(), name);
+    EXPECT_EQ(setup->our_env().name(), name);
+    EXPECT_EQ(setup->our_env().config(), env->config()) << name;
+    EXPECT_EQ(setup->dim(), env->dim()) << name;
   }
-  EXPECT_THROW(make_scene("sphere-10"), UsageError);
+  EXPECT_THROW(make_setup("sphere-10"), UsageError);
 }
 
 TEST(Crosscheck, TolerancesAreTheDocumentedOnes) {

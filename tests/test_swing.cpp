@@ -85,7 +85,7 @@ TEST(SwingConfig, InvalidFieldsAreNamed) {
   expect_field(c, "tangential_keep");
 }
 
-TEST(SwingScene, StableOverTheStiffnessRangeAndPatchesCoverTheCloth) {
+TEST(SwingModel, StableOverTheStiffnessRangeAndPatchesCoverTheCloth) {
   const auto& env = swing("swing-stiffness-single");
   const auto& m = env.model();
   const auto& cfg = env.swing_config();
@@ -122,7 +122,7 @@ TEST(SwingScene, StableOverTheStiffnessRangeAndPatchesCoverTheCloth) {
               0.2, 1e-12);
 }
 
-TEST(SwingScene, TheSwingThrowsTheClothOntoTheFloor) {
+TEST(SwingModel, TheSwingThrowsTheClothOntoTheFloor) {
   // at the reference params (and the box's corners) the cloth is released and lies on the floor
   // at the end, forward of where it started
   for (const std::string name : {"swing-stiffness-mesh", "swing-velocity-mesh"}) {
@@ -150,7 +150,7 @@ TEST(SwingScene, TheSwingThrowsTheClothOntoTheFloor) {
   }
 }
 
-TEST(SwingScene, StretchDuringTheSwingStaysModest) {
+TEST(SwingModel, StretchDuringTheSwingStaysModest) {
   // largest structural-spring strain (l - L0) / L0 over the held part of the episode (steps before
   // the release), with every patch at k_low, the middle and k_high
   const auto& env = swing("swing-stiffness-single");

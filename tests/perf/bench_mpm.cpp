@@ -1,4 +1,4 @@
-// The MLS-MPM engine on a PlasticineLab-sized scene (10,000 von Mises particles, 64^3 grid,
+// The MLS-MPM engine on a PlasticineLab-sized model (10,000 von Mises particles, 64^3 grid,
 // dt 1e-4, 19 substeps x 50 env steps = 950 substeps, a sphere pressing in with soft contact):
 //   - forward episode, particle-substeps per second, 1 and 2 threads;
 //   - gradient episode (forward + checkpointed reverse) against the forward, 1 and 2 threads;
@@ -32,7 +32,7 @@
 #include "envs/registry.hpp"
 #include "tests/perf/allocation_counter.hpp"
 #include "tests/perf/timing_reporter.hpp"
-#include "tests/support/mpm_scenes.hpp"
+#include "tests/support/mpm_models.hpp"
 
 namespace {
 
@@ -44,7 +44,7 @@ constexpr int kEnvSteps = 50;
 
 // PlasticineLab's defaults (MpmConfig, Material): a 0.3 x 0.1 x 0.3 box of uniformly sampled
 // particles (its RollingPin/Writer/Torus shape) and a sphere of radius 0.04 moving into it
-const MpmModel& scene() {
+const MpmModel& plb_sized_model() {
   static const MpmModel model = [] {
     MpmModel m;
     m.materials = {Material{}};
@@ -85,7 +85,7 @@ PhaseTimes forward_phases, gradient_phases, forward_scalar_phases, gradient_scal
 
 void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phases,
          LanePath path = default_lane_path()) {
-  const MpmModel& m = scene();
+  const MpmModel& m = plb_sized_model();
   const testing::SmoothObjective objective;
   ThreadTeam team(static_cast<int>(state.range(0)));
   MpmWorkspace ws(m);
@@ -144,7 +144,7 @@ class AlternatingPaths : public EpisodeObserver {
 double alternating_lanes_seconds = 0.0, alternating_scalar_seconds = 0.0;
 
 void BM_ForwardAlternatingPathsFull(benchmark::State& state) {
-  const MpmModel& m = scene();
+  const MpmModel& m = plb_sized_model();
   const testing::SmoothObjective objective;
   MpmWorkspace ws(m);
   AlternatingPaths paths(ws, default_lane_path());
@@ -162,7 +162,7 @@ double alternating_gradient_lanes_seconds = 0.0, alternating_gradient_scalar_sec
 
 void BM_GradientAlternatingPathsFull(benchmark::State& state) {
   constexpr int kSteps = 5, kRounds = 3;
-  const MpmModel& m = scene();
+  const MpmModel& m = plb_sized_model();
   const testing::SmoothObjective objective;
   MpmWorkspace ws(m);
   const auto a = actions(kSteps);
@@ -211,11 +211,11 @@ BENCHMARK(BM_FluidH5Gradient)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GradientOneEnvStep)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_GradientOneEnvStepScalar)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// peak RSS (MB) of a child process that builds the scene and runs one episode
+// peak RSS (MB) of a child process that builds the model and runs one episode
 double child_peak_rss_mb(bool gradient) {
   const pid_t pid = fork();
   if (pid == 0) {
-    const MpmModel& m = scene();
+    const MpmModel& m = plb_sized_model();
     const testing::SmoothObjective objective;
     MpmWorkspace ws(m);
     const auto a = actions(kEnvSteps);
@@ -274,7 +274,7 @@ int main(int argc, char** argv) {
     const double step_scalar = reporter.seconds("BM_ForwardOneEnvStepScalar/1/real_time");
     const double gstep = reporter.seconds("BM_GradientOneEnvStep/1/real_time");
     const double gstep_scalar = reporter.seconds("BM_GradientOneEnvStepScalar/1/real_time");
-    const double substeps = static_cast<double>(kEnvSteps) * scene().config.substeps;
+    const double substeps = static_cast<double>(kEnvSteps) * plb_sized_model().config.substeps;
     const char* lanes = lane_path_name(default_lane_path());
     std::printf("\nCPU: %s; lanes path: %s (scalar forced by the *Scalar* benchmarks)\n", cpu_model().c_str(), lanes);
     if (alternating_lanes_seconds > 0.0)
@@ -292,8 +292,8 @@ int main(int argc, char** argv) {
     if (gstep > 0.0 && gstep_scalar > 0.0) std::printf(", gradient %.2fx", gstep_scalar / gstep);
     if (step > 0.0 && step_scalar > 0.0) std::printf("\n");
     if (f1 > 0.0) {
-      std::printf("\nscene: %d particles, %dx%dx%d grid, dt %g, %.0f substeps\n", kParticles, scene().config.grid[0],
-                  scene().config.grid[1], scene().config.grid[2], scene().config.dt, substeps);
+      std::printf("\nmodel: %d particles, %dx%dx%d grid, dt %g, %.0f substeps\n", kParticles, plb_sized_model().config.grid[0],
+                  plb_sized_model().config.grid[1], plb_sized_model().config.grid[2], plb_sized_model().config.dt, substeps);
       std::printf("forward: %.2f s = %.2f M particle-substeps/s (1 thread)\n", f1, kParticles * substeps / f1 / 1e6);
       if (g1 > 0.0) std::printf("gradient episode: %.2f s = %.2fx the forward (1 thread)\n", g1, g1 / f1);
       if (f2 > 0.0) std::printf("2 threads: forward %.2fx, gradient %.2fx one thread\n", f1 / f2, g2 > 0 ? g1 / g2 : 0.0);

@@ -1,5 +1,5 @@
 #pragma once
-// Test helper: small MPM scenes built directly on the engine (no task), and a smooth objective
+// Test helper: small MPM models built directly on the engine (no task), and a smooth objective
 // of the particle positions and primitive poses for gradient checks.
 #include <string>
 #include <vector>
@@ -82,7 +82,7 @@ inline mpm::PrimitiveSpec translating_primitive(const char* name, mpm::ShapeKind
 
 // three bodies (plastic, elastic, fluid) on a 32^3 grid and the seven primitives, each touching
 // a body: sphere, capsule, cylinder, torus, box, bowl, rolling pin
-inline mpm::MpmModel every_primitive_scene(int substeps) {
+inline mpm::MpmModel every_primitive_model(int substeps) {
   auto m = empty_model(32, 1.0 / 32, 4e-4, substeps, Vec3(0.0, -5.0, 0.0));
   const double floor = 3.0 / 32;
   add_block(m, "plastic", plastic(400.0, 0.2, 4.0), Vec3(0.15, floor, 0.2), Vec3(0.35, 0.25, 0.4), 2);

@@ -1,4 +1,4 @@
-// The cross-check's scene of `cartpole1` and `cartpole3`: no contact, the tip compared over the
+// The cross-check's setup of `cartpole1` and `cartpole3`: no contact, the tip compared over the
 // whole horizon and the final loss.
 #include <cmath>
 #include <limits>
@@ -7,7 +7,7 @@
 #include "envs/rigid/cartpole_env.hpp"
 #include "reference/bullet_adapter.hpp"
 #include "reference/mujoco_adapter.hpp"
-#include "reference/scene.hpp"
+#include "reference/setup.hpp"
 
 namespace dsb::reference {
 namespace {
@@ -27,10 +27,10 @@ Rollout tip_rollout(const std::string& engine, const std::vector<Eigen::Vector2d
   return r;
 }
 
-class CartpoleScene : public CrosscheckScene {
+class CartpoleSetup : public CrosscheckSetup {
  public:
-  CartpoleScene(const std::string& name, CartpoleConfig cfg)
-      : CrosscheckScene(name), env_(name, std::move(cfg)) {}
+  CartpoleSetup(const std::string& name, CartpoleConfig cfg)
+      : CrosscheckSetup(name), env_(name, std::move(cfg)) {}
   const Env& our_env() const override { return env_; }
   bool contact() const override { return false; }
   Eigen::Vector3d gravity() const override { return {0.0, -env_.model().gravity, 0.0}; }
@@ -83,10 +83,10 @@ class CartpoleScene : public CrosscheckScene {
 
 }  // namespace
 
-SceneEntry cartpole_scene(int links) {
+SetupEntry cartpole_setup(int links) {
   const std::string name = "cartpole" + std::to_string(links);
-  return {name, [name, links]() -> std::unique_ptr<CrosscheckScene> {
-            return std::make_unique<CartpoleScene>(
+  return {name, [name, links]() -> std::unique_ptr<CrosscheckSetup> {
+            return std::make_unique<CartpoleSetup>(
                 name, links == 1 ? CartpoleConfig::one_link() : CartpoleConfig::three_links());
           }};
 }

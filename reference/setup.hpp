@@ -1,8 +1,8 @@
 #pragma once
-// A reference scene: one rigid env as the cross-check sees it in every engine (our simulator,
+// A reference setup: one rigid env as the cross-check sees it in every engine (our simulator,
 // MuJoCo, Bullet), with its seeded parameter vectors and its tolerances. Each rigid env has its
-// scene in its own file (cartpole_scene.cpp, bounce_scene.cpp, pinball_scene.cpp), which also
-// defines the scene's registration entry; scenes.cpp lists the entries, one line per env.
+// setup in its own file (cartpole_setup.cpp, bounce_setup.cpp, pinball_setup.cpp), which also
+// defines the setup's registration entry; setups.cpp lists the entries, one line per env.
 #include <functional>
 #include <limits>
 #include <memory>
@@ -30,21 +30,21 @@ struct Tolerances {
   int bounces = -1;           // |difference of the number of bounces on the ground / floor|
 };
 
-class CrosscheckScene {
+class CrosscheckSetup {
  public:
-  virtual ~CrosscheckScene() = default;
+  virtual ~CrosscheckSetup() = default;
   const std::string& env() const { return env_; }
   // our env, built from the config its registry family uses (a test checks they are equal)
   virtual const Env& our_env() const = 0;
   int dim() const { return our_env().dim(); }
-  virtual bool contact() const = 0;           // a ball scene (events, rebound, bounces apply)
+  virtual bool contact() const = 0;           // a ball setup (events, rebound, bounces apply)
   virtual Eigen::Vector3d gravity() const = 0;  // ours (m/s^2)
   virtual double dt() const = 0;
   // the seeded parameter vectors, drawn from `rng` (crosscheck_vectors seeds it)
   virtual std::vector<std::vector<double>> vectors(Rng& rng) const = 0;
   // the tolerance of `engines` ("ours-mujoco", "ours-bullet", "mujoco-bullet")
   virtual Tolerances tolerances(const std::string& engines) const = 0;
-  // one engine's rollout of the parameters x; the engine models are built once per scene
+  // one engine's rollout of the parameters x; the engine models are built once per setup
   // (the pinball's per vector: its paddles are placed by x)
   virtual Rollout ours(std::span<const double> x) const = 0;
   virtual Rollout mujoco(std::span<const double> x) = 0;
@@ -57,7 +57,7 @@ class CrosscheckScene {
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // outward unit normal (ours)
     bool flat = true;  // false on a paddle's rounded end (the normal turns as the ball moves)
   };
-  // none (an empty name) in a scene without contact
+  // none (an empty name) in a setup without contact
   virtual Surface nearest_surface(std::span<const double> x, const Eigen::Vector3d& p) const;
   // bounces (ContactEvents::bounces) that start on the ground (bounce) or the floor (pinball)
   int floor_bounces(std::span<const double> x, const Rollout& r, const ContactEvents& e) const;
@@ -70,7 +70,7 @@ class CrosscheckScene {
   double rebound(std::span<const double> x, const Rollout& r, const ContactEvents& e) const;
 
  protected:
-  explicit CrosscheckScene(std::string env) : env_(std::move(env)) {}
+  explicit CrosscheckSetup(std::string env) : env_(std::move(env)) {}
 
  private:
   std::string env_;
@@ -81,34 +81,34 @@ class NearestSurface {
  public:
   void consider(const std::string& name, double distance, const Eigen::Vector3d& normal,
                 bool flat = true);
-  const CrosscheckScene::Surface& nearest() const { return nearest_; }
+  const CrosscheckSetup::Surface& nearest() const { return nearest_; }
 
  private:
   double best_ = std::numeric_limits<double>::infinity();
-  CrosscheckScene::Surface nearest_;
+  CrosscheckSetup::Surface nearest_;
 };
 
-// a point of a planar scene (z = 0)
+// a point of a planar setup (z = 0)
 inline Eigen::Vector3d lift(const Eigen::Vector2d& p) { return {p.x(), p.y(), 0.0}; }
 
-// the tolerances every ball scene shares (free flight, first impact, first rebound)
-Tolerances ball_scene_tolerances();
+// the tolerances every ball setup shares (free flight, first impact, first rebound)
+Tolerances ball_setup_tolerances();
 
-// A scene's registration entry: the env's name and the scene's factory.
-struct SceneEntry {
+// A setup's registration entry: the env's name and the setup's factory.
+struct SetupEntry {
   std::string env;
-  std::function<std::unique_ptr<CrosscheckScene>()> make;
+  std::function<std::unique_ptr<CrosscheckSetup>()> make;
 };
-SceneEntry cartpole_scene(int links);          // cartpole_scene.cpp: `cartpole1`, `cartpole3`
-SceneEntry bounce_scene();                     // bounce_scene.cpp: `bounce`
-SceneEntry pinball_scene(int rows, int cols);  // pinball_scene.cpp: `pinball-RxC`
+SetupEntry cartpole_setup(int links);          // cartpole_setup.cpp: `cartpole1`, `cartpole3`
+SetupEntry bounce_setup();                     // bounce_setup.cpp: `bounce`
+SetupEntry pinball_setup(int rows, int cols);  // pinball_setup.cpp: `pinball-RxC`
 
-// the entries, in table order (scenes.cpp)
-const std::vector<SceneEntry>& scene_entries();
+// the entries, in table order (setups.cpp)
+const std::vector<SetupEntry>& setup_entries();
 // the envs the cross-check knows, in table order
 const std::vector<std::string>& crosscheck_envs();
-// the scene of `env`; throws UsageError naming an env the cross-check does not know
-std::unique_ptr<CrosscheckScene> make_scene(const std::string& env);
+// the setup of `env`; throws UsageError naming an env the cross-check does not know
+std::unique_ptr<CrosscheckSetup> make_setup(const std::string& env);
 
 // The seeded parameter vectors of an env (fixed seed, so the table is reproducible). Cartpoles:
 // 8 control sequences uniform in [-0.5, 0.5]; pinballs: 12 angle vectors uniform in [-1, 1];
@@ -122,7 +122,7 @@ Tolerances crosscheck_tolerances(const std::string& env, const std::string& engi
 // every contact episode changes the velocity by at least 2 m/s (no grazes), none starts in the
 // last 15 % of the horizon or the extra quarter (no bounce that a few steps of timing difference
 // move across the end of the episode), and at each one the other surface is more than 0.3 m
-// beyond the contact radius (no bounce into the corner of ground and wall). (bounce_scene.cpp)
+// beyond the contact radius (no bounce into the corner of ground and wall). (bounce_setup.cpp)
 bool bounce_throw_is_clear(const BounceConfig& cfg, std::span<const double> x);
 
 }  // namespace dsb::reference

@@ -1,20 +1,20 @@
-// The cross-check's scenes, one registration line per rigid env (each entry is defined beside
-// its scene), and what is looked up by env name.
+// The cross-check's setups, one registration line per rigid env (each entry is defined beside
+// its setup), and what is looked up by env name.
 #include <algorithm>
 
 #include "common/error.hpp"
 #include "common/rng.hpp"
-#include "reference/scene.hpp"
+#include "reference/setup.hpp"
 
 namespace dsb::reference {
 
-const std::vector<SceneEntry>& scene_entries() {
-  static const std::vector<SceneEntry> entries = {
-      cartpole_scene(1),
-      cartpole_scene(3),
-      bounce_scene(),
-      pinball_scene(1, 2),
-      pinball_scene(4, 4),
+const std::vector<SetupEntry>& setup_entries() {
+  static const std::vector<SetupEntry> entries = {
+      cartpole_setup(1),
+      cartpole_setup(3),
+      bounce_setup(),
+      pinball_setup(1, 2),
+      pinball_setup(4, 4),
   };
   return entries;
 }
@@ -22,14 +22,14 @@ const std::vector<SceneEntry>& scene_entries() {
 const std::vector<std::string>& crosscheck_envs() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> n;
-    for (const auto& e : scene_entries()) n.push_back(e.env);
+    for (const auto& e : setup_entries()) n.push_back(e.env);
     return n;
   }();
   return names;
 }
 
-std::unique_ptr<CrosscheckScene> make_scene(const std::string& env) {
-  const auto& entries = scene_entries();
+std::unique_ptr<CrosscheckSetup> make_setup(const std::string& env) {
+  const auto& entries = setup_entries();
   const auto it = std::find_if(entries.begin(), entries.end(), [&](const auto& e) { return e.env == env; });
   if (it == entries.end()) {
     std::string known;
@@ -42,13 +42,13 @@ std::unique_ptr<CrosscheckScene> make_scene(const std::string& env) {
 std::vector<std::vector<double>> crosscheck_vectors(const std::string& env) {
   // fixed seed: the table is the same on every run
   constexpr std::uint64_t kSeed = 20220711;
-  const auto scene = make_scene(env);
+  const auto setup = make_setup(env);
   Rng rng(kSeed ^ fnv1a64(env));
-  return scene->vectors(rng);
+  return setup->vectors(rng);
 }
 
 Tolerances crosscheck_tolerances(const std::string& env, const std::string& engines) {
-  return make_scene(env)->tolerances(engines);
+  return make_setup(env)->tolerances(engines);
 }
 
 }  // namespace dsb::reference

@@ -1,4 +1,4 @@
-#include "reference/scene.hpp"
+#include "reference/setup.hpp"
 
 #include <limits>
 
@@ -12,12 +12,12 @@ void NearestSurface::consider(const std::string& name, double distance,
   }
 }
 
-CrosscheckScene::Surface CrosscheckScene::nearest_surface(std::span<const double>,
+CrosscheckSetup::Surface CrosscheckSetup::nearest_surface(std::span<const double>,
                                                           const Eigen::Vector3d&) const {
   return {};
 }
 
-int CrosscheckScene::floor_bounces(std::span<const double> x, const Rollout& r,
+int CrosscheckSetup::floor_bounces(std::span<const double> x, const Rollout& r,
                                    const ContactEvents& e) const {
   int n = 0;
   for (std::size_t i = 0; i < e.episode_starts.size(); ++i) {
@@ -28,7 +28,7 @@ int CrosscheckScene::floor_bounces(std::span<const double> x, const Rollout& r,
   return n;
 }
 
-double CrosscheckScene::rebound(std::span<const double> x, const Rollout& r,
+double CrosscheckSetup::rebound(std::span<const double> x, const Rollout& r,
                                 const ContactEvents& e) const {
   if (e.first_impact < 0) return std::numeric_limits<double>::quiet_NaN();
   const int a = e.episode_starts.front(), b = e.episode_ends.front();
@@ -44,7 +44,7 @@ double CrosscheckScene::rebound(std::span<const double> x, const Rollout& r,
   return -v_out.dot(n) / v_in.dot(n);
 }
 
-Tolerances ball_scene_tolerances() {
+Tolerances ball_setup_tolerances() {
   // the figures behind every number are in reference/README.md ("Tolerances")
   Tolerances t;
   // free flight is the same recursion (measured: bit-identical), contact starts at the same

@@ -1,4 +1,4 @@
-// The cross-check's scene of `bounce`: a ball thrown against the ground and a wall; free flight,
+// The cross-check's setup of `bounce`: a ball thrown against the ground and a wall; free flight,
 // first impact, first rebound and ground bounces compared, final positions against Bullet.
 #include <algorithm>
 #include <memory>
@@ -7,7 +7,7 @@
 #include "envs/rigid/bounce_env.hpp"
 #include "reference/bullet_adapter.hpp"
 #include "reference/mujoco_adapter.hpp"
-#include "reference/scene.hpp"
+#include "reference/setup.hpp"
 
 namespace dsb::reference {
 
@@ -48,9 +48,9 @@ Rollout ball_rollout(const std::string& engine, const std::vector<BallState>& st
   return r;
 }
 
-class BounceScene : public CrosscheckScene {
+class BounceSetup : public CrosscheckSetup {
  public:
-  BounceScene() : CrosscheckScene("bounce"), env_(BounceConfig{}) {}
+  BounceSetup() : CrosscheckSetup("bounce"), env_(BounceConfig{}) {}
   const Env& our_env() const override { return env_; }
   bool contact() const override { return true; }
   Eigen::Vector3d gravity() const override { return {0.0, -env_.model().gravity, 0.0}; }
@@ -68,7 +68,7 @@ class BounceScene : public CrosscheckScene {
   }
 
   Tolerances tolerances(const std::string& engines) const override {
-    Tolerances t = ball_scene_tolerances();
+    Tolerances t = ball_setup_tolerances();
     // ground bounces: equal on every clear throw (374 of 374, all pairs)
     t.bounces = 0;
     // Bullet's friction is Coulomb's, like ours: final positions measured within 0.39 m; MuJoCo
@@ -110,8 +110,8 @@ class BounceScene : public CrosscheckScene {
 
 }  // namespace
 
-SceneEntry bounce_scene() {
-  return {"bounce", []() -> std::unique_ptr<CrosscheckScene> { return std::make_unique<BounceScene>(); }};
+SetupEntry bounce_setup() {
+  return {"bounce", []() -> std::unique_ptr<CrosscheckSetup> { return std::make_unique<BounceSetup>(); }};
 }
 
 }  // namespace dsb::reference

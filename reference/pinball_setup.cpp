@@ -1,4 +1,4 @@
-// The cross-check's scene of `pinball-RxC`: a ball dropped through paddles at the parameters'
+// The cross-check's setup of `pinball-RxC`: a ball dropped through paddles at the parameters'
 // angles; free flight, first impact and first rebound compared (after a few paddle hits the
 // paths are chaotic: final positions and bounce counts are reported only).
 #include <cmath>
@@ -8,7 +8,7 @@
 #include "envs/rigid/pinball_env.hpp"
 #include "reference/bullet_adapter.hpp"
 #include "reference/mujoco_adapter.hpp"
-#include "reference/scene.hpp"
+#include "reference/setup.hpp"
 
 namespace dsb::reference {
 namespace {
@@ -24,10 +24,10 @@ Rollout ball_rollout(const std::string& engine, const std::vector<Ball2State>& s
   return r;
 }
 
-class PinballScene : public CrosscheckScene {
+class PinballSetup : public CrosscheckSetup {
  public:
-  PinballScene(const std::string& name, PinballConfig cfg)
-      : CrosscheckScene(name), env_(name, std::move(cfg)) {}
+  PinballSetup(const std::string& name, PinballConfig cfg)
+      : CrosscheckSetup(name), env_(name, std::move(cfg)) {}
   const Env& our_env() const override { return env_; }
   bool contact() const override { return true; }
   Eigen::Vector3d gravity() const override { return {0.0, -env_.model().gravity, 0.0}; }
@@ -44,7 +44,7 @@ class PinballScene : public CrosscheckScene {
     return xs;
   }
 
-  Tolerances tolerances(const std::string&) const override { return ball_scene_tolerances(); }
+  Tolerances tolerances(const std::string&) const override { return ball_setup_tolerances(); }
 
   Rollout ours(std::span<const double> x) const override {
     const auto states = env_.trajectory(x);
@@ -90,10 +90,10 @@ class PinballScene : public CrosscheckScene {
 
 }  // namespace
 
-SceneEntry pinball_scene(int rows, int cols) {
+SetupEntry pinball_setup(int rows, int cols) {
   const std::string name = "pinball-" + std::to_string(rows) + "x" + std::to_string(cols);
-  return {name, [name, rows, cols]() -> std::unique_ptr<CrosscheckScene> {
-            return std::make_unique<PinballScene>(name, PinballConfig::grid(rows, cols));
+  return {name, [name, rows, cols]() -> std::unique_ptr<CrosscheckSetup> {
+            return std::make_unique<PinballSetup>(name, PinballConfig::grid(rows, cols));
           }};
 }
 
