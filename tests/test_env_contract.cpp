@@ -187,8 +187,9 @@ TEST_P(EnvContract, GradientAgreesWithCentralDifferencesAlongSeededDirections) {
   int agree = 0, same_sign = 0, points = 0;
   auto xs = contract_points(env->dim(), smooth ? kSeededPoints : kPiecewisePoints);
   // not at the centre, where every command is exactly 0: fluid-h5's loss jumps by -1.2e-5 just
-  // beside it along the first seeded direction, and plb-writer-h5's value there lies 1e-7 above
-  // its limits from both sides (docs/envs.md, the env contract); the seeded points are generic
+  // beside it (the resting bowl holds grid nodes on its shell's mid-surface, where the SDF's
+  // normal flips), and plb-writer-h5's value there lies 1e-7 above its limits from both sides
+  // (docs/envs.md, the env contract); the seeded points are generic
   xs.erase(xs.begin());
   for (const auto& x : xs) {
     const DirectionalCheck c = check_direction(*env, x, directions);
