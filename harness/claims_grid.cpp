@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "common/error.hpp"
+#include "optimizers/registry.hpp"
 
 namespace dsb {
 namespace {
@@ -118,10 +119,22 @@ std::vector<GridRequest> claims_requests(const GridRequest& base, const std::vec
     }
     out.push_back(std::move(r));
   }
-  for (const auto& [owner, settings] : base.knobs)
-    if (!owners_used.count(owner))
-      throw UsageError("--set " + owner + "." + settings.begin()->first + ": " + owner +
-                       " is neither an env nor an optimizer of the claims grid");
+  for (const auto& [owner, settings] : base.knobs) {
+    if (owners_used.count(owner)) continue;
+    const std::string what = "--set " + owner + "." + settings.begin()->first + ": ";
+    const bool claims_env =
+        std::any_of(envs.begin(), envs.end(), [&](const ClaimsEnv& x) { return x.env == owner; });
+    const auto& entries = optimizer_entries();
+    const bool optimizer =
+        std::any_of(entries.begin(), entries.end(), [&](const OptimizerEntry& o) { return o.name == owner; });
+    const bool claims_optimizer = optimizer && std::any_of(envs.begin(), envs.end(), [&](const ClaimsEnv& x) {
+      return x.every_optimizer || std::find(x.optimizers.begin(), x.optimizers.end(), owner) != x.optimizers.end();
+    });
+    if (claims_env) throw UsageError(what + "env " + owner + " is in the claims grid, but --env leaves it out");
+    if (claims_optimizer)
+      throw UsageError(what + "optimizer " + owner + " runs on none of the claims grid's envs that --env keeps");
+    throw UsageError(what + owner + " is neither an env nor an optimizer of the claims grid");
+  }
   return out;
 }
 

@@ -100,7 +100,19 @@ TEST_F(ClaimsCli, BadCombinationsExitTwoNamingTheValue) {
   EXPECT_NE(other_env.err.find("--env sphere-10: no claim"), std::string::npos) << other_env.err;
   const auto knob = harness("plan --claims --env cartpole3 --set bo.init_points=3 --db " + path("none.sqlite"));
   EXPECT_EQ(knob.code, 2);
-  EXPECT_NE(knob.err.find("bo is neither an env nor an optimizer of the claims grid"), std::string::npos) << knob.err;
+  EXPECT_NE(knob.err.find("--set bo.init_points: optimizer bo runs on none of the claims grid's envs that --env keeps"),
+            std::string::npos)
+      << knob.err;
+  const auto left_out = harness("plan --claims --env cartpole3 --set plb-pinch.target=t.npy --db " + path("none.sqlite"));
+  EXPECT_EQ(left_out.code, 2);
+  EXPECT_NE(left_out.err.find("--set plb-pinch.target: env plb-pinch is in the claims grid, but --env leaves it out"),
+            std::string::npos)
+      << left_out.err;
+  const auto neither = harness("plan --claims --env cartpole3 --set sphere-10.x=1 --db " + path("none.sqlite"));
+  EXPECT_EQ(neither.code, 2);
+  EXPECT_NE(neither.err.find("--set sphere-10.x: sphere-10 is neither an env nor an optimizer of the claims grid"),
+            std::string::npos)
+      << neither.err;
   EXPECT_FALSE(std::filesystem::exists(path("none.sqlite")));
 }
 
