@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include <unistd.h>
@@ -179,6 +181,64 @@ TEST(PpoLearning, BeatsRandomSearchOnTheReachEnv) {
   std::printf("reach env, 1,000 episodes, 5 seeds: median best loss ppo %.4g, random %.4g\n", median(ppo),
               median(random));
   EXPECT_LT(median(ppo), median(random));
+}
+
+// The reach env observed through a lens that multiplies the position by 1e12: finite, but far past
+// the +-1e6 that the RL optimizers clamp observations to (rl_core.hpp sanitize_observation).
+class HugeObservationReach : public Env {
+ public:
+  HugeObservationReach() : Env(testing::ReachEnv().info()) {}
+  nlohmann::json config() const override { return inner_.config(); }
+  class Rl : public RlEnv {
+   public:
+    explicit Rl(std::unique_ptr<RlEnv> inner) : inner_(std::move(inner)) {}
+    int observation_dim() const override { return inner_->observation_dim(); }
+    int action_dim() const override { return inner_->action_dim(); }
+    int horizon() const override { return inner_->horizon(); }
+    int action_repeat() const override { return inner_->action_repeat(); }
+    void reset() override { inner_->reset(); }
+    std::vector<double> observe() const override {
+      std::vector<double> o = inner_->observe();
+      o[0] *= 1e12;
+      return o;
+    }
+    void step(std::span<const double> a) override { inner_->step(a); }
+    bool done() const override { return inner_->done(); }
+    double final_loss() const override { return inner_->final_loss(); }
+
+   private:
+    std::unique_ptr<RlEnv> inner_;
+  };
+  std::unique_ptr<RlEnv> make_rl() const override { return std::make_unique<Rl>(inner_.make_rl()); }
+
+ protected:
+  double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override {
+    return inner_.loss(x, ws, team);
+  }
+  double rollout_with_grad(std::span<const double>, std::span<double>, Workspace&, ThreadTeam&) const override {
+    throw std::logic_error("huge observation reach: no gradient");
+  }
+
+ private:
+  testing::ReachEnv inner_;
+};
+
+TEST(PpoRuns, HugeObservationsAreClampedAndCounted) {
+  // 30 episodes x 20 decisions: the position is 0 only at each reset (and wherever the actions
+  // cancel exactly), so nearly every one of the 600 observations after a step is clamped
+  HugeObservationReach huge;
+  nlohmann::json d;
+  const double best = best_of(huge, 30, "ppo", 5, &d);
+  std::printf("huge observations: %lld components clamped in 30 episodes, best loss %.4g\n",
+              static_cast<long long>(d["observations_sanitized"].get<std::int64_t>()), best);
+  EXPECT_GT(d["observations_sanitized"].get<std::int64_t>(), 500);
+  EXPECT_LE(d["observations_sanitized"].get<std::int64_t>(), 600);
+  EXPECT_TRUE(std::isfinite(best));
+  for (const double s : d["log_std"].get<std::vector<double>>()) EXPECT_TRUE(std::isfinite(s));
+  // the plain reach env's observations are left as they are
+  nlohmann::json plain;
+  best_of(testing::ReachEnv(), 30, "ppo", 5, &plain);
+  EXPECT_EQ(plain["observations_sanitized"].get<std::int64_t>(), 0);
 }
 
 TEST(PpoRuns, ExactBudgetAndIdenticalReruns) {

@@ -167,6 +167,7 @@ class Ppo : public Optimizer {
     diag_ = nlohmann::json::object();
     episodes_ = EpisodeLosses(cfg_.failed_loss, kBlock);
     updates_ = 0;
+    obs_sanitized_ = 0;
     last_ = {};
     const RlSpec spec = f.rl_spec();
     const int O = spec.observation_dim, A = spec.action_dim, N = cfg_.n_steps;
@@ -191,6 +192,7 @@ class Ppo : public Optimizer {
         for (int t = 0; t < N; ++t) {
           if (!open) {
             f.rl_reset(obs);
+            obs_sanitized_ += sanitize_observation(obs);
             open = true;
           }
           const Eigen::Map<const Eigen::VectorXd> o(obs.data(), O);
@@ -204,6 +206,7 @@ class Ppo : public Optimizer {
             clipped[k] = std::clamp(action[k], -1.0, 1.0);
           }
           const RlStep step = f.rl_step(clipped, next_obs);
+          obs_sanitized_ += sanitize_observation(next_obs);
           // sparse reward: -loss at the last decision (a failed episode's stand-in: rl_core.hpp)
           reward_buf[t] = step.done ? -episodes_.finish_episode(step.loss) : 0.0;
           done_buf[t] = step.done ? 1.0 : 0.0;
@@ -267,6 +270,7 @@ class Ppo : public Optimizer {
   void finish(const PpoNetworks& nets) {
     episodes_.put_diagnostics(diag_);
     diag_["updates"] = updates_;
+    diag_["observations_sanitized"] = obs_sanitized_;
     diag_["policy_hash"] = params_digest({nets.policy.params(), nets.value.params(), nets.log_std});
     diag_["log_std"] = nets.log_std;
     diag_["last_update"] = {{"policy_loss", last_.policy_loss}, {"value_loss", last_.value_loss},
@@ -278,7 +282,7 @@ class Ppo : public Optimizer {
   std::string name_ = "ppo";
   nlohmann::json diag_ = nlohmann::json::object();
   EpisodeLosses episodes_{FailedEpisodeLoss{}, kBlock};
-  std::int64_t updates_ = 0;
+  std::int64_t updates_ = 0, obs_sanitized_ = 0;  // observations clamped to +-1e6 or NaN set to 0 (rl_core.hpp)
   PpoLoss last_;
 };
 
