@@ -48,13 +48,10 @@ Rollout ball_rollout(const std::string& engine, const std::vector<BallState>& st
   return r;
 }
 
-class BounceSetup : public CrosscheckSetup {
+class BounceSetup : public RigidSetup<BounceEnv> {
  public:
-  BounceSetup() : CrosscheckSetup("bounce"), env_(BounceConfig{}) {}
-  const Env& our_env() const override { return env_; }
+  BounceSetup() : RigidSetup("bounce", BounceConfig{}) {}
   bool contact() const override { return true; }
-  Eigen::Vector3d gravity() const override { return {0.0, -env_.model().gravity, 0.0}; }
-  double dt() const override { return env_.model().dt; }
 
   std::vector<std::vector<double>> vectors(Rng& rng) const override {
     // throws over the whole box, kept when they are clear (not grazing, no bounce at the end)
@@ -103,7 +100,6 @@ class BounceSetup : public CrosscheckSetup {
   }
 
  private:
-  BounceEnv env_;
   std::optional<MujocoBounce> mujoco_;
   std::unique_ptr<BulletBounce> bullet_;
 };

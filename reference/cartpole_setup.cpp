@@ -27,24 +27,14 @@ Rollout tip_rollout(const std::string& engine, const std::vector<Eigen::Vector2d
   return r;
 }
 
-class CartpoleSetup : public CrosscheckSetup {
+class CartpoleSetup : public RigidSetup<CartpoleEnv> {
  public:
-  CartpoleSetup(const std::string& name, CartpoleConfig cfg)
-      : CrosscheckSetup(name), env_(name, std::move(cfg)) {}
-  const Env& our_env() const override { return env_; }
+  CartpoleSetup(const std::string& name, CartpoleConfig cfg) : RigidSetup(name, name, std::move(cfg)) {}
   bool contact() const override { return false; }
-  Eigen::Vector3d gravity() const override { return {0.0, -env_.model().gravity, 0.0}; }
-  double dt() const override { return env_.model().dt; }
 
   std::vector<std::vector<double>> vectors(Rng& rng) const override {
     // open-loop controls uniform in [-0.5, 0.5] (half the speed and torque bounds)
-    std::vector<std::vector<double>> xs;
-    for (int k = 0; k < 8; ++k) {
-      std::vector<double> x(env_.dim());
-      for (auto& xi : x) xi = rng.uniform(-0.5, 0.5);
-      xs.push_back(std::move(x));
-    }
-    return xs;
+    return uniform_vectors(rng, 8, env_.dim(), -0.5, 0.5);
   }
 
   Tolerances tolerances(const std::string& engines) const override {
@@ -76,7 +66,6 @@ class CartpoleSetup : public CrosscheckSetup {
   }
 
  private:
-  CartpoleEnv env_;
   std::optional<MujocoCartpole> mujoco_;
   std::unique_ptr<BulletCartpole> bullet_;
 };

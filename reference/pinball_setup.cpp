@@ -24,24 +24,14 @@ Rollout ball_rollout(const std::string& engine, const std::vector<Ball2State>& s
   return r;
 }
 
-class PinballSetup : public CrosscheckSetup {
+class PinballSetup : public RigidSetup<PinballEnv> {
  public:
-  PinballSetup(const std::string& name, PinballConfig cfg)
-      : CrosscheckSetup(name), env_(name, std::move(cfg)) {}
-  const Env& our_env() const override { return env_; }
+  PinballSetup(const std::string& name, PinballConfig cfg) : RigidSetup(name, name, std::move(cfg)) {}
   bool contact() const override { return true; }
-  Eigen::Vector3d gravity() const override { return {0.0, -env_.model().gravity, 0.0}; }
-  double dt() const override { return env_.model().dt; }
 
   std::vector<std::vector<double>> vectors(Rng& rng) const override {
     // paddle angles over the whole range
-    std::vector<std::vector<double>> xs;
-    for (int k = 0; k < 12; ++k) {
-      std::vector<double> x(env_.dim());
-      for (auto& xi : x) xi = rng.uniform(-1.0, 1.0);
-      xs.push_back(std::move(x));
-    }
-    return xs;
+    return uniform_vectors(rng, 12, env_.dim(), -1.0, 1.0);
   }
 
   Tolerances tolerances(const std::string&) const override { return ball_setup_tolerances(); }
@@ -83,9 +73,6 @@ class PinballSetup : public CrosscheckSetup {
     }
     return s.nearest();
   }
-
- private:
-  PinballEnv env_;
 };
 
 }  // namespace

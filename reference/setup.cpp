@@ -44,6 +44,16 @@ double CrosscheckSetup::rebound(std::span<const double> x, const Rollout& r,
   return -v_out.dot(n) / v_in.dot(n);
 }
 
+std::vector<std::vector<double>> uniform_vectors(Rng& rng, int n, int dim, double lo, double hi) {
+  std::vector<std::vector<double>> xs;
+  for (int k = 0; k < n; ++k) {
+    std::vector<double> x(static_cast<std::size_t>(dim));
+    for (auto& xi : x) xi = rng.uniform(lo, hi);
+    xs.push_back(std::move(x));
+  }
+  return xs;
+}
+
 Tolerances ball_setup_tolerances() {
   // the figures behind every number are in reference/README.md ("Tolerances")
   Tolerances t;

@@ -8,6 +8,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -75,6 +76,25 @@ class CrosscheckSetup {
  private:
   std::string env_;
 };
+
+// What the rigid setups share: our env (EnvT, built from the setup's arguments), gravity along -y
+// and the step, both read from the env's model.
+template <class EnvT>
+class RigidSetup : public CrosscheckSetup {
+ public:
+  const Env& our_env() const override { return env_; }
+  Eigen::Vector3d gravity() const override { return {0.0, -env_.model().gravity, 0.0}; }
+  double dt() const override { return env_.model().dt; }
+
+ protected:
+  template <class... EnvArgs>
+  explicit RigidSetup(std::string name, EnvArgs&&... env_args)
+      : CrosscheckSetup(std::move(name)), env_(std::forward<EnvArgs>(env_args)...) {}
+  EnvT env_;
+};
+
+// n parameter vectors of dim values, uniform in [lo, hi], drawn vector by vector
+std::vector<std::vector<double>> uniform_vectors(Rng& rng, int n, int dim, double lo, double hi);
 
 // picks the nearest of candidate surfaces, considered in order (the first of equal distances)
 class NearestSurface {
