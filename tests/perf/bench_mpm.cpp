@@ -1,7 +1,8 @@
 // The MLS-MPM engine on a PlasticineLab-sized model (10,000 von Mises particles, 64^3 grid,
 // dt 1e-4, 19 substeps x 50 env steps = 950 substeps, a sphere pressing in with soft contact):
 //   - forward episode, particle-substeps per second, 1 and 2 threads;
-//   - gradient episode (forward + checkpointed reverse) against the forward, 1 and 2 threads;
+//   - gradient episode (forward + checkpointed reverse) against the forward, 1 and 2 threads, and with
+//     every substep's tape kept from the forward pass (no recomputation), 1 thread;
 //   - the phase breakdown of both (stress = F update + SVD + return mapping + stress);
 //   - peak resident memory of a process that runs one gradient episode, against the full
 //     history's size (950 states of every particle).
@@ -81,10 +82,12 @@ std::vector<double> actions(int env_steps) {
   return a;
 }
 
-PhaseTimes forward_phases, gradient_phases, forward_scalar_phases, gradient_scalar_phases;
+PhaseTimes forward_phases, gradient_phases, gradient_taped_phases, forward_scalar_phases, gradient_scalar_phases;
 
+// tape: the bytes of substep tapes the forward pass may keep (episode.hpp; 0 recomputes every env
+// step in the reverse pass, kTapeEverything keeps them all)
 void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phases,
-         LanePath path = default_lane_path()) {
+         LanePath path = default_lane_path(), std::size_t tape = 0) {
   const MpmModel& m = plb_sized_model();
   const testing::SmoothObjective objective;
   ThreadTeam team(static_cast<int>(state.range(0)));
@@ -92,11 +95,11 @@ void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phas
   ws.lanes = path;
   const auto a = actions(env_steps);
   std::vector<double> g(a.size());
-  if (gradient) run_episode_with_grad(m, ws, team, a, env_steps, objective, g);  // size the buffers
+  if (gradient) run_episode_with_grad(m, ws, team, a, env_steps, objective, g, tape);  // size the buffers
   PhaseTimes times;
   ws.phase_times = &times;
   for (auto _ : state) {
-    const double loss = gradient ? run_episode_with_grad(m, ws, team, a, env_steps, objective, g)
+    const double loss = gradient ? run_episode_with_grad(m, ws, team, a, env_steps, objective, g, tape)
                                  : run_episode(m, ws, team, a, env_steps, objective);
     benchmark::DoNotOptimize(loss);
   }
@@ -113,6 +116,9 @@ void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phas
 
 void BM_ForwardEpisodeFull(benchmark::State& s) { run(s, kEnvSteps, false, &forward_phases); }
 void BM_GradientEpisodeFull(benchmark::State& s) { run(s, kEnvSteps, true, &gradient_phases); }
+void BM_GradientEpisodeTapedFull(benchmark::State& s) {
+  run(s, kEnvSteps, true, &gradient_taped_phases, default_lane_path(), kTapeEverything);
+}
 void BM_ForwardEpisodeScalarFull(benchmark::State& s) {
   run(s, kEnvSteps, false, &forward_scalar_phases, LanePath::scalar);
 }
@@ -188,6 +194,7 @@ void BM_GradientOneEnvStep(benchmark::State& s) { run(s, 1, true, nullptr); }
 void BM_GradientOneEnvStepScalar(benchmark::State& s) { run(s, 1, true, nullptr, LanePath::scalar); }
 BENCHMARK(BM_ForwardEpisodeFull)->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_GradientEpisodeFull)->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK(BM_GradientEpisodeTapedFull)->Arg(1)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_ForwardEpisodeScalarFull)->Arg(1)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_GradientEpisodeScalarFull)->Arg(1)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_ForwardOneEnvStep)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -268,6 +275,7 @@ int main(int argc, char** argv) {
     const double f2 = reporter.seconds("BM_ForwardEpisodeFull/2/iterations:1/real_time");
     const double g1 = reporter.seconds("BM_GradientEpisodeFull/1/iterations:1/real_time");
     const double g2 = reporter.seconds("BM_GradientEpisodeFull/2/iterations:1/real_time");
+    const double gt = reporter.seconds("BM_GradientEpisodeTapedFull/1/iterations:1/real_time");
     const double fs = reporter.seconds("BM_ForwardEpisodeScalarFull/1/iterations:1/real_time");
     const double gs = reporter.seconds("BM_GradientEpisodeScalarFull/1/iterations:1/real_time");
     const double step = reporter.seconds("BM_ForwardOneEnvStep/1/real_time");
@@ -296,6 +304,9 @@ int main(int argc, char** argv) {
                   plb_sized_model().config.grid[1], plb_sized_model().config.grid[2], plb_sized_model().config.dt, substeps);
       std::printf("forward: %.2f s = %.2f M particle-substeps/s (1 thread)\n", f1, kParticles * substeps / f1 / 1e6);
       if (g1 > 0.0) std::printf("gradient episode: %.2f s = %.2fx the forward (1 thread)\n", g1, g1 / f1);
+      if (gt > 0.0)
+        std::printf("gradient episode with every substep's tape kept: %.2f s = %.2fx the forward (1 thread)\n", gt,
+                    gt / f1);
       if (f2 > 0.0) std::printf("2 threads: forward %.2fx, gradient %.2fx one thread\n", f1 / f2, g2 > 0 ? g1 / g2 : 0.0);
       if (fs > 0.0)
         std::printf("scalar path: forward %.2f s = %.2f M particle-substeps/s, gradient %.2f s (1 thread)\n", fs,
@@ -305,6 +316,7 @@ int main(int argc, char** argv) {
       if (fs > 0.0) std::printf("\n");
       print_phases("forward", forward_phases);
       print_phases("gradient", gradient_phases);
+      print_phases("gradient, taped,", gradient_taped_phases);
       print_phases("forward, scalar path,", forward_scalar_phases);
       print_phases("gradient, scalar path,", gradient_scalar_phases);
     }
