@@ -217,7 +217,7 @@ RlStep BudgetedObjective::rl_step(std::span<const double> action, std::span<doub
     std::copy(a.observation.begin(), a.observation.end(), observation.begin());
     if (!a.done) return {false, 0.0};
     rl_episode_ = {};
-    return {true, finish_episode({}, a.loss, false, a.wall_s, std::numeric_limits<double>::quiet_NaN())};
+    return {true, finish_episode({}, a.loss, false, a.wall_s, a.metric)};
   }
   journal_.begin_live_call();
   // one decision: the action held for action_repeat env steps, or until the episode ends
@@ -232,13 +232,14 @@ RlStep BudgetedObjective::rl_step(std::span<const double> action, std::span<doub
   a.done = rl.done() || blown_up;
   a.loss = !a.done ? 0.0 : blown_up ? std::numeric_limits<double>::quiet_NaN() : rl.final_loss();
   a.wall_s = a.done ? seconds_since(rl_episode_.start) : 0.0;
+  if (a.done && !blown_up) a.metric = rl.final_metric();
   if (journal_.recording()) {
     a.observation.assign(observation.begin(), observation.end());
     journal_.write(ReplayKind::rl_step, action, a.payload());
   }
   if (!a.done) return {false, 0.0};
   rl_episode_ = {};
-  return {true, finish_episode({}, a.loss, false, a.wall_s, std::numeric_limits<double>::quiet_NaN())};
+  return {true, finish_episode({}, a.loss, false, a.wall_s, a.metric)};
 }
 
 }  // namespace dsb

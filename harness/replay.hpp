@@ -7,8 +7,10 @@
 // entry the recorded answer is served instead of simulating; from the first call past the
 // journal (or one that differs) the run goes on live. A resumed run's evals therefore equal an
 // uninterrupted run's. Entries are deleted when the run ends.
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -56,22 +58,28 @@ struct EpisodeAnswer {
 };
 
 // What an RL decision returned: {done (1 or 0), the episode's raw final loss (0 until done), the
-// episode's wall_s (0 until done)} then the observation.
+// episode's wall_s (0 until done), the env's second metric (NaN until done, and for an env
+// without one)} then the observation. Journals written before the metric was kept lack it (3
+// values before the observation): they are read with the metric NaN.
 struct RlStepAnswer {
   bool done = false;
-  double loss = 0.0, wall_s = 0.0;
+  double loss = 0.0, wall_s = 0.0, metric = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> observation;
 
   std::vector<double> payload() const {
-    std::vector<double> p = {done ? 1.0 : 0.0, loss, wall_s};
+    std::vector<double> p = {done ? 1.0 : 0.0, loss, wall_s, metric};
     p.insert(p.end(), observation.begin(), observation.end());
     return p;
   }
   static RlStepAnswer from(const ReplayEntry& e, std::size_t observation_size) {
-    if (e.payload.size() != 3 + observation_size)
-      throw ReplayDiverged("resume: a journal RL step of " + std::to_string(e.payload.size()) + " values, expected " +
-                           std::to_string(3 + observation_size));
-    return {e.payload[0] != 0.0, e.payload[1], e.payload[2], {e.payload.begin() + 3, e.payload.end()}};
+    const std::size_t n = e.payload.size();
+    if (n != 4 + observation_size && n != 3 + observation_size)
+      throw ReplayDiverged("resume: a journal RL step of " + std::to_string(n) + " values, expected " +
+                           std::to_string(4 + observation_size));
+    const std::size_t head = n - observation_size;
+    const double metric = head == 4 ? e.payload[3] : std::numeric_limits<double>::quiet_NaN();
+    return {e.payload[0] != 0.0, e.payload[1], e.payload[2], metric,
+            {e.payload.begin() + static_cast<std::ptrdiff_t>(head), e.payload.end()}};
   }
 };
 

@@ -2,6 +2,7 @@
 // of points outside the box, and identical reruns.
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -231,6 +232,60 @@ TEST(BudgetRl, EpisodesAreRecordedWithTheEnvsFinalLossAndCountAgainstTheBudget) 
     // the budget is spent: no fourth episode, and nothing more is recorded
     EXPECT_THROW(f.rl_reset(obs), BudgetExhausted);
     EXPECT_EQ(f.used(), 3);
+  }
+}
+
+// Listens without committing (the journal is taken at the end).
+class QuietListener : public EpisodeListener {
+ public:
+  void episode_finished(BudgetedObjective&, bool) override {}
+};
+
+TEST(BudgetRl, AnRlEpisodeKeepsTheEnvsMetricAndReplaysIt) {
+  const auto env = make_env("fluid-h5");  // metric cube_height; one decision an episode
+  const std::vector<double> action = {0.4, -0.3};
+  QuietListener listener;
+  BudgetedObjective live(*env, 2);
+  live.set_listener(&listener, nullptr);
+  std::vector<double> obs(live.rl_spec().observation_dim);
+  for (int episode = 0; episode < 2; ++episode) {
+    live.rl_reset(obs);
+    for (RlStep r; !r.done;) r = live.rl_step(action, obs);
+  }
+  const auto direct = env->make_rl();
+  direct->reset();
+  while (!direct->done()) direct->step(action);
+  ASSERT_EQ(live.evals().size(), 2u);
+  const double metric = live.evals()[0].metric;
+  EXPECT_TRUE(std::isfinite(metric));
+  EXPECT_GT(metric, 0.0);  // the cube's centre is above the tank floor
+  EXPECT_EQ(metric, direct->final_metric());
+  EXPECT_EQ(live.evals()[1].metric, metric);
+  std::int64_t first = 0;
+  const std::vector<ReplayEntry> journal = live.take_journal(first);
+  // replayed from the journal: the same metric; from a journal written before the metric was
+  // kept (3 values before the observation), NaN and the same losses
+  for (const bool old_layout : {false, true}) {
+    std::vector<ReplayEntry> entries = journal;
+    if (old_layout)
+      for (auto& e : entries)
+        if (e.kind == ReplayKind::rl_step) e.payload.erase(e.payload.begin() + 3);
+    BudgetedObjective replayed(*env, 2);
+    replayed.set_replay(entries, 2);
+    for (int episode = 0; episode < 2; ++episode) {
+      replayed.rl_reset(obs);
+      for (RlStep r; !r.done;) r = replayed.rl_step(action, obs);
+    }
+    EXPECT_EQ(replayed.replayed_episodes(), 2) << old_layout;
+    ASSERT_EQ(replayed.evals().size(), 2u);
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_EQ(replayed.evals()[k].loss, live.evals()[k].loss) << old_layout;
+      if (old_layout) {
+        EXPECT_TRUE(std::isnan(replayed.evals()[k].metric));
+      } else {
+        EXPECT_EQ(replayed.evals()[k].metric, metric);
+      }
+    }
   }
 }
 

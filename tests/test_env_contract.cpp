@@ -18,7 +18,8 @@
 //    check; Smoothness::piecewise envs (contact switches) in their direction statistics only;
 //  - the same loss and gradient bits for 1 and 2 threads;
 //  - the RL view, where there is one: rl_actions(x) replayed step by step ends with final_loss()
-//    equal to loss(x), with observations of the declared size, finite;
+//    equal to loss(x) and final_metric() equal to the rollout's episode_metric(), with
+//    observations of the declared size, finite;
 //  - frames, where the env is renderable: steps from 0 upwards, a state item in each, finite points.
 #include <cmath>
 #include <cstdio>
@@ -258,11 +259,21 @@ TEST_P(EnvContract, RlViewReplaysTheLossOfItsActions) {
     }
     EXPECT_TRUE(rl->done());
     EXPECT_EQ(rl->observe().size(), static_cast<std::size_t>(rl->observation_dim()));
-    const double direct = env->loss(x), replay = rl->final_loss();
+    const auto ws = env->make_workspace();
+    const double direct = env->loss(x, *ws, serial_team()), replay = rl->final_loss();
     if (tolerance == 0.0) {
       EXPECT_EQ(replay, direct);
     } else {
       EXPECT_NEAR(replay, direct, tolerance * std::max(1.0, std::abs(direct)));
+    }
+    // the second metric, where the env has one, the same as the rollout's; NaN where it has none
+    const double metric = env->episode_metric(*ws), replay_metric = rl->final_metric();
+    if (env->info().metric.empty()) {
+      EXPECT_TRUE(std::isnan(replay_metric)) << replay_metric;
+    } else if (tolerance == 0.0) {
+      EXPECT_EQ(replay_metric, metric) << env->info().metric;
+    } else {
+      EXPECT_NEAR(replay_metric, metric, tolerance * std::max(1.0, std::abs(metric))) << env->info().metric;
     }
   }
 }

@@ -13,6 +13,7 @@
 // its loss and gradient are bit-identical for every team size (fixed reduction order,
 // common/parallel.hpp).
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -68,6 +69,9 @@ class RlEnv {
   virtual bool done() const = 0;
   // the episode loss once done() (the same number loss() gives for the same actions)
   virtual double final_loss() const = 0;
+  // the env's second metric (EnvInfo::metric) once done(): the number episode_metric() gives after
+  // loss() of the same actions; NaN for an env without one or an episode that blew up
+  virtual double final_metric() const { return std::numeric_limits<double>::quiet_NaN(); }
 };
 
 // The mutable buffers of one rollout. Envs derive their own.

@@ -56,6 +56,7 @@ class PlbRl : public RlEnv {
     ws_.reset_state(env_.model().mpm);
     step_ = 0;
     loss_ = 0.0;
+    scratch_.final_iou = std::numeric_limits<double>::quiet_NaN();
   }
   // every N/200-th particle's position and velocity, then each primitive's position and quaternion (w, x, y, z)
   std::vector<double> observe() const override {
@@ -81,6 +82,8 @@ class PlbRl : public RlEnv {
   }
   bool done() const override { return step_ >= horizon() || std::isnan(loss_); }
   double final_loss() const override { return loss_; }
+  // the soft IoU with the target after the last env step (the objective sets it there)
+  double final_metric() const override { return std::isnan(loss_) ? loss_ : scratch_.final_iou; }
 
  private:
   int observed() const { return std::min(env_.plb_config().observed_particles, env_.model().mpm.particles()); }
