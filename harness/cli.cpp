@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "common/error.hpp"
+#include "git_sha.hpp"  // generated: DSB_GIT_SHA
 #include "harness/command.hpp"
 
 namespace dsb {

@@ -27,6 +27,7 @@
 #include "harness/report_refresher.hpp"
 #include "harness/run_order.hpp"
 #include "harness/runner.hpp"
+#include "git_sha.hpp"  // generated at build time: DSB_GIT_SHA
 
 namespace dsb {
 namespace {

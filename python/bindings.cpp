@@ -26,6 +26,7 @@
 #include <pybind11/stl.h>
 
 #include "common/error.hpp"
+#include "git_sha.hpp"  // generated: DSB_GIT_SHA
 #include "common/thread_team.hpp"
 #include "common/unit_box.hpp"
 #include "common/usable_cpus.hpp"

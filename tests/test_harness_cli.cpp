@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -418,6 +419,17 @@ TEST_F(HarnessCli, ListGradcheckVersionAndHelp) {
   const auto version = harness("--version");
   EXPECT_EQ(version.code, 0);
   EXPECT_NE(version.out.find("harness 0."), std::string::npos) << version.out;
+  // the commit it was built from, refreshed at every build (cmake/git_sha.cmake): the checkout's
+  // HEAD, "-dirty" after it when tracked files differed; "unknown" outside a git checkout
+  std::string head;
+  if (FILE* git = popen("git -C '" DSB_SOURCE_DIR "' rev-parse --short=12 HEAD 2>/dev/null", "r")) {
+    char buf[64] = {};
+    if (std::fgets(buf, sizeof buf, git)) head = buf;
+    pclose(git);
+  }
+  while (!head.empty() && (head.back() == '\n' || head.back() == ' ')) head.pop_back();
+  EXPECT_NE(version.out.find("(git " + (head.empty() ? std::string("unknown") : head)), std::string::npos)
+      << version.out << " against HEAD " << head;
   EXPECT_EQ(harness("--help").code, 0);
   EXPECT_EQ(harness("eval --help").code, 0);
 }
