@@ -69,10 +69,10 @@ class FluidRl : public RlEnv {
     if (blown_up_) return std::numeric_limits<double>::quiet_NaN();
     return objective_.final_loss(ws_.particles, ws_.poses);
   }
-  // the cube's height above the tank floor (FluidObjective::final_cube_height)
+  // the cube's height above the tank floor after the last env step, as the rollout's metric
   double final_metric() const override {
     if (blown_up_ || step_ < horizon()) return std::numeric_limits<double>::quiet_NaN();
-    return cube_centre(env_.model(), ws_.particles).y() - env_.fluid_config().floor_y();
+    return objective_.cube_height(ws_.particles);
   }
 
  private:

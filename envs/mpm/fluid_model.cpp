@@ -120,8 +120,12 @@ double FluidObjective::final_loss(const std::vector<Particle>& particles, const 
 double FluidObjective::step_loss(int step, const std::vector<Particle>& particles, const std::vector<Pose>& poses,
                                  ThreadTeam&) const {
   if (step != cfg_.env_steps - 1) return 0.0;
-  final_cube_height_ = cube_centre(model_, particles).y() - cfg_.floor_y();
+  final_cube_height_ = cube_height(particles);
   return final_loss(particles, poses);
+}
+
+double FluidObjective::cube_height(const std::vector<Particle>& particles) const {
+  return cube_centre(model_, particles).y() - cfg_.floor_y();
 }
 
 void FluidObjective::step_loss_adjoint(int step, const std::vector<Particle>& particles,

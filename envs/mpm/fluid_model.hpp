@@ -25,6 +25,8 @@ class FluidObjective : public EpisodeObjective {
                          std::vector<ParticleAdjoint>& adj, std::vector<PoseAdjoint>& pose_adj,
                          ThreadTeam& team) const override;
   double final_loss(const std::vector<Particle>& particles, const std::vector<Pose>& poses) const;
+  // the cube centre's height above the tank floor (m) in the state `particles`
+  double cube_height(const std::vector<Particle>& particles) const;
   // the cube centre's height above the tank floor after the last env step (the episode's second
   // metric: above cfg.rim_height the cube is out of the tank); NaN until that step was scored
   double final_cube_height() const { return final_cube_height_; }
