@@ -1,9 +1,11 @@
-// `harness calibrate`: times one episode of each env of a grid on this machine (cached for plan and ETAs).
+// `harness calibrate`: times one episode of each env of a grid on this machine, and a short run of
+// each cheap (env, optimizer) pair (cached for plan and ETAs).
 #include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -41,6 +43,30 @@ int command_calibrate(const RunArgs& a, bool force) {
     }
     std::cout << fmt::format("{:<26} {:>12.4g} {:>12.4g} {:>10}  {}\n", name, c.forward_s, c.gradient_s, c.decisions,
                              measure ? "measured now" : "cached");
+  }
+  // the cheap pairs' short runs (CostModel: an optimizer's own work per episode), one per
+  // (env, optimizer, configs)
+  std::set<std::string> probed;
+  bool header = false;
+  for (const PlannedRun& run : plan.pending) {
+    const std::string pair = run.spec.env + "|" + run.key.env_config_hash + "|" + run.spec.optimizer + "|" +
+                             run.key.opt_config_hash;
+    if (!costs.probes(run) || !probed.insert(pair).second) continue;
+    std::optional<RunProbe> p = costs.probed(run);
+    const bool measure = force || !p;
+    if (measure) {
+      std::cerr << "harness: timing a short run of " << run.spec.env << " x " << run.spec.optimizer << " ..."
+                << std::endl;
+      p = costs.calibrate_run(run);
+      costs.save();
+    }
+    if (!header) {
+      std::cout << fmt::format("\n{:<26} {:<16} {:>9} {:>12}  {}\n", "env", "optimizer", "episodes", "seconds",
+                               "source");
+      header = true;
+    }
+    std::cout << fmt::format("{:<26} {:<16} {:>9} {:>12.4g}  {}\n", run.spec.env, run.spec.optimizer, p->episodes,
+                             p->seconds, measure ? "measured now" : "cached");
   }
   std::cout << "cost cache: " << costs.path() << "\n";
   return 0;

@@ -12,6 +12,8 @@
 #include "common/error.hpp"
 #include "common/parallel.hpp"
 #include "envs/registry.hpp"
+#include "harness/grid.hpp"
+#include "harness/runner.hpp"
 #include "optimizers/registry.hpp"
 
 namespace dsb {
@@ -73,13 +75,51 @@ CostModel::CostModel() : path_(default_cache_path()), cpu_(cpu_model_name()) {
     const auto j = nlohmann::json::parse(in);
     for (const auto& [k, v] : j.at("costs").items())
       table_[k] = {v.at("forward_s").get<double>(), v.at("gradient_s").get<double>(), v.at("decisions").get<int>(), true};
+    if (j.contains("runs"))
+      for (const auto& [k, v] : j.at("runs").items())
+        probes_[k] = {v.at("episodes").get<std::int64_t>(), v.at("seconds").get<double>()};
   } catch (const std::exception&) {
     table_.clear();  // an unreadable cache is an empty one; `calibrate` rewrites it
+    probes_.clear();
   }
 }
 
 std::string CostModel::key(const std::string& env_name, const std::string& env_config_hash) const {
   return env_name + "|" + env_config_hash + "|" + DSB_VERSION + "|" + cpu_;
+}
+
+std::string CostModel::run_key(const PlannedRun& run) const {
+  return run.spec.env + "|" + run.key.env_config_hash + "|" + run.spec.optimizer + "|" + run.key.opt_config_hash +
+         "|" + std::to_string(probe_episodes(run)) + "|" + DSB_VERSION + "|" + cpu_;
+}
+
+std::int64_t CostModel::probe_episodes(const PlannedRun& run) {
+  const bool modelled = static_cast<bool>(optimizer_entry(run.spec.optimizer).costs.own_seconds);
+  return std::min<std::int64_t>(run.spec.budget, modelled ? kProbeEpisodesModelled : kProbeEpisodesMax);
+}
+
+bool CostModel::probes(const PlannedRun& run) const {
+  // an RL learner's cost comes in updates spread over many episodes (ppo: one per 2,048
+  // decisions), which a short run would miss or catch whole: its registry entry models it
+  if (run.spec.ext || optimizer_entry(run.spec.optimizer).needs_rl) return false;
+  const EpisodeCost c = episode(run.spec.env, run.key.env_config_hash);
+  return c.measured && std::max(c.forward_s, c.gradient_s) <= kProbeMaxEpisodeSeconds;
+}
+
+std::optional<RunProbe> CostModel::probed(const PlannedRun& run) const {
+  if (const auto it = probes_.find(run_key(run)); it != probes_.end() && it->second.episodes > 0) return it->second;
+  return std::nullopt;
+}
+
+RunProbe CostModel::calibrate_run(const PlannedRun& run) {
+  RunSpec spec = run.spec;
+  spec.budget = probe_episodes(run);
+  const auto env = shared_env(spec.env, spec.env_options);
+  const auto optimizer = make_run_optimizer(spec);
+  const RunResult r = execute_run(spec, *env, *optimizer);
+  const RunProbe p{std::max<std::int64_t>(r.episodes, 1), r.wall_s};
+  probes_[run_key(run)] = p;
+  return p;
 }
 
 EpisodeCost CostModel::episode(const std::string& env_name, const std::string& env_config_hash) const {
@@ -96,15 +136,30 @@ double CostModel::run_seconds(const PlannedRun& run, double shared_share) const 
     return c.gradient_s * static_cast<double>(run.spec.budget);
   }
   const OptimizerEntry& opt = optimizer_entry(run.spec.optimizer);
-  double per_episode = opt.needs_gradient ? c.gradient_s : c.forward_s;
+  const double g = opt.costs.gradient_share;
+  double per_episode = opt.needs_gradient ? g * c.gradient_s + (1.0 - g) * c.forward_s : c.forward_s;
   if (opt.needs_rl) {
     // the hint alone knows no decision count: one per 5 env steps of a 50-step episode
     const int decisions = c.decisions > 0 ? c.decisions : 10;
     per_episode += decisions * opt.costs.learner_s_per_decision;
   }
   const int dim = shared_env(run.spec.env)->info().dim;  // metadata
-  return per_episode * static_cast<double>(run.spec.budget) * (1.0 - shared_share) +
-         (opt.costs.own_seconds ? opt.costs.own_seconds(dim, run.spec.budget) : 0.0);
+  const auto own = [&](std::int64_t budget) {
+    return opt.costs.own_seconds ? opt.costs.own_seconds(dim, budget) : 0.0;
+  };
+  const double budget = static_cast<double>(run.spec.budget);
+  if (const auto p = probed(run)) {
+    // measured: an optimizer with a modelled own time keeps the model's growth with the budget,
+    // scaled to what the short run spent beyond its episodes; any other costs its measured seconds
+    // per episode
+    const double probe_own = own(p->episodes);
+    if (probe_own > 0.0) {
+      const double measured_own = std::max(0.0, p->seconds - per_episode * static_cast<double>(p->episodes));
+      return per_episode * budget * (1.0 - shared_share) + measured_own * own(run.spec.budget) / probe_own;
+    }
+    return p->seconds / static_cast<double>(p->episodes) * budget * (1.0 - shared_share);
+  }
+  return per_episode * budget * (1.0 - shared_share) + own(run.spec.budget);
 }
 
 EpisodeCost CostModel::calibrate(const std::string& env_name, const std::string& env_config_hash,
@@ -133,9 +188,14 @@ void CostModel::save() const {
   nlohmann::json costs = nlohmann::json::object();
   for (const auto& [k, c] : table_)
     costs[k] = {{"forward_s", c.forward_s}, {"gradient_s", c.gradient_s}, {"decisions", c.decisions}};
-  const nlohmann::json j = {{"what", "diffsim-bench seconds per episode, one core: env|env config hash|harness "
+  nlohmann::json runs = nlohmann::json::object();
+  for (const auto& [k, v] : probes_) runs[k] = {{"episodes", v.episodes}, {"seconds", v.seconds}};
+  const nlohmann::json j = {{"what", "diffsim-bench seconds per episode, one core: costs by env|env config hash|harness "
+                                     "version|CPU model; runs (short runs of cheap pairs, the optimizer's own work "
+                                     "included) by env|env config hash|optimizer|optimizer config hash|harness "
                                      "version|CPU model"},
-                            {"costs", costs}};
+                            {"costs", costs},
+                            {"runs", runs}};
   std::error_code ec;
   const auto dir = std::filesystem::path(path_).parent_path();
   if (!dir.empty()) std::filesystem::create_directories(dir, ec);

@@ -9,6 +9,19 @@
 // ~/.cache/diffsim-bench/episode-costs.json. Envs not measured yet fall back to their cost hint
 // (seconds of a gradient episode on the machine the hint was written on), and the plan says so.
 // Reading the cache never builds an env model.
+//
+// An optimizer's own work (its updates, NLopt's models, a GP's fits, the budget wrapper's
+// records) is invisible beside a particle task's episode but most of a cheap env's run: CMA-ES in
+// 400-D spends milliseconds per episode beside a cartpole3 episode of 36 us, and BOBYQA's steps
+// in 200-D cost nothing until its 401-point initial model is built, then milliseconds each. So
+// `calibrate` also times a run of every (env, optimizer, config) pair of the grid whose episodes
+// are cheap (at most kProbeMaxEpisodeSeconds): the whole budget (up to kProbeEpisodesMax) for an
+// optimizer without a model of its own time, and kProbeEpisodesModelled episodes for one whose
+// registry entry models it (a GP's fits grow with the run: 1,000 episodes of `bo` in 200-D take
+// ten minutes). The plan counts the first's measured seconds per episode; for the second the
+// measured time beyond the episodes scales the model, which keeps its growth with the budget.
+// External optimizers and RL learners are not run (an RL learner's cost comes in updates spread
+// over many episodes, ppo's one per 2,048 decisions; its registry entry models it).
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -20,6 +33,16 @@
 #include "harness/plan.hpp"
 
 namespace dsb {
+
+inline constexpr std::int64_t kProbeEpisodesMax = 1000;
+inline constexpr std::int64_t kProbeEpisodesModelled = 200;
+inline constexpr double kProbeMaxEpisodeSeconds = 1e-3;
+
+// a short run's wall seconds over its episodes
+struct RunProbe {
+  std::int64_t episodes = 0;
+  double seconds = 0.0;
+};
 
 struct EpisodeCost {
   double forward_s = 0.0;   // one loss() rollout
@@ -44,6 +67,16 @@ class CostModel {
   // view's decisions, and records them; `env_options` as the grid gives the env (--set ENV.KEY=VALUE)
   EpisodeCost calibrate(const std::string& env_name, const std::string& env_config_hash,
                         std::size_t tape_memory_bytes = 0, const EnvOptions& env_options = {});
+  // whether `calibrate_run` applies to the run: its env's measured episodes are cheap and its
+  // optimizer is neither external nor an RL learner
+  bool probes(const PlannedRun& run) const;
+  // the short run of the run's (env, optimizer, configs), if one was timed
+  std::optional<RunProbe> probed(const PlannedRun& run) const;
+  // runs the run's optimizer on its env for probe_episodes(run) episodes (the run's seed, nothing
+  // stored) and records its wall seconds
+  RunProbe calibrate_run(const PlannedRun& run);
+  // min(budget, kProbeEpisodesMax), or kProbeEpisodesModelled for an optimizer with a modelled own time
+  static std::int64_t probe_episodes(const PlannedRun& run);
   // writes the cache (creating its folder); throws UsageError naming the file when it cannot
   void save() const;
 
@@ -51,8 +84,10 @@ class CostModel {
 
  private:
   std::string key(const std::string& env_name, const std::string& env_config_hash) const;
+  std::string run_key(const PlannedRun& run) const;
   std::string path_, cpu_;
   std::map<std::string, EpisodeCost> table_;
+  std::map<std::string, RunProbe> probes_;  // by run_key
 };
 
 // the CPU's model name (/proc/cpuinfo), "unknown" when it cannot be read

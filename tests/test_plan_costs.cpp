@@ -16,12 +16,15 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include "harness/cost_model.hpp"
 #include "harness/plan.hpp"
 #include "harness/plan_report.hpp"
 #include "harness/progress.hpp"
 #include "harness/run_order.hpp"
 #include "harness/slurm_command.hpp"
+#include "optimizers/bo/gp_cost.hpp"
 #include "optimizers/registry.hpp"
 #include "support/harness_process.hpp"
 #include "support/sqlite_rows.hpp"
@@ -231,6 +234,70 @@ TEST_F(PlanFromDatabase, SlurmTakesItsTimeLimitFromThePlanUnlessGivenOne) {
   ASSERT_EQ(t.code, 0) << t.err;
   EXPECT_NE(testing::read_file(path("d/array.sbatch")).find("#SBATCH --time=2:00:00"), std::string::npos);
   EXPECT_EQ(slurm_time_limit(3600.0), "0-01:45:00");  // 1.5 h + 15 min
+}
+
+// the planned seconds of (env, optimizer, seed) in a --runs-csv file
+double planned_seconds(const std::string& csv, const std::string& prefix) {
+  const auto at = csv.find(prefix);
+  if (at == std::string::npos) return -1.0;
+  return std::stod(csv.substr(at + prefix.size()));
+}
+
+TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSeconds) {
+  const std::string cache = "DSB_COST_CACHE=" + path("costs.json");
+  // cartpole3 is cheap: cmaes runs its whole budget, boleap (a modelled GP time) 200 episodes;
+  // nothing of an RL learner is run
+  const std::string grid = "--env cartpole3 --optimizer cmaes,boleap,ppo --seeds 1 --budget 300";
+  const auto c = testing::run_harness(dir_, "calibrate " + grid, cache);
+  ASSERT_EQ(c.code, 0) << c.err;
+  const auto j = nlohmann::json::parse(testing::read_file(path("costs.json")));
+  ASSERT_EQ(j.at("runs").size(), 2u) << j.dump();
+  double cmaes_s = 0.0, boleap_s = 0.0;
+  for (const auto& [key, v] : j.at("runs").items()) {
+    EXPECT_GT(v.at("seconds").get<double>(), 0.0) << key;
+    if (key.rfind("cartpole3|", 0) == 0 && key.find("|cmaes|") != std::string::npos) {
+      EXPECT_EQ(v.at("episodes").get<int>(), 300) << key;
+      cmaes_s = v.at("seconds").get<double>();
+    } else {
+      EXPECT_NE(key.find("|boleap|"), std::string::npos) << key;
+      EXPECT_EQ(v.at("episodes").get<int>(), 200) << key;
+      boleap_s = v.at("seconds").get<double>();
+    }
+  }
+  ASSERT_GT(cmaes_s, 0.0);
+  ASSERT_GT(boleap_s, 0.0);
+  const auto p = testing::run_harness(dir_, "plan " + grid + " --db " + path("p.sqlite") + " --runs-csv " +
+                                                path("runs.csv"), cache);
+  ASSERT_EQ(p.code, 0) << p.err;
+  const std::string csv = testing::read_file(path("runs.csv"));
+  // cmaes: its measured run itself (the plan writes 6 significant digits)
+  EXPECT_NEAR(planned_seconds(csv, "cartpole3,cmaes,0,300,"), cmaes_s, 1e-5 * cmaes_s) << csv;
+  // boleap: the measured 200 episodes scaled to 300 by its model: the episodes at their calibrated
+  // costs (43% gradient episodes), its own time by the model's growth from 200 to 300 episodes
+  const auto costs = j.at("costs").begin().value();
+  const double per_episode =
+      0.43 * costs.at("gradient_s").get<double>() + 0.57 * costs.at("forward_s").get<double>();
+  const auto& own = optimizer_entry("boleap").costs.own_seconds;
+  const double expected =
+      per_episode * 300.0 + (boleap_s - per_episode * 200.0) * own(400, 300) / own(400, 200);
+  EXPECT_NEAR(planned_seconds(csv, "cartpole3,boleap,0,300,"), expected, 1e-5 * expected) << csv;
+  EXPECT_GT(own(400, 300), own(400, 200));
+  // a longer budget: cmaes is timed again over the whole of it, and the cache keeps both
+  ASSERT_EQ(testing::run_harness(dir_, "calibrate --env cartpole3 --optimizer cmaes --seeds 1 --budget 400", cache).code, 0);
+  const auto j2 = nlohmann::json::parse(testing::read_file(path("costs.json")));
+  EXPECT_EQ(j2.at("runs").size(), 3u) << j2.dump();
+}
+
+TEST(PlanCosts, BoLeapsGpIsFittedOnItsDesignAndAfterEveryLeapThatLeavesBudget) {
+  // cartpole3: a design of 20 points, then fits at 120, 220, ..., 920 for 1,000 episodes
+  EXPECT_EQ(boleap_fits(400, 1000, 100), 10);
+  EXPECT_EQ(boleap_fits(400, 200, 100), 2);
+  EXPECT_EQ(boleap_fits(400, 10, 100), 1);
+  // one fit at n = 20: evaluations (70 + 0.17 n) x (n^3 and n^2 d terms)
+  const double n = 20.0, evaluations = kBoLeapEvaluationsBase + kBoLeapEvaluationsPerPoint * n;
+  EXPECT_DOUBLE_EQ(boleap_own_seconds(400, 20, 100),
+                   evaluations * (kBoSecondsPerN3 * n * n * n + kBoSecondsPerN2D * n * n * 400.0));
+  EXPECT_GT(boleap_own_seconds(400, 1000, 100), boleap_own_seconds(10, 1000, 100));
 }
 
 TEST(PlanCosts, NoOptimizerIsNamedInTheHarness) {

@@ -39,11 +39,31 @@ double bo_own_seconds(int dim, std::int64_t budget, const BoConfig& cfg) {
   return kBoEvaluationsPerFit * (kBoSecondsPerN3 * n3 + kBoSecondsPerN2D * n2 * dim);
 }
 
-double boleap_own_seconds(int dim, std::int64_t budget) {
-  const double d = std::clamp(static_cast<double>(dim), 10.0, 400.0);
-  const double per_1000 = 12.6 + (200.0 - 12.6) * (d - 10.0) / 390.0;
-  const double scale = static_cast<double>(budget) / 1000.0;
-  return per_1000 * scale * scale;
+namespace {
+
+// fn(n) for the points n at which BoLeap refits: the initial design, then after every leap that
+// leaves budget for another
+template <class Fn>
+void for_each_leap_fit(int dim, std::int64_t budget, int episodes_per_leap, const BoConfig& cfg, Fn&& fn) {
+  const std::int64_t first = std::min<std::int64_t>(cfg.initial_points_for(dim), budget);
+  for (std::int64_t n = first; n == first || n < budget; n += std::max(1, episodes_per_leap)) fn(static_cast<double>(n));
+}
+
+}  // namespace
+
+int boleap_fits(int dim, std::int64_t budget, int episodes_per_leap, const BoConfig& cfg) {
+  int fits = 0;
+  for_each_leap_fit(dim, budget, episodes_per_leap, cfg, [&](double) { ++fits; });
+  return fits;
+}
+
+double boleap_own_seconds(int dim, std::int64_t budget, int episodes_per_leap, const BoConfig& cfg) {
+  double seconds = 0.0;
+  for_each_leap_fit(dim, budget, episodes_per_leap, cfg, [&](double n) {
+    const double evaluations = kBoLeapEvaluationsBase + kBoLeapEvaluationsPerPoint * n;
+    seconds += evaluations * (kBoSecondsPerN3 * n * n * n + kBoSecondsPerN2D * n * n * dim);
+  });
+  return seconds;
 }
 
 }  // namespace dsb

@@ -23,9 +23,16 @@ double bo_own_seconds(int dim, std::int64_t budget, const BoConfig& cfg = {});
 // the fits of that schedule over a run (a run's diagnostics count the same as gp_fits)
 int bo_fits(int dim, std::int64_t budget, const BoConfig& cfg = {});
 
-// boleap: its GP is fitted once per leap (about every 100 episodes); the runs' own time measured at
-// 1,000 episodes (12.6 s at 10-D, about 200 s at 400-D, linear in between), scaled by
-// (budget / 1,000)^2 (the fits grow with the points the GP holds).
-double boleap_own_seconds(int dim, std::int64_t budget);
+// boleap: its GP is fitted on the initial design and then at the end of every leap of
+// `episodes_per_leap` episodes that leaves budget for another (n = n0, n0 + E, n0 + 2E, ... < budget),
+// each fit at the same per-evaluation costs as bo's; a fit takes more likelihood evaluations as n
+// grows: kBoLeapEvaluationsBase + kBoLeapEvaluationsPerPoint n (fitted to the runs' diagnostics:
+// 172-196 evaluations over the 2 fits of 200-episode runs (n 11-20, 110-120), 1,277-1,876 over the
+// 11 fits of 1,000-episode runs on cartpole1 and rastrigin-10).
+inline constexpr double kBoLeapEvaluationsBase = 70.0;
+inline constexpr double kBoLeapEvaluationsPerPoint = 0.17;
+double boleap_own_seconds(int dim, std::int64_t budget, int episodes_per_leap, const BoConfig& cfg = {});
+// the fits of that schedule over a run
+int boleap_fits(int dim, std::int64_t budget, int episodes_per_leap, const BoConfig& cfg = {});
 
 }  // namespace dsb

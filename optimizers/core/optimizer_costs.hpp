@@ -14,6 +14,9 @@ struct OptimizerCosts {
   std::string family;
   // an RL learner's own work per decision (acting and its share of the updates)
   double learner_s_per_decision = 0.0;
+  // for an optimizer that needs gradients: the share of its episodes that take one (the others
+  // are forward episodes), measured over its runs' diagnostics (objective.grad_episodes / episodes)
+  double gradient_share = 1.0;
   // the optimizer's own work over a whole run (a GP's fits and acquisitions) on an env of `dim`
   // parameters at `budget` episodes; empty: negligible beside the episodes
   std::function<double(int dim, std::int64_t budget)> own_seconds = {};
