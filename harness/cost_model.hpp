@@ -12,7 +12,7 @@
 //
 // An optimizer's own work (its updates, NLopt's models, a GP's fits, the budget wrapper's
 // records) is invisible beside a particle task's episode but most of a cheap env's run: CMA-ES in
-// 400-D spends milliseconds per episode beside a cartpole3 episode of 36 us, and BOBYQA's steps
+// 400-D spends 8-13 ms per episode beside a cartpole3 episode of 36 us, and BOBYQA's steps
 // in 200-D cost nothing until its 401-point initial model is built, then milliseconds each. So
 // `calibrate` also times a run of every (env, optimizer, config) pair of the grid whose episodes
 // are cheap (at most kProbeMaxEpisodeSeconds): the whole budget (up to kProbeEpisodesMax) for an
