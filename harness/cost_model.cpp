@@ -93,16 +93,21 @@ std::string CostModel::run_key(const PlannedRun& run) const {
          "|" + std::to_string(probe_episodes(run)) + "|" + DSB_VERSION + "|" + cpu_;
 }
 
-std::int64_t CostModel::probe_episodes(const PlannedRun& run) {
-  const bool modelled = static_cast<bool>(optimizer_entry(run.spec.optimizer).costs.own_seconds);
+std::int64_t CostModel::probe_episodes(const PlannedRun& run) const {
+  const OptimizerEntry& opt = optimizer_entry(run.spec.optimizer);
+  if (opt.needs_rl) {
+    const std::int64_t decisions = std::max(1, episode(run.spec.env, run.key.env_config_hash).decisions);
+    return std::min<std::int64_t>(run.spec.budget, (kProbeRlDecisions + decisions - 1) / decisions);
+  }
+  const bool modelled = static_cast<bool>(opt.costs.own_seconds);
   return std::min<std::int64_t>(run.spec.budget, modelled ? kProbeEpisodesModelled : kProbeEpisodesMax);
 }
 
 bool CostModel::probes(const PlannedRun& run) const {
-  // an RL learner's cost comes in updates spread over many episodes (ppo: one per 2,048
-  // decisions), which a short run would miss or catch whole: its registry entry models it
-  if (run.spec.ext || optimizer_entry(run.spec.optimizer).needs_rl) return false;
+  if (run.spec.ext) return false;
   const EpisodeCost c = episode(run.spec.env, run.key.env_config_hash);
+  // an RL learner needs the env's measured decisions per episode to size its probe
+  if (optimizer_entry(run.spec.optimizer).needs_rl && c.decisions <= 0) return false;
   return c.measured && std::max(c.forward_s, c.gradient_s) <= kProbeMaxEpisodeSeconds;
 }
 

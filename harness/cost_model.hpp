@@ -20,8 +20,10 @@
 // registry entry models it (a GP's fits grow with the run: 1,000 episodes of `bo` in 200-D take
 // ten minutes). The plan counts the first's measured seconds per episode; for the second the
 // measured time beyond the episodes scales the model, which keeps its growth with the budget.
-// External optimizers and RL learners are not run (an RL learner's cost comes in updates spread
-// over many episodes, ppo's one per 2,048 decisions; its registry entry models it).
+// An RL learner's cost comes in updates spread over many decisions (one per 2,048 decisions for
+// PPO's rollouts, one per decision for SAC), so it runs kProbeRlDecisions decisions, whole episodes,
+// and the plan counts its measured seconds per episode; on an expensive env its registry entry's
+// seconds per decision are added to the episodes instead. External optimizers are not run.
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -37,6 +39,8 @@ namespace dsb {
 inline constexpr std::int64_t kProbeEpisodesMax = 1000;
 inline constexpr std::int64_t kProbeEpisodesModelled = 200;
 inline constexpr double kProbeMaxEpisodeSeconds = 1e-3;
+// two of PPO's 2,048-decision rollouts with their updates; 41 episodes of a cartpole
+inline constexpr std::int64_t kProbeRlDecisions = 4096;
 
 // a short run's wall seconds over its episodes
 struct RunProbe {
@@ -68,15 +72,16 @@ class CostModel {
   EpisodeCost calibrate(const std::string& env_name, const std::string& env_config_hash,
                         std::size_t tape_memory_bytes = 0, const EnvOptions& env_options = {});
   // whether `calibrate_run` applies to the run: its env's measured episodes are cheap and its
-  // optimizer is neither external nor an RL learner
+  // optimizer is not external
   bool probes(const PlannedRun& run) const;
   // the short run of the run's (env, optimizer, configs), if one was timed
   std::optional<RunProbe> probed(const PlannedRun& run) const;
   // runs the run's optimizer on its env for probe_episodes(run) episodes (the run's seed, nothing
   // stored) and records its wall seconds
   RunProbe calibrate_run(const PlannedRun& run);
-  // min(budget, kProbeEpisodesMax), or kProbeEpisodesModelled for an optimizer with a modelled own time
-  static std::int64_t probe_episodes(const PlannedRun& run);
+  // min(budget, kProbeEpisodesMax), or kProbeEpisodesModelled for an optimizer with a modelled own
+  // time, or the episodes that hold kProbeRlDecisions of the env's RL view for an RL learner
+  std::int64_t probe_episodes(const PlannedRun& run) const;
   // writes the cache (creating its folder); throws UsageError naming the file when it cannot
   void save() const;
 
