@@ -39,13 +39,17 @@ namespace dsb {
 inline constexpr std::int64_t kProbeEpisodesMax = 1000;
 inline constexpr std::int64_t kProbeEpisodesModelled = 200;
 inline constexpr double kProbeMaxEpisodeSeconds = 1e-3;
+// a probe shorter than this (its run and its replay) is repeated, the median kept
+inline constexpr double kProbeRepeatSeconds = 0.2;
 // two of PPO's 2,048-decision rollouts with their updates; 41 episodes of a cartpole
 inline constexpr std::int64_t kProbeRlDecisions = 4096;
 
-// a short run's wall seconds over its episodes
+// a short run's wall seconds over its episodes, and the seconds per episode of replaying it from
+// its journal (what a later seed pays for each episode it shares)
 struct RunProbe {
   std::int64_t episodes = 0;
   double seconds = 0.0;
+  double replay_s_per_episode = 0.0;
 };
 
 struct EpisodeCost {
@@ -63,7 +67,7 @@ class CostModel {
   // the cost of one episode of `env_name` (config hash as stored with runs)
   EpisodeCost episode(const std::string& env_name, const std::string& env_config_hash) const;
   // the estimated seconds of a whole run on one core, `shared_share` of its episodes taken from
-  // another seed's run (replayed: free)
+  // another seed's run (replayed: at the probe's replay cost for a probed pair, else free)
   double run_seconds(const PlannedRun& run, double shared_share = 0.0) const;
 
   // times one forward and one gradient episode of the env (repeated to at least 0.2 s for cheap
@@ -76,8 +80,9 @@ class CostModel {
   bool probes(const PlannedRun& run) const;
   // the short run of the run's (env, optimizer, configs), if one was timed
   std::optional<RunProbe> probed(const PlannedRun& run) const;
-  // runs the run's optimizer on its env for probe_episodes(run) episodes (the run's seed, nothing
-  // stored) and records its wall seconds
+  // runs the run's optimizer on its env for probe_episodes(run) episodes (the run's seed, its
+  // journal recorded as a grid's run records it, nothing stored) and records its wall seconds, then
+  // replays it from that journal and records the seconds per replayed episode
   RunProbe calibrate_run(const PlannedRun& run);
   // min(budget, kProbeEpisodesMax), or kProbeEpisodesModelled for an optimizer with a modelled own
   // time, or the episodes that hold kProbeRlDecisions of the env's RL view for an RL learner

@@ -245,18 +245,24 @@ double planned_seconds(const std::string& csv, const std::string& prefix) {
 
 TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSeconds) {
   const std::string cache = "DSB_COST_CACHE=" + path("costs.json");
-  // cartpole3 is cheap: cmaes runs its whole budget, boleap (a modelled GP time) 200 episodes,
-  // ppo the 41 episodes of 100 decisions that hold two of its 2,048-decision rollouts
-  const std::string grid = "--env cartpole3 --optimizer cmaes,boleap,ppo --seeds 1 --budget 300";
+  // cartpole3 is cheap: cmaes and gd run their whole budget, boleap (a modelled GP time) 200
+  // episodes, ppo the 41 episodes of 100 decisions that hold two of its 2,048-decision rollouts
+  const std::string grid = "--env cartpole3 --optimizer cmaes,boleap,ppo,gd --seeds 2 --budget 300";
   const auto c = testing::run_harness(dir_, "calibrate " + grid, cache);
   ASSERT_EQ(c.code, 0) << c.err;
   const auto j = nlohmann::json::parse(testing::read_file(path("costs.json")));
-  ASSERT_EQ(j.at("runs").size(), 3u) << j.dump();
-  double cmaes_s = 0.0, boleap_s = 0.0, ppo_s = 0.0;
+  ASSERT_EQ(j.at("runs").size(), 4u) << j.dump();
+  double cmaes_s = 0.0, boleap_s = 0.0, ppo_s = 0.0, gd_s = 0.0, gd_replay_s = 0.0;
   for (const auto& [key, v] : j.at("runs").items()) {
     EXPECT_GT(v.at("seconds").get<double>(), 0.0) << key;
+    // every probe is replayed from its journal (a later seed's shared episodes cost that)
+    EXPECT_GT(v.at("replay_s_per_episode").get<double>(), 0.0) << key;
     ASSERT_EQ(key.rfind("cartpole3|", 0), 0u) << key;
-    if (key.find("|cmaes|") != std::string::npos) {
+    if (key.find("|gd|") != std::string::npos) {
+      EXPECT_EQ(v.at("episodes").get<int>(), 300) << key;
+      gd_s = v.at("seconds").get<double>();
+      gd_replay_s = v.at("replay_s_per_episode").get<double>();
+    } else if (key.find("|cmaes|") != std::string::npos) {
       EXPECT_EQ(v.at("episodes").get<int>(), 300) << key;
       cmaes_s = v.at("seconds").get<double>();
     } else if (key.find("|ppo|") != std::string::npos) {
@@ -287,12 +293,15 @@ TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSe
       per_episode * 300.0 + (boleap_s - per_episode * 200.0) * own(400, 300) / own(400, 200);
   EXPECT_NEAR(planned_seconds(csv, "cartpole3,boleap,0,300,"), expected, 1e-5 * expected) << csv;
   EXPECT_GT(own(400, 300), own(400, 200));
+  // gd: seed 0 its measured run, seed 1 (a copy of seed 0) the replay of 300 episodes
+  EXPECT_NEAR(planned_seconds(csv, "cartpole3,gd,0,300,"), gd_s, 1e-5 * gd_s) << csv;
+  EXPECT_NEAR(planned_seconds(csv, "cartpole3,gd,1,300,"), 300.0 * gd_replay_s, 1e-5 * 300.0 * gd_replay_s) << csv;
   // ppo: its measured seconds per episode (acting, learning, the env) over the budget
   EXPECT_NEAR(planned_seconds(csv, "cartpole3,ppo,0,300,"), ppo_s / 41.0 * 300.0, 1e-5 * ppo_s * 300.0 / 41.0) << csv;
   // a longer budget: cmaes is timed again over the whole of it, and the cache keeps both
   ASSERT_EQ(testing::run_harness(dir_, "calibrate --env cartpole3 --optimizer cmaes --seeds 1 --budget 400", cache).code, 0);
   const auto j2 = nlohmann::json::parse(testing::read_file(path("costs.json")));
-  EXPECT_EQ(j2.at("runs").size(), 4u) << j2.dump();
+  EXPECT_EQ(j2.at("runs").size(), 5u) << j2.dump();
 }
 
 TEST(PlanCosts, BoLeapsGpIsFittedOnItsDesignAndAfterEveryLeapThatLeavesBudget) {
