@@ -135,8 +135,8 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
                        measured_runs, ctx.db);
   if (sharing_runs > 0)
     out << fmt::format("  sharing across seeds: {} runs take about {:.0f} episodes from an earlier seed's run of "
-                       "their group (the episodes before the optimizer's first draw, replayed: counted as free), "
-                       "saving about {:.4g} of {:.4g} core-hours; --no-sharing simulates them\n",
+                       "their group (the episodes before the optimizer's first draw, replayed: at the replay's measured "
+                       "cost on cheap envs, else free), saving about {:.4g} of {:.4g} core-hours; --no-sharing simulates them\n",
                        sharing_runs, shared_episodes, (unshared - total) / 3600.0, unshared / 3600.0);
   // wall: the work over the runs at once, but never less than the longest run
   const int parallel = std::max(1, std::min<int>(ctx.jobs, static_cast<int>(plan.pending.size())));
