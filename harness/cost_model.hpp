@@ -18,8 +18,8 @@
 // are cheap (at most kProbeMaxEpisodeSeconds): the whole budget (up to kProbeEpisodesMax) for an
 // optimizer without a model of its own time, and kProbeEpisodesModelled episodes for one whose
 // registry entry models it (a GP's fits grow with the run: 1,000 episodes of `bo` in 200-D take
-// ten minutes). The plan counts the first's measured seconds per episode; for the second the
-// measured time beyond the episodes scales the model, which keeps its growth with the budget.
+// six minutes). The plan counts the first's measured seconds per episode; for the second the
+// measured time beyond the episodes plus the model's growth from the probe's episodes to the budget.
 // An RL learner's cost comes in updates spread over many decisions (one per 2,048 decisions for
 // PPO's rollouts, one per decision for SAC), so it runs kProbeRlDecisions decisions, whole episodes,
 // and the plan counts its measured seconds per episode; on an expensive env its registry entry's
