@@ -12,6 +12,7 @@ with --reference OPT, p_ref (the same test against OPT's default runs on that en
 medians over its runs of its diagnostics: leaps, descents, descent steps and stale stops per run.
 
     /usr/bin/python3 scripts/knob_study_table.py knob-study.sqlite --out knob_study.csv [--markdown]
+    /usr/bin/python3 scripts/knob_study_table.py OUTDIR/parts/*.csv --out knob_study.csv
 """
 import argparse
 import json
@@ -68,14 +69,25 @@ def variant_names(configs):
     return names
 
 
-def load(path, labels=None):
+def read_runs(path):
+    """a study database's done runs, or those of a part's CSV (scripts/lib/variant-study.sh)"""
+    columns = ["env", "optimizer", "seed", "budget", "best_loss", "opt_config_hash", "config", "diagnostics"]
+    if path.endswith(".csv"):
+        runs = pd.read_csv(path, dtype={"opt_config_hash": str, "config": str, "diagnostics": str},
+                           keep_default_na=False, na_values={"best_loss": [""]}, float_precision="round_trip")
+        return runs[runs.status == "done"][columns]
     con = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
     runs = pd.read_sql_query(
         "SELECT r.env, r.optimizer, r.seed, r.budget, r.best_loss, r.opt_config_hash, c.json AS config, "
         "r.diagnostics "
         "FROM runs r JOIN configs c ON c.hash = r.opt_config_hash WHERE r.status = 'done'", con)
     con.close()
-    runs["best_loss"] = runs["best_loss"].fillna(math.inf)
+    return runs
+
+
+def load(paths, labels=None):
+    runs = pd.concat([read_runs(p) for p in paths], ignore_index=True)
+    runs["best_loss"] = pd.to_numeric(runs["best_loss"]).fillna(math.inf)
     names = {}
     for opt, g in runs.groupby("optimizer"):
         cfgs = {h: json.loads(c) for h, c in zip(g["opt_config_hash"], g["config"])}
@@ -151,7 +163,8 @@ def markdown(table, reference=None):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("db")
+    ap.add_argument("inputs", nargs="+", metavar="DB_OR_CSV",
+                    help="a study database, or the parts' CSVs (variant-study.sh)")
     ap.add_argument("--out", help="CSV to write")
     ap.add_argument("--variants", help="CSV opt_config_hash,variant naming the configs")
     ap.add_argument("--reference", help="optimizer whose default runs each row is also tested against (p_ref)")
@@ -161,9 +174,9 @@ def main():
         labels = None
         if a.variants:
             labels = dict(pd.read_csv(a.variants, dtype=str)[["opt_config_hash", "variant"]].values)
-        runs = load(a.db, labels)
-    except (sqlite3.Error, pd.errors.DatabaseError, OSError, KeyError) as e:
-        sys.stderr.write(f"knob_study_table: cannot read '{a.db}': {e}\n")
+        runs = load(a.inputs, labels)
+    except (sqlite3.Error, pd.errors.DatabaseError, OSError, KeyError, AttributeError, ValueError) as e:
+        sys.stderr.write(f"knob_study_table: cannot read '{' '.join(a.inputs)}': {e}\n")
         sys.exit(2)
     table = summarise(runs, a.reference)
     if a.out:

@@ -33,3 +33,22 @@ assert abs(float(v["ratio"]) - float(v["median"]) / float(base["median"])) < 1e-
 assert v["wins"].endswith("/3") and 0.0 <= float(v["p"]) <= 1.0
 print("knob study table: 5 rows, medians equal SQLite's, ratio", v["ratio"])
 PY
+# every finished part left its runs as CSV; a study whose OUTDIR was lost takes them as landed
+# data (STUDY_LANDED) and runs nothing, with the same table
+ls "$work"/parts/*.csv >/dev/null
+STUDY_LANDED=$work/parts "$src/scripts/knob-study.sh" "$work/again" --envs sphere-10 --seeds 3 \
+  --only '^(reference|rand-descents(\.start_scale=0\.1)?)$' "$build" >"$work/again.log"
+grep -q "landed: sphere-10 reference" "$work/again.log"
+if compgen -G "$work/again/parts/*.sqlite" >/dev/null; then echo "a landed part was run again" >&2; exit 1; fi
+cmp "$work/knob_study.csv" "$work/again/knob_study.csv"
+# a landed part made by another binary is refused, naming the file
+mkdir "$work/other"
+sed '2,$s/git [0-9a-f]*/git 000000000000/' "$work/parts/sphere-10__reference.csv" >"$work/other/sphere-10__reference.csv"
+set +e
+STUDY_LANDED=$work/other "$src/scripts/knob-study.sh" "$work/third" --envs sphere-10 --seeds 3 --only '^reference$' \
+  "$build" >/dev/null 2>"$work/third.err"
+code=$?
+set -e
+[[ $code == 2 ]] || { echo "expected exit 2 for another binary's part, got $code" >&2; exit 1; }
+grep -q "sphere-10__reference.csv was made by" "$work/third.err" || { cat "$work/third.err" >&2; exit 1; }
+echo "landed parts: taken without running, the same table; another binary's refused"

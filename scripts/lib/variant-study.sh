@@ -13,6 +13,14 @@
 # OUTDIR/variants.csv names each hash by its label) and scripts/knob_study_table.py writes the
 # table. Variants see the same random numbers: a run's seed depends on env, optimizer and seed index
 # only. Interrupted? Run the same command again: every part resumes.
+#
+# A study longer than a machine's life goes on from landed data: each finished part also leaves
+# its runs as OUTDIR/parts/ENV__LABEL.csv (env, optimizer, seed, budget, status, best_loss,
+# opt_config_hash, config, diagnostics, wall_s, harness: the binary's --version line). Commit those
+# into data/$study/ (or point $STUDY_LANDED at them) and a later run of the study, on a machine that
+# lost OUTDIR, takes those parts from there instead of running them, provided its binary is the one
+# that made them (it refuses, naming the file, otherwise: build that commit). The table is made from
+# the parts' CSVs, landed or not.
 variant_study() {
   local root out seeds=5 only='.' jobs=2 build
   root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
@@ -32,6 +40,8 @@ variant_study() {
   harness=$build/bin/harness
   [[ -x $harness ]] || { echo "$study: no harness at $harness" >&2; return 2; }
   mkdir -p "$out/parts"
+  version=$("$harness" --version)
+  landed=${STUDY_LANDED:-$root/data/$study}
 
   local parts=() env v label opt flags env_list
   IFS=, read -ra env_list <<<"$envs"
@@ -39,6 +49,19 @@ variant_study() {
     for v in "${variants[@]}"; do
       IFS='|' read -r label opt flags <<<"$v"
       [[ $label =~ $only ]] || continue
+      if [[ -f $landed/${env}__$label.csv ]]; then
+        # a landed part: this binary's, or the study would mix binaries
+        local made_by
+        made_by=$(/usr/bin/python3 -c 'import csv, sys; print(*sorted({r["harness"] for r in csv.DictReader(open(sys.argv[1]))}), sep=" | ")' \
+          "$landed/${env}__$label.csv")
+        if [[ $made_by != "$version" ]]; then
+          echo "$study: $landed/${env}__$label.csv was made by '$made_by', not by this binary ('$version'): build that commit, or move the file away" >&2
+          return 2
+        fi
+        cp "$landed/${env}__$label.csv" "$out/parts/${env}__$label.csv"
+        echo "  landed: $env $label"
+        continue
+      fi
       parts+=("$(cost_rank "$env" "$label")|$env|$label|$opt|$flags")
     done
   done
@@ -46,13 +69,15 @@ variant_study() {
   echo "$study: ${#parts[@]} parts (env x variant), $seeds seeds, $jobs at once, into $out"
 
   export -f run_study_part budget_of
-  export harness seeds out
-  printf '%s\n' "${parts[@]}" | xargs -d '\n' -P "$jobs" -I{} bash -c 'run_study_part "$@"' _ {}
+  export harness seeds out version
+  ((${#parts[@]} == 0)) || printf '%s\n' "${parts[@]}" | xargs -d '\n' -P "$jobs" -I{} bash -c 'run_study_part "$@"' _ {}
 
   rm -f "$out/$study.sqlite"
-  "$harness" merge --into "$out/$study.sqlite" "$out"/parts/*.sqlite
+  if compgen -G "$out/parts/*.sqlite" >/dev/null; then
+    "$harness" merge --into "$out/$study.sqlite" "$out"/parts/*.sqlite
+  fi
   { echo "opt_config_hash,variant"; study_labels; } >"$out/variants.csv"
-  /usr/bin/python3 "$root/scripts/knob_study_table.py" "$out/$study.sqlite" --variants "$out/variants.csv" \
+  /usr/bin/python3 "$root/scripts/knob_study_table.py" "$out"/parts/*.csv --variants "$out/variants.csv" \
     --reference cmaes --out "$out/${study//-/_}.csv"
 }
 
@@ -61,8 +86,27 @@ run_study_part() {
   IFS='|' read -r _ env label opt flags <<<"$1"
   # shellcheck disable=SC2086
   # exit 3: some runs failed, which are results (stored with their errors), not a crash
+  local db=$out/parts/${env}__${label}.sqlite
   "$harness" --env "$env" --optimizer "$opt" $flags --seeds "$seeds" --budget "$(budget_of "$env")" \
-    --jobs 1 --quiet --db "$out/parts/${env}__${label}.sqlite" || (($? == 3)) && echo "  done: $env $label"
+    --jobs 1 --quiet --db "$db" || (($? == 3)) || return 0
+  # the finished part's runs, to land as data (the binary's version line in every row; floats as
+  # Python writes them, which read back to the same bits)
+  /usr/bin/python3 - "$db" "$version" "${db%.sqlite}.csv" <<'PY'
+import csv, os, sqlite3, sys
+db, version, out = sys.argv[1:]
+con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+rows = con.execute("SELECT r.env, r.optimizer, r.seed, r.budget, r.status, r.best_loss, r.opt_config_hash, "
+                   "c.json, r.diagnostics, r.wall_s FROM runs r JOIN configs c ON c.hash = r.opt_config_hash "
+                   "ORDER BY r.optimizer, r.seed").fetchall()
+with open(out + ".tmp", "w", newline="") as f:
+    w = csv.writer(f, lineterminator="\n")
+    w.writerow(["env", "optimizer", "seed", "budget", "status", "best_loss", "opt_config_hash", "config",
+                "diagnostics", "wall_s", "harness"])
+    for r in rows:
+        w.writerow([("" if v is None else repr(v) if isinstance(v, float) else v) for v in r] + [version])
+os.replace(out + ".tmp", out)
+PY
+  echo "  done: $env $label"
 }
 
 # the variants' labels by config hash, for the table
@@ -71,9 +115,10 @@ study_labels() {
   for v in "${variants[@]}"; do
     IFS='|' read -r label opt _ <<<"$v"
     [[ $label == reference ]] && continue
-    for f in "$out"/parts/*__"$label".sqlite; do
+    for f in "$out"/parts/*__"$label".csv; do
       [[ -e $f ]] || continue
-      sqlite3 -readonly "$f" "SELECT DISTINCT opt_config_hash FROM runs" | sed "s/\$/,$label/"
+      /usr/bin/python3 -c 'import csv, sys; print(*sorted({r["opt_config_hash"] for r in csv.DictReader(open(sys.argv[1]))}), sep="\n")' \
+        "$f" | sed "s/\$/,$label/"
     done
   done | sort -u
 }
