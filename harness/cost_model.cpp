@@ -26,6 +26,12 @@ std::string default_cache_path() {
   return ".diffsim-bench-episode-costs.json";
 }
 
+// the median of a non-empty sample (the upper one of an even count)
+double median_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
 // the median of repeated timings of f, repeated until `min_total_s` has passed (at least once,
 // at most 25 times)
 template <class F>
@@ -39,8 +45,7 @@ double median_seconds(F&& f, double min_total_s) {
     times.push_back(t);
     total += t;
   }
-  std::sort(times.begin(), times.end());
-  return times[times.size() / 2];
+  return median_of(std::move(times));
 }
 
 }  // namespace
@@ -169,11 +174,7 @@ RunProbe CostModel::calibrate_run(const PlannedRun& run) {
     replay_s.push_back(rr.replayed_episodes > 0 ? rr.wall_s / static_cast<double>(rr.replayed_episodes) : 0.0);
     total += r.wall_s + rr.wall_s;
   }
-  const auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-  };
-  const RunProbe p{episodes, median(run_s), median(replay_s)};
+  const RunProbe p{episodes, median_of(std::move(run_s)), median_of(std::move(replay_s))};
   probes_[run_key(run)] = p;
   return p;
 }
