@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.hpp"
+#include "git_sha.hpp"  // generated at build time: DSB_GIT_SHA
 #include "common/parallel.hpp"
 #include "envs/registry.hpp"
 #include "harness/grid.hpp"
@@ -25,6 +26,10 @@ std::string default_cache_path() {
   if (const char* h = std::getenv("HOME"); h && *h) return std::string(h) + "/.cache/diffsim-bench/episode-costs.json";
   return ".diffsim-bench-episode-costs.json";
 }
+
+// the build a calibration belongs to: the version and the commit (with "-dirty" when the tree
+// differed from it), so that a binary never plans with what an older one measured
+std::string harness_build() { return std::string(DSB_VERSION) + "+" + DSB_GIT_SHA; }
 
 // the median of a non-empty sample (the upper one of an even count)
 double median_of(std::vector<double> v) {
@@ -73,13 +78,19 @@ std::string human_duration(double s) {
   return fmt::format("{:.1f} days", s / 86400.0);
 }
 
-CostModel::CostModel() : path_(default_cache_path()), cpu_(cpu_model_name()) {
+CostModel::CostModel() : path_(default_cache_path()), build_(harness_build()), cpu_(cpu_model_name()) {
   std::ifstream in(path_);
   if (!in) return;
   try {
     const auto j = nlohmann::json::parse(in);
-    for (const auto& [k, v] : j.at("costs").items())
+    for (const auto& [k, v] : j.at("costs").items()) {
       table_[k] = {v.at("forward_s").get<double>(), v.at("gradient_s").get<double>(), v.at("decisions").get<int>(), true};
+      // env|env config hash|build|CPU model: another build's measurement on this CPU
+      const auto a = k.find('|'), b = a == std::string::npos ? a : k.find('|', a + 1),
+                 c = b == std::string::npos ? b : k.find('|', b + 1);
+      if (c != std::string::npos && k.compare(b + 1, c - b - 1, build_) != 0 && k.compare(c + 1, std::string::npos, cpu_) == 0)
+        other_builds_.insert(k.substr(0, b));
+    }
     if (j.contains("runs"))
       for (const auto& [k, v] : j.at("runs").items())
         probes_[k] = {v.at("episodes").get<std::int64_t>(), v.at("seconds").get<double>(),
@@ -87,16 +98,21 @@ CostModel::CostModel() : path_(default_cache_path()), cpu_(cpu_model_name()) {
   } catch (const std::exception&) {
     table_.clear();  // an unreadable cache is an empty one; `calibrate` rewrites it
     probes_.clear();
+    other_builds_.clear();
   }
 }
 
 std::string CostModel::key(const std::string& env_name, const std::string& env_config_hash) const {
-  return env_name + "|" + env_config_hash + "|" + DSB_VERSION + "|" + cpu_;
+  return env_name + "|" + env_config_hash + "|" + build_ + "|" + cpu_;
+}
+
+bool CostModel::measured_by_other_build(const std::string& env_name, const std::string& env_config_hash) const {
+  return other_builds_.count(env_name + "|" + env_config_hash) > 0;
 }
 
 std::string CostModel::run_key(const PlannedRun& run) const {
   return run.spec.env + "|" + run.key.env_config_hash + "|" + run.spec.optimizer + "|" + run.key.opt_config_hash +
-         "|" + std::to_string(probe_episodes(run)) + "|" + DSB_VERSION + "|" + cpu_;
+         "|" + std::to_string(probe_episodes(run)) + "|" + build_ + "|" + cpu_;
 }
 
 std::int64_t CostModel::probe_episodes(const PlannedRun& run) const {
@@ -253,9 +269,9 @@ void CostModel::save() const {
   for (const auto& [k, v] : probes_)
     runs[k] = {{"episodes", v.episodes}, {"seconds", v.seconds}, {"replay_s_per_episode", v.replay_s_per_episode}};
   const nlohmann::json j = {{"what", "diffsim-bench seconds per episode, one core: costs by env|env config hash|harness "
-                                     "version|CPU model; runs (short runs of cheap pairs, the optimizer's own work "
-                                     "included) by env|env config hash|optimizer|optimizer config hash|harness "
-                                     "version|CPU model"},
+                                     "build (version+commit)|CPU model; runs (short runs of cheap pairs, the "
+                                     "optimizer's own work included) by env|env config hash|optimizer|optimizer "
+                                     "config hash|episodes|harness build|CPU model"},
                             {"costs", costs},
                             {"runs", runs}};
   std::error_code ec;

@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -91,12 +92,16 @@ class CostModel {
   void save() const;
 
   const std::string& path() const { return path_; }
+  // whether the cache holds episode costs of the env on this CPU measured by another build of the
+  // harness (which this one does not use)
+  bool measured_by_other_build(const std::string& env_name, const std::string& env_config_hash) const;
 
  private:
   std::string key(const std::string& env_name, const std::string& env_config_hash) const;
   std::string run_key(const PlannedRun& run) const;
-  std::string path_, cpu_;
+  std::string path_, build_, cpu_;
   std::map<std::string, EpisodeCost> table_;
+  std::set<std::string> other_builds_;  // env|env config hash measured by other builds on this CPU
   std::map<std::string, RunProbe> probes_;  // by run_key
 };
 

@@ -83,7 +83,7 @@ std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs) {
 void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& ctx) {
   const std::vector<double> cost = run_costs(plan, costs);
   std::map<std::string, Tally> by_env, by_family;
-  std::set<std::string> measured, hinted;
+  std::set<std::string> measured, hinted, other_build;
   double total = 0.0, longest = 0.0;
   for (std::size_t i = 0; i < plan.pending.size(); ++i) {
     const auto& p = plan.pending[i];
@@ -94,6 +94,9 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
       t->names.insert(p.spec.optimizer);
     }
     (costs.episode(p.spec.env, p.key.env_config_hash).measured ? measured : hinted).insert(p.spec.env);
+    if (!costs.episode(p.spec.env, p.key.env_config_hash).measured &&
+        costs.measured_by_other_build(p.spec.env, p.key.env_config_hash))
+      other_build.insert(p.spec.env);
     total += cost[i];
     longest = std::max(longest, cost[i]);
   }
@@ -105,7 +108,12 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
                      hinted.empty() ? std::string()
                                     : "; the others from their cost hints (forward and gradient episodes on the "
                                       "2-core machine the project measures on): `harness calibrate " + ctx.grid_flags +
-                                          "` measures them, one episode each");
+                                          "` measures them, one episode each" +
+                                          (other_build.empty()
+                                               ? std::string()
+                                               : fmt::format(" ({} of them were measured by another build of the "
+                                                             "harness: a calibration belongs to the binary that made it)",
+                                                             other_build.size())));
   out << fmt::format("  {:<26} {:>6} {:>11} {:>12}\n", "env", "runs", "core-hours", "longest run");
   std::vector<std::pair<std::string, Tally>> envs(by_env.begin(), by_env.end());
   std::stable_sort(envs.begin(), envs.end(), [](const auto& a, const auto& b) { return a.second.seconds > b.second.seconds; });

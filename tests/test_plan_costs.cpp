@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -302,6 +303,47 @@ TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSe
   ASSERT_EQ(testing::run_harness(dir_, "calibrate --env cartpole3 --optimizer cmaes --seeds 1 --budget 400", cache).code, 0);
   const auto j2 = nlohmann::json::parse(testing::read_file(path("costs.json")));
   EXPECT_EQ(j2.at("runs").size(), 5u) << j2.dump();
+}
+
+TEST_F(PlanFromDatabase, ACalibrationBelongsToTheBuildThatMadeIt) {
+  const std::string cache = "DSB_COST_CACHE=" + path("costs.json");
+  const std::string grid = "--env cartpole3 --optimizer cmaes --seeds 1 --budget 50";
+  ASSERT_EQ(testing::run_harness(dir_, "calibrate " + grid, cache).code, 0);
+  const auto plan = [&] { return testing::run_harness(dir_, "plan " + grid + " --db " + path("p.sqlite"), cache); };
+  const auto mine = plan();
+  ASSERT_EQ(mine.code, 0) << mine.err;
+  EXPECT_NE(mine.out.find("measured on this machine for 1 of 1 envs"), std::string::npos) << mine.out;
+  // the same cache as an older binary would have left it: every key's build field (the third
+  // field: version+commit) another one's
+  auto j = nlohmann::json::parse(testing::read_file(path("costs.json")));
+  for (const char* table : {"costs", "runs"}) {
+    nlohmann::json moved = nlohmann::json::object();
+    for (const auto& [key, v] : j.at(table).items()) {
+      std::vector<std::string> fields;
+      std::istringstream in(key);
+      for (std::string f; std::getline(in, f, '|');) fields.push_back(f);
+      const std::size_t build = std::string(table) == "costs" ? 2 : 5;  // runs: env|hash|opt|hash|episodes|build|cpu
+      ASSERT_GT(fields.size(), build + 1) << key;
+      // version+commit: "0.1.0+1b6c2f752ac9" (or with "-dirty")
+      const auto plus = fields[build].find('+');
+      ASSERT_NE(plus, std::string::npos) << key;
+      EXPECT_GE(fields[build].size() - plus - 1, 7u) << key;
+      fields[build] = fields[build].substr(0, plus) + "+000000000000";
+      std::string other;
+      for (std::size_t i = 0; i < fields.size(); ++i) other += (i ? "|" : "") + fields[i];
+      moved[other] = v;
+    }
+    j[table] = moved;
+  }
+  {
+    std::ofstream out(path("costs.json"));
+    out << j.dump(2);
+  }
+  const auto theirs = plan();
+  ASSERT_EQ(theirs.code, 0) << theirs.err;
+  EXPECT_NE(theirs.out.find("measured on this machine for 0 of 1 envs"), std::string::npos) << theirs.out;
+  EXPECT_NE(theirs.out.find("1 of them were measured by another build of the harness"), std::string::npos)
+      << theirs.out;
 }
 
 TEST(PlanCosts, BoLeapsGpIsFittedOnItsDesignAndAfterEveryLeapThatLeavesBudget) {
