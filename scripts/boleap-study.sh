@@ -30,7 +30,9 @@
 # single moves and the pair (not the ablation), the variant with the best mean rank of its median
 # final best loss over cartpole1, cartpole3 and rastrigin-10 (rank 1 = lowest median per env);
 # a tie goes to the paper's reading (plain steps over Adam, a leap in episodes over iterations,
-# the smaller change from the base).
+# the smaller change from the base). scripts/boleap_study_choice.py applies it to the table, and
+# names PAIR_FLAGS from the single moves:
+#   python3 scripts/boleap_study_choice.py OUTDIR/boleap_study.csv
 set -euo pipefail
 study=boleap-study
 envs="rastrigin-10,cartpole1,cartpole3"
