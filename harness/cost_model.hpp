@@ -83,7 +83,8 @@ class CostModel {
   std::optional<RunProbe> probed(const PlannedRun& run) const;
   // runs the run's optimizer on its env for probe_episodes(run) episodes (the run's seed, its
   // journal recorded as a grid's run records it, nothing stored) and records its wall seconds, then
-  // replays it from that journal and records the seconds per replayed episode
+  // replays it from that journal and records the seconds per replayed episode (0 without a
+  // replay when the optimizer drew before its first episode: no later seed shares any of it)
   RunProbe calibrate_run(const PlannedRun& run);
   // min(budget, kProbeEpisodesMax), or kProbeEpisodesModelled for an optimizer with a modelled own
   // time, or the episodes that hold kProbeRlDecisions of the env's RL view for an RL learner

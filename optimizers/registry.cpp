@@ -70,10 +70,10 @@ const std::vector<OptimizerEntry>& optimizer_entries() {
       // and its amortised update, sac one 7.3 ms gradient step per decision)
       {.name = "ppo", .description = "PPO (Stable-Baselines3 defaults, 3 x 64 tanh MLPs), sparse reward -loss; RL envs only",
        .make = [] { return make_ppo(); }, .needs_rl = true,
-       .costs = {.family = "rl (learner per decision)", .learner_s_per_decision = 2.41e-4}},
+       .costs = {.family = "rl (episodes + learner)", .learner_s_per_decision = 2.41e-4}},
       {.name = "sac", .description = "SB3 SAC defaults, 3x64 ReLU MLPs, sparse reward -loss at the last decision",
        .make = [] { return make_sac(); }, .needs_rl = true,
-       .costs = {.family = "rl (learner per decision)", .learner_s_per_decision = 7.3e-3}},
+       .costs = {.family = "rl (episodes + learner)", .learner_s_per_decision = 7.3e-3}},
   };
   return entries;
 }

@@ -256,16 +256,19 @@ TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSe
   double cmaes_s = 0.0, boleap_s = 0.0, ppo_s = 0.0, gd_s = 0.0, gd_replay_s = 0.0;
   for (const auto& [key, v] : j.at("runs").items()) {
     EXPECT_GT(v.at("seconds").get<double>(), 0.0) << key;
-    // every probe is replayed from its journal (a later seed's shared episodes cost that)
-    EXPECT_GT(v.at("replay_s_per_episode").get<double>(), 0.0) << key;
     ASSERT_EQ(key.rfind("cartpole3|", 0), 0u) << key;
     if (key.find("|gd|") != std::string::npos) {
       EXPECT_EQ(v.at("episodes").get<int>(), 300) << key;
       gd_s = v.at("seconds").get<double>();
+      // gd never draws: its probe is replayed from its journal, as a later seed replays it
       gd_replay_s = v.at("replay_s_per_episode").get<double>();
+      EXPECT_GT(gd_replay_s, 0.0) << key;
     } else if (key.find("|cmaes|") != std::string::npos) {
       EXPECT_EQ(v.at("episodes").get<int>(), 300) << key;
       cmaes_s = v.at("seconds").get<double>();
+      // CMA-ES draws its first population before its first episode: no seed shares any of it,
+      // and its replay is not timed
+      EXPECT_EQ(v.at("replay_s_per_episode").get<double>(), 0.0) << key;
     } else if (key.find("|ppo|") != std::string::npos) {
       EXPECT_EQ(v.at("episodes").get<int>(), 41) << key;
       ppo_s = v.at("seconds").get<double>();
