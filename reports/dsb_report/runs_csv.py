@@ -1,0 +1,95 @@
+"""A study's runs as one CSV file, a row per run, and back: what the project publishes from a grid
+(data/study/runs.csv) and what the claims verdicts and results tables are regenerated from.
+
+Columns (RUNS_CSV_COLUMNS): env, optimizer, seed, budget, status, episodes, best_loss (the run's
+final best loss; empty when it has none), best_episode (the first episode that reached it),
+metric_at_best (the env's second metric, evals.metric, at that episode; empty where the env has
+none), wall_s, env_config_hash, opt_config_hash, harness_version, git_sha. Floats are written as
+Python's repr, which reads back to the same bits, so verdicts and medians from the file are those
+from the database. Every run is written, whatever its status (the claims table says which runs are
+missing or incomplete); best_episode and metric_at_best only for the runs a report analyses
+(data.load: one config variant per env, optimizer and budget).
+
+A Data read back from the file holds final values only: each panel's `best` is its runs' final
+best loss as one column, so what needs whole curves (convergence plots, targets) is not for it.
+"""
+from __future__ import annotations
+
+import csv
+import math
+import os
+
+import numpy as np
+import pandas as pd
+
+from .data import Data, Panel, _choose_variants, slugify
+
+RUNS_CSV_COLUMNS = ["env", "optimizer", "seed", "budget", "status", "episodes", "best_loss", "best_episode",
+                    "metric_at_best", "wall_s", "env_config_hash", "opt_config_hash", "harness_version",
+                    "git_sha"]
+
+
+class RunsCsvError(Exception):
+    """The file cannot be read as a runs CSV (one-line message)."""
+
+
+def _number(v) -> str:
+    if v is None:
+        return ""
+    v = float(v)
+    return "" if math.isnan(v) else repr(v)
+
+
+def write(data: Data, path: str) -> int:
+    """Writes data's runs to `path` (a new file: an existing one is refused). Returns the rows."""
+    if os.path.exists(path):
+        raise RunsCsvError(f"'{path}' exists: remove it or name another file")
+    at_best = {}
+    for p in data.panels:
+        final = p.best[:, -1] if p.best.size else np.zeros(0)
+        for i, rid in enumerate(p.runs["run_id"].to_numpy()):
+            episode = ""
+            if p.best.shape[1] and np.isfinite(final[i]):
+                episode = str(int(np.argmax(p.best[i] == final[i])))  # the first episode at the final best
+            metric = p.metric_at_best[i] if p.metric_at_best.size else float("nan")
+            at_best[int(rid)] = (episode, _number(metric))
+    tmp = path + ".tmp"
+    with open(tmp, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(RUNS_CSV_COLUMNS)
+        for r in data.runs.sort_values(["env", "optimizer", "budget", "seed", "run_id"]).itertuples(index=False):
+            episode, metric = at_best.get(int(r.run_id), ("", ""))
+            w.writerow([r.env, r.optimizer, int(r.seed), int(r.budget), r.status, int(r.episodes),
+                        _number(r.best_loss), episode, metric, _number(r.wall_s), r.env_config_hash,
+                        r.opt_config_hash, r.harness_version, r.git_sha])
+    os.replace(tmp, path)
+    return len(data.runs)
+
+
+def load(path: str) -> Data:
+    """The runs of a runs CSV as a Data of final values (see the module's docstring)."""
+    try:
+        runs = pd.read_csv(path, dtype={"env_config_hash": str, "opt_config_hash": str, "git_sha": str,
+                                        "harness_version": str}, float_precision="round_trip",
+                           keep_default_na=False, na_values=[""])
+    except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as e:
+        raise RunsCsvError(f"cannot read '{path}': {e}") from None
+    absent = [c for c in RUNS_CSV_COLUMNS if c not in runs.columns]
+    if absent:
+        raise RunsCsvError(f"'{path}' lacks column(s) {', '.join(absent)}")
+    runs = runs.copy()
+    runs.insert(0, "run_id", np.arange(1, len(runs) + 1))
+    for c in ("best_loss", "wall_s", "metric_at_best"):
+        runs[c] = pd.to_numeric(runs[c], errors="coerce").astype(float)
+    selected, ignored = _choose_variants(runs[runs["status"] == "done"])
+    panels = []
+    budgets_per_env = selected.groupby("env")["budget"].nunique().to_dict()
+    for (env, budget), g in selected.groupby(["env", "budget"], sort=True):
+        g = g.sort_values(["optimizer", "seed"]).reset_index(drop=True)
+        final = g["best_loss"].to_numpy(dtype=float)
+        best = np.where(np.isnan(final), np.inf, final)[:, None]
+        slug = slugify(env if budgets_per_env[env] == 1 else f"{env}_b{budget}")
+        panels.append(Panel(env, int(budget), slug, g, best, np.full(len(g), np.nan),
+                            sorted(g["optimizer"].unique()), g["metric_at_best"].to_numpy(dtype=float)))
+    return Data(db_path=path, db_size=os.path.getsize(path), meta={}, runs=runs, selected=selected,
+                ignored=ignored, panels=panels, optimizers=sorted(runs["optimizer"].unique()))

@@ -1,0 +1,167 @@
+#!/usr/bin/python3
+"""A study's published runs (one CSV, a row per run) and the tables made from them: the median
+final best loss per env and optimizer, the paper's claims with their verdicts, and, where a claim
+reads the env's second metric, how many seeds of each optimizer reach its threshold.
+
+    /usr/bin/python3 scripts/study_results.py export DB RUNS.csv
+    /usr/bin/python3 scripts/study_results.py tables RUNS.csv [--claims FILE] [--harness BIN]
+                                                            [--update FILE]
+
+`export` writes a database's runs (reports/dsb_report/runs_csv.py; a new file only). `tables`
+prints the three tables as Markdown; with --update it also replaces the text between the lines
+`<!-- study_results.py: begin -->` and `<!-- study_results.py: end -->` of FILE (the README) with
+them. The verdicts are the report's (reports/dsb_report/claims.py) on the same runs: from the CSV
+or from the database they are the same. --harness BIN lets the claims table tell an env the
+harness lacks from runs the file lacks (`harness list`). Needs pandas and scipy (Debian's
+/usr/bin/python3). Exit codes: 0, 2 bad input (one line naming it).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "reports"))
+
+BEGIN, END = "<!-- study_results.py: begin -->", "<!-- study_results.py: end -->"
+
+
+def fail(msg: str) -> int:
+    print(f"study_results: {msg}", file=sys.stderr)
+    return 2
+
+
+def fmt(v: float) -> str:
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "—"
+    if math.isinf(v):
+        return "inf"
+    return f"{v:.4g}"
+
+
+def medians_table(data) -> str:
+    """env x optimizer: the median final best loss over the env's analysed runs (largest budget)"""
+    import numpy as np
+    from dsb_report import data as data_mod, stats
+    panels = data_mod.main_panels(data)
+    opts = sorted({o for p in panels for o in p.optimizers})
+    lines = ["| env (budget, seeds) | " + " | ".join(opts) + " |", "|---" * (len(opts) + 1) + "|"]
+    for p in panels:
+        seeds = sorted({len(p.rows(o)) for o in p.optimizers})
+        cells = []
+        for o in opts:
+            v = stats.final_values(p, o) if o in p.optimizers else np.zeros(0)
+            cells.append(fmt(float(np.median(v))) if v.size else "—")
+        lines.append(f"| {p.env} ({p.budget}, {'-'.join(map(str, seeds[::max(1, len(seeds) - 1)]))}) | "
+                     + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def claims_table(verdicts) -> str:
+    lines = ["| claim | env | verdict | the paper says |", "|---|---|---|---|"]
+    for r in verdicts.itertuples(index=False):
+        lines.append(f"| {r.id} | {r.env} | {r.verdict} | {r.statement} |")
+    return "\n".join(lines) + "\n"
+
+
+def metric_table(data, claims) -> str:
+    """for each env of a metric claim: per optimizer, the seeds whose metric at their best episode
+    reaches the claim's threshold"""
+    import numpy as np
+    from dsb_report import data as data_mod
+    by_env = {p.env: p for p in data_mod.main_panels(data)}
+    lines = []
+    seen = set()
+    for c in claims:
+        if c.kind not in ("metric_most", "metric_few"):
+            continue
+        for env in c.envs:
+            if (env, c.threshold) in seen:
+                continue
+            seen.add((env, c.threshold))
+            p = by_env.get(env)
+            if p is None:
+                lines.append(f"- {env}: no done run")
+                continue
+            parts = []
+            for o in p.optimizers:
+                m = p.metric_at_best[p.rows(o)]
+                parts.append(f"{o} {int(np.sum(m >= c.threshold))} of {m.size}" if np.any(np.isfinite(m))
+                             else f"{o} no metric")
+            lines.append(f"- {env}, metric at the best episode >= {c.threshold:g}: " + "; ".join(parts))
+    return "\n".join(lines) + ("\n" if lines else "")
+
+
+def tables(args) -> int:
+    from dsb_report import claims as claims_mod, runs_csv
+    try:
+        data = runs_csv.load(args.runs)
+    except runs_csv.RunsCsvError as e:
+        return fail(str(e))
+    try:
+        claims = claims_mod.load(args.claims)
+    except Exception as e:  # the claims module names the bad row
+        return fail(f"--claims: {e}")
+    registry = None
+    if args.harness:
+        from dsb_report import registry as registry_mod
+        registry = registry_mod.load(args.harness)
+    from dsb_report import data as data_mod
+    verdicts, _ = claims_mod.evaluate(claims, data_mod.main_panels(data), data.runs, registry)
+    text = ("Median final best loss over each env's seeds (the largest budget):\n\n" + medians_table(data)
+            + "\nThe paper's claims:\n\n" + claims_table(verdicts))
+    metric = metric_table(data, claims)
+    if metric:
+        text += "\nSeeds that reach the claims' metric thresholds:\n\n" + metric
+    sys.stdout.write(text)
+    if args.update:
+        try:
+            with open(args.update, encoding="utf-8") as f:
+                old = f.read()
+        except OSError as e:
+            return fail(f"--update: cannot read '{args.update}': {e.strerror}")
+        if old.count(BEGIN) != 1 or old.count(END) != 1 or old.index(BEGIN) > old.index(END):
+            return fail(f"--update: '{args.update}' has no single '{BEGIN}' ... '{END}' block")
+        new = old[:old.index(BEGIN) + len(BEGIN)] + "\n" + text + old[old.index(END):]
+        tmp = args.update + ".tmp"
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(new)
+        os.replace(tmp, args.update)
+    return 0
+
+
+def export(args) -> int:
+    from dsb_report import data as data_mod, runs_csv
+    try:
+        data = data_mod.load(args.db)
+        n = runs_csv.write(data, args.out)
+    except (data_mod.DataError, runs_csv.RunsCsvError) as e:
+        return fail(str(e))
+    print(f"study_results: {n} runs -> {args.out}")
+    return 0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    e = sub.add_parser("export", help="a database's runs as a runs CSV (a new file)")
+    e.add_argument("db")
+    e.add_argument("out")
+    t = sub.add_parser("tables", help="the tables from a runs CSV, as Markdown")
+    t.add_argument("runs")
+    t.add_argument("--claims", default=os.path.join(os.path.dirname(HERE), "reports", "paper_claims.csv"))
+    t.add_argument("--harness", help="the harness, to tell a missing env from missing runs")
+    t.add_argument("--update", help="a file whose study_results.py block gets the tables")
+    a = ap.parse_args(argv)
+    try:
+        import pandas  # noqa: F401
+        import scipy.stats  # noqa: F401
+    except ImportError as err:
+        return fail(f"{sys.executable} cannot import {err.name}; use /usr/bin/python3")
+    return export(a) if a.command == "export" else tables(a)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
