@@ -49,13 +49,13 @@ def medians_table(data) -> str:
     opts = sorted({o for p in panels for o in p.optimizers})
     lines = ["| env (budget, seeds) | " + " | ".join(opts) + " |", "|---" * (len(opts) + 1) + "|"]
     for p in panels:
-        seeds = sorted({len(p.rows(o)) for o in p.optimizers})
+        counts = [len(p.rows(o)) for o in p.optimizers]
+        seeds = f"{min(counts)}" if min(counts) == max(counts) else f"{min(counts)}-{max(counts)}"
         cells = []
         for o in opts:
             v = stats.final_values(p, o) if o in p.optimizers else np.zeros(0)
             cells.append(fmt(float(np.median(v))) if v.size else "—")
-        lines.append(f"| {p.env} ({p.budget}, {'-'.join(map(str, seeds[::max(1, len(seeds) - 1)]))}) | "
-                     + " | ".join(cells) + " |")
+        lines.append(f"| {p.env} ({p.budget}, {seeds}) | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
