@@ -52,3 +52,18 @@ set -e
 [[ $code == 2 ]] || { echo "expected exit 2 for another binary's part, got $code" >&2; exit 1; }
 grep -q "sphere-10__reference.csv was made by" "$work/third.err" || { cat "$work/third.err" >&2; exit 1; }
 echo "landed parts: taken without running, the same table; another binary's refused"
+# landing: new parts are copied, landed ones left alone, a differing one refused without copying
+mkdir "$work/landed"
+"$src/scripts/land-study-parts.sh" "$work" "$work/landed" >"$work/land.log"
+for f in "$work"/parts/*.csv; do cmp "$f" "$work/landed/$(basename "$f")"; done
+"$src/scripts/land-study-parts.sh" "$work" "$work/landed" | grep -q "0 new part(s)"
+echo "changed" >>"$work/landed/sphere-10__reference.csv"
+rm "$work/landed/sphere-10__rand-descents.csv"
+set +e
+"$src/scripts/land-study-parts.sh" "$work" "$work/landed" >/dev/null 2>"$work/land.err"
+code=$?
+set -e
+[[ $code == 2 ]] || { echo "expected exit 2 for a differing landed part, got $code" >&2; exit 1; }
+grep -q "sphere-10__reference.csv differs" "$work/land.err" || { cat "$work/land.err" >&2; exit 1; }
+[[ ! -e $work/landed/sphere-10__rand-descents.csv ]] || { echo "copied despite the refusal" >&2; exit 1; }
+echo "landing: new parts copied, a differing landed part refused"
