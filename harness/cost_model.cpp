@@ -10,12 +10,12 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.hpp"
-#include "git_sha.hpp"  // generated at build time: DSB_GIT_SHA
 #include "common/parallel.hpp"
 #include "envs/registry.hpp"
 #include "harness/grid.hpp"
 #include "harness/runner.hpp"
 #include "optimizers/registry.hpp"
+#include "git_sha.hpp"  // generated at build time: DSB_GIT_SHA
 
 namespace dsb {
 namespace {
