@@ -8,6 +8,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -45,28 +46,35 @@ int command_calibrate(const RunArgs& a, bool force) {
                              measure ? "measured now" : "cached");
   }
   // the cheap pairs' short runs (CostModel: an optimizer's own work per episode), one per
-  // (env, optimizer, configs)
+  // (env, optimizer, configs), timed in rounds across the pairs as a grid runs them
   std::set<std::string> probed;
-  bool header = false;
+  std::vector<PlannedRun> pairs;
+  std::vector<bool> measured_now;
   for (const PlannedRun& run : plan.pending) {
     const std::string pair = run.spec.env + "|" + run.key.env_config_hash + "|" + run.spec.optimizer + "|" +
                              run.key.opt_config_hash;
     if (!costs.probes(run) || !probed.insert(pair).second) continue;
-    std::optional<RunProbe> p = costs.probed(run);
-    const bool measure = force || !p;
-    if (measure) {
-      std::cerr << "harness: timing a short run of " << run.spec.env << " x " << run.spec.optimizer << " ..."
-                << std::endl;
-      p = costs.calibrate_run(run);
-      costs.save();
-    }
-    if (!header) {
+    pairs.push_back(run);
+    measured_now.push_back(force || !costs.probed(run));
+  }
+  std::vector<PlannedRun> to_time;
+  for (std::size_t i = 0; i < pairs.size(); ++i)
+    if (measured_now[i]) to_time.push_back(pairs[i]);
+  costs.calibrate_runs(
+      to_time,
+      [](const PlannedRun& run) {
+        std::cerr << "harness: timing a short run of " << run.spec.env << " x " << run.spec.optimizer << " ..."
+                  << std::endl;
+      },
+      [&costs] { costs.save(); });
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const PlannedRun& run = pairs[i];
+    if (i == 0)
       std::cout << fmt::format("\n{:<26} {:<16} {:>9} {:>12}  {}\n", "env", "optimizer", "episodes", "seconds",
                                "source");
-      header = true;
-    }
-    std::cout << fmt::format("{:<26} {:<16} {:>9} {:>12.4g}  {}\n", run.spec.env, run.spec.optimizer, p->episodes,
-                             p->seconds, measure ? "measured now" : "cached");
+    const RunProbe p = *costs.probed(run);
+    std::cout << fmt::format("{:<26} {:<16} {:>9} {:>12.4g}  {}\n", run.spec.env, run.spec.optimizer, p.episodes,
+                             p.seconds, measured_now[i] ? "measured now" : "cached");
   }
   std::cout << "cost cache: " << costs.path() << "\n";
   return 0;

@@ -1,10 +1,12 @@
 #include "harness/cost_model.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -164,43 +166,74 @@ class ProbeListener : public EpisodeListener {
 
 }  // namespace
 
-RunProbe CostModel::calibrate_run(const PlannedRun& run) {
-  RunSpec spec = run.spec;
-  spec.budget = probe_episodes(run);
-  const auto env = shared_env(spec.env, spec.env_options);
-  const std::atomic<bool> stop{false};
-  // the run, then the same run from its journal, as a later seed replays the episodes it shares
-  // with seed 0 (the plan counts them at this cost, not as free: on a 2-D function replaying an
-  // episode costs about what simulating it does); repeated like an episode's timing while the
-  // pair takes under kProbeRepeatSeconds (a run of 0.1 ms is at the mercy of one interruption),
-  // the medians kept
-  std::vector<double> run_s, replay_s;
+namespace {
+
+// one timed run of a probe and its replay (the replay 0 when the optimizer drew before its first
+// episode: no later seed shares any of it, so it is not timed; half of calibrate's time on
+// CMA-ES in 400-D)
+struct ProbeTiming {
   std::int64_t episodes = 1;
-  double total = 0.0;
-  while (run_s.empty() || (total < kProbeRepeatSeconds && run_s.size() < 9)) {
-    ProbeListener listener;
-    RunControl control{&listener, &stop, {}, 0, 0};
-    RunResult r = execute_run(spec, *env, *make_run_optimizer(spec), nullptr, nullptr, &control);
-    listener.keep(std::move(r.journal_tail));
-    episodes = std::max<std::int64_t>(r.episodes, 1);
-    run_s.push_back(r.wall_s);
-    total += r.wall_s;
-    // an optimizer that draws before its first episode shares nothing with an earlier seed: no
-    // episode of it is ever replayed that way, so its replay is not timed (half of calibrate's
-    // time on CMA-ES in 400-D)
-    if (r.seed_free.drew && r.seed_free.episodes == 0) {
-      replay_s.push_back(0.0);
-      continue;
+  double run_s = 0.0, replay_s_per_episode = 0.0, total_s = 0.0;
+};
+
+ProbeTiming time_probe_once(const RunSpec& spec, const Env& env) {
+  const std::atomic<bool> stop{false};
+  ProbeListener listener;
+  RunControl control{&listener, &stop, {}, 0, 0};
+  RunResult r = execute_run(spec, env, *make_run_optimizer(spec), nullptr, nullptr, &control);
+  listener.keep(std::move(r.journal_tail));
+  ProbeTiming t{std::max<std::int64_t>(r.episodes, 1), r.wall_s, 0.0, r.wall_s};
+  if (r.seed_free.drew && r.seed_free.episodes == 0) return t;
+  // the same run from its journal, as a later seed replays the episodes it shares with seed 0 (the
+  // plan counts them at this cost, not as free: on a 2-D function replaying an episode costs about
+  // what simulating it does)
+  ProbeListener again;
+  RunControl replay{&again, &stop, std::move(listener.journal), r.episodes, 0};
+  const RunResult rr = execute_run(spec, env, *make_run_optimizer(spec), nullptr, nullptr, &replay);
+  if (rr.replayed_episodes > 0) t.replay_s_per_episode = rr.wall_s / static_cast<double>(rr.replayed_episodes);
+  t.total_s += rr.wall_s;
+  return t;
+}
+
+}  // namespace
+
+void CostModel::calibrate_runs(const std::vector<PlannedRun>& runs,
+                               const std::function<void(const PlannedRun&)>& starting,
+                               const std::function<void()>& after_round) {
+  struct Pending {
+    const PlannedRun* run;
+    RunSpec spec;
+    std::shared_ptr<const Env> env;
+    std::vector<double> run_s, replay_s;
+    std::int64_t episodes = 1;
+    double total = 0.0;
+    bool done() const {
+      return !run_s.empty() && (total >= kProbeRepeatSeconds || static_cast<int>(run_s.size()) >= kProbeRepeatsMax);
     }
-    ProbeListener again;
-    RunControl replay{&again, &stop, std::move(listener.journal), r.episodes, 0};
-    const RunResult rr = execute_run(spec, *env, *make_run_optimizer(spec), nullptr, nullptr, &replay);
-    replay_s.push_back(rr.replayed_episodes > 0 ? rr.wall_s / static_cast<double>(rr.replayed_episodes) : 0.0);
-    total += rr.wall_s;
+  };
+  std::vector<Pending> pending;
+  for (const PlannedRun& run : runs) {
+    RunSpec spec = run.spec;
+    spec.budget = probe_episodes(run);
+    pending.push_back({&run, spec, shared_env(spec.env, spec.env_options), {}, {}});
   }
-  const RunProbe p{episodes, median_of(std::move(run_s)), median_of(std::move(replay_s))};
-  probes_[run_key(run)] = p;
-  return p;
+  // a round times each pair not yet done once, in the order given (the grid's): a pair of a
+  // second of runs is done after its first round, one of 0.1 ms after nine
+  for (bool any = true; any;) {
+    any = false;
+    for (Pending& p : pending) {
+      if (p.done()) continue;
+      if (p.run_s.empty() && starting) starting(*p.run);
+      const ProbeTiming t = time_probe_once(p.spec, *p.env);
+      p.episodes = t.episodes;
+      p.run_s.push_back(t.run_s);
+      p.replay_s.push_back(t.replay_s_per_episode);
+      p.total += t.total_s;
+      probes_[run_key(*p.run)] = {p.episodes, median_of(p.run_s), median_of(p.replay_s)};
+      any = true;
+    }
+    if (any && after_round) after_round();
+  }
 }
 
 EpisodeCost CostModel::episode(const std::string& env_name, const std::string& env_config_hash) const {

@@ -7,12 +7,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -306,6 +308,45 @@ TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSe
   ASSERT_EQ(testing::run_harness(dir_, "calibrate --env cartpole3 --optimizer cmaes --seeds 1 --budget 400", cache).code, 0);
   const auto j2 = nlohmann::json::parse(testing::read_file(path("costs.json")));
   EXPECT_EQ(j2.at("runs").size(), 5u) << j2.dump();
+}
+
+TEST_F(PlanFromDatabase, CalibrationTimesShortRunsInRoundsAcrossThePairsAsAGridRunsThem) {
+  // the cache of this test alone (CostModel reads $DSB_COST_CACHE)
+  const std::string cache = path("rounds.json");
+  ASSERT_EQ(setenv("DSB_COST_CACHE", cache.c_str(), 1), 0);
+  std::vector<RunSpec> grid;
+  for (const auto& [env, opt] : {std::pair<std::string, std::string>{"sphere-10", "random"}, {"branin", "gd"}})
+    grid.push_back(RunSpec{env, opt, 0, 50, per_run_seed(env, opt, 0)});
+  const GridPlan plan = plan_grid(grid, {}, "0.1.0");
+  ASSERT_EQ(plan.pending.size(), 2u);
+  CostModel costs;
+  for (const PlannedRun& run : plan.pending) costs.calibrate(run.spec.env, run.key.env_config_hash);
+  for (const PlannedRun& run : plan.pending) ASSERT_TRUE(costs.probes(run)) << run.spec.env;
+  std::vector<std::string> started;
+  int rounds = 0;
+  costs.calibrate_runs(
+      plan.pending, [&](const PlannedRun& run) { started.push_back(run.spec.env); },
+      [&] {
+        // after the first round every pair has been timed once: a pair's repeats come after the
+        // other pairs' runs, not back to back
+        if (++rounds == 1)
+          for (const PlannedRun& run : plan.pending) EXPECT_TRUE(costs.probed(run).has_value()) << run.spec.env;
+      });
+  unsetenv("DSB_COST_CACHE");
+  EXPECT_EQ(started, (std::vector<std::string>{"sphere-10", "branin"}));
+  // 50 episodes of a 10-D or 2-D function take well under kProbeRepeatSeconds / kProbeRepeatsMax:
+  // each pair is repeated, up to kProbeRepeatsMax rounds
+  EXPECT_GT(rounds, 1);
+  EXPECT_LE(rounds, kProbeRepeatsMax);
+  for (const PlannedRun& run : plan.pending) {
+    const auto p = costs.probed(run);
+    ASSERT_TRUE(p.has_value());
+    EXPECT_EQ(p->episodes, 50);
+    EXPECT_GT(p->seconds, 0.0);
+  }
+  // gd never draws: its replay is timed; random draws before its first episode: not
+  EXPECT_GT(costs.probed(plan.pending[1])->replay_s_per_episode, 0.0);
+  EXPECT_EQ(costs.probed(plan.pending[0])->replay_s_per_episode, 0.0);
 }
 
 TEST_F(PlanFromDatabase, ACalibrationBelongsToTheBuildThatMadeIt) {
