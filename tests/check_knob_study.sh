@@ -33,6 +33,22 @@ assert abs(float(v["ratio"]) - float(v["median"]) / float(base["median"])) < 1e-
 assert v["wins"].endswith("/3") and 0.0 <= float(v["p"]) <= 1.0
 print("knob study table: 5 rows, medians equal SQLite's, ratio", v["ratio"])
 PY
+# a part without shared episodes ran in pieces of one run each (--shard I/N), each leaving its own
+# CSV; gd's seeds share episodes, so the reference part (random, gd, cmaes) ran whole
+/usr/bin/python3 - "$work" <<'PY'
+import csv, glob, sqlite3, sys
+work = sys.argv[1]
+pieces = sorted(glob.glob(f"{work}/parts/sphere-10__rand-descents@*of*.csv"))
+assert len(pieces) == 3, pieces
+seeds = sorted(int(r["seed"]) for p in pieces for r in csv.DictReader(open(p)))
+assert seeds == [0, 1, 2], (pieces, seeds)
+for p in pieces:
+    assert len(list(csv.DictReader(open(p)))) == 1, p
+whole = list(csv.DictReader(open(f"{work}/parts/sphere-10__reference.csv")))
+assert sorted((r["optimizer"], int(r["seed"])) for r in whole) == sorted(
+    (o, s) for o in ("cmaes", "gd", "random") for s in range(3)), whole
+print("pieces: rand-descents in 3 one-run pieces, the reference part whole")
+PY
 # every finished part left its runs as CSV; a study whose OUTDIR was lost takes them as landed
 # data (STUDY_LANDED) and runs nothing, with the same table
 ls "$work"/parts/*.csv >/dev/null
@@ -58,12 +74,13 @@ mkdir "$work/landed"
 for f in "$work"/parts/*.csv; do cmp "$f" "$work/landed/$(basename "$f")"; done
 "$src/scripts/land-study-parts.sh" "$work" "$work/landed" | grep -q "0 new part(s)"
 echo "changed" >>"$work/landed/sphere-10__reference.csv"
-rm "$work/landed/sphere-10__rand-descents.csv"
+piece=$(basename "$(ls "$work"/landed/sphere-10__rand-descents@*.csv | head -1)")
+rm "$work/landed/$piece"
 set +e
 "$src/scripts/land-study-parts.sh" "$work" "$work/landed" >/dev/null 2>"$work/land.err"
 code=$?
 set -e
 [[ $code == 2 ]] || { echo "expected exit 2 for a differing landed part, got $code" >&2; exit 1; }
 grep -q "sphere-10__reference.csv differs" "$work/land.err" || { cat "$work/land.err" >&2; exit 1; }
-[[ ! -e $work/landed/sphere-10__rand-descents.csv ]] || { echo "copied despite the refusal" >&2; exit 1; }
+[[ ! -e $work/landed/$piece ]] || { echo "copied despite the refusal" >&2; exit 1; }
 echo "landing: new parts copied, a differing landed part refused"

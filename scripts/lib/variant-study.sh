@@ -21,6 +21,14 @@
 # lost OUTDIR, takes those parts from there instead of running them, provided its binary is the one
 # that made them (it refuses, naming the file, otherwise: build that commit). The table is made from
 # the parts' CSVs, landed or not.
+#
+# A part whose runs take hours would still be lost whole with its machine, so a part runs in pieces:
+# the harness's deterministic slices of its runs (--shard I/N, by run key), N the smallest from the
+# part's run count to 64 that puts each run in a slice of its own (a part whose seeds share
+# episodes, which keeps a group's seeds in one slice, or one with no such N, runs whole). Each
+# piece is a part of one run: OUTDIR/parts/ENV__LABEL@IofN.{sqlite,csv}, landed as it finishes,
+# and two pieces of a part run at once. A part begun whole (its ENV__LABEL.sqlite in OUTDIR)
+# finishes whole.
 variant_study() {
   local root out seeds=5 only='.' jobs=2 build
   root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
@@ -51,22 +59,33 @@ variant_study() {
       [[ $label =~ $only ]] || continue
       if [[ -f $landed/${env}__$label.csv ]]; then
         # a landed part: this binary's, or the study would mix binaries
-        local made_by
-        made_by=$(/usr/bin/python3 -c 'import csv, sys; print(*sorted({r["harness"] for r in csv.DictReader(open(sys.argv[1]))}), sep=" | ")' \
-          "$landed/${env}__$label.csv")
-        if [[ $made_by != "$version" ]]; then
-          echo "$study: $landed/${env}__$label.csv was made by '$made_by', not by this binary ('$version'): build that commit, or move the file away" >&2
-          return 2
-        fi
+        check_made_by "$landed/${env}__$label.csv" || return 2
         cp "$landed/${env}__$label.csv" "$out/parts/${env}__$label.csv"
         echo "  landed: $env $label"
         continue
       fi
-      parts+=("$(cost_rank "$env" "$label")|$env|$label|$opt|$flags")
+      local rank piece pieces
+      rank=$(cost_rank "$env" "$label")
+      if [[ -e $out/parts/${env}__$label.sqlite ]]; then
+        parts+=("$rank|$env|$label|$opt|$flags|")
+        continue
+      fi
+      mapfile -t pieces < <(part_pieces "$env" "$opt" "$flags")
+      ((${#pieces[@]})) || { parts+=("$rank|$env|$label|$opt|$flags|"); continue; }
+      for piece in "${pieces[@]}"; do
+        local name=${env}__$label@${piece/\//of}
+        if [[ -f $landed/$name.csv ]]; then
+          check_made_by "$landed/$name.csv" || return 2
+          cp "$landed/$name.csv" "$out/parts/$name.csv"
+          echo "  landed: $env $label piece $piece"
+          continue
+        fi
+        parts+=("$rank|$env|$label|$opt|$flags|$piece")
+      done
     done
   done
   mapfile -t parts < <(printf '%s\n' "${parts[@]}" | sort -t'|' -k1,1n -s)
-  echo "$study: ${#parts[@]} parts (env x variant), $seeds seeds, $jobs at once, into $out"
+  echo "$study: ${#parts[@]} parts or pieces of parts (env x variant), $seeds seeds, $jobs at once, into $out"
 
   export -f run_study_part budget_of
   export harness seeds out version
@@ -81,14 +100,51 @@ variant_study() {
     --reference cmaes --out "$out/${study//-/_}.csv"
 }
 
+# a landed part's CSV was made by this binary, or the study would mix binaries
+check_made_by() {
+  local made_by
+  made_by=$(/usr/bin/python3 -c 'import csv, sys; print(*sorted({r["harness"] for r in csv.DictReader(open(sys.argv[1]))}), sep=" | ")' "$1")
+  [[ $made_by == "$version" ]] && return 0
+  echo "$study: $1 was made by '$made_by', not by this binary ('$version'): build that commit, or move the file away" >&2
+  return 1
+}
+
+# the runs of a part's grid (of its slice I/N when given), as `harness plan` counts them, and how
+# many of them take episodes from an earlier seed's run: "RUNS SHARING"
+part_runs() {
+  local env=$1 opt=$2 flags=$3 shard=${4:-} plan
+  # shellcheck disable=SC2086
+  plan=$("$harness" plan --env "$env" --optimizer "$opt" $flags --seeds "$seeds" --budget "$(budget_of "$env")" \
+    ${shard:+--shard "$shard"} --db "$out/parts/.plan-nothing.sqlite")
+  echo "$(sed -n 's/^plan: \([0-9]*\) runs in the grid.*/\1/p' <<<"$plan") $(sed -n 's/^ *sharing across seeds: \([0-9]*\) runs.*/\1/p' <<<"$plan")"
+}
+
+# the slices "I/N" that hold one run each of the part (ENV OPT FLAGS), or nothing when its seeds
+# share episodes or no N from the part's run count to 64 separates its runs
+part_pieces() {
+  local env=$1 opt=$2 flags=$3 total sharing n i k pieces
+  read -r total sharing < <(part_runs "$env" "$opt" "$flags")
+  ((total > 1 && ${sharing:-0} == 0)) || return 0
+  for ((n = total; n <= 64; n++)); do
+    pieces=()
+    for ((i = 0; i < n; i++)); do
+      read -r k _ < <(part_runs "$env" "$opt" "$flags" "$i/$n")
+      ((k <= 1)) || continue 2
+      ((k == 0)) || pieces+=("$i/$n")
+    done
+    printf '%s\n' "${pieces[@]}"
+    return 0
+  done
+}
+
 run_study_part() {
-  local env label opt flags
-  IFS='|' read -r _ env label opt flags <<<"$1"
+  local env label opt flags shard
+  IFS='|' read -r _ env label opt flags shard <<<"$1"
   # shellcheck disable=SC2086
   # exit 3: some runs failed, which are results (stored with their errors), not a crash
-  local db=$out/parts/${env}__${label}.sqlite
+  local db=$out/parts/${env}__${label}${shard:+@${shard/\//of}}.sqlite
   "$harness" --env "$env" --optimizer "$opt" $flags --seeds "$seeds" --budget "$(budget_of "$env")" \
-    --jobs 1 --quiet --db "$db" || (($? == 3)) || return 0
+    ${shard:+--shard "$shard"} --jobs 1 --quiet --db "$db" || (($? == 3)) || return 0
   # the finished part's runs, to land as data (the binary's version line in every row; floats as
   # Python writes them, which read back to the same bits)
   /usr/bin/python3 - "$db" "$version" "${db%.sqlite}.csv" <<'PY'
@@ -106,7 +162,7 @@ with open(out + ".tmp", "w", newline="") as f:
         w.writerow([("" if v is None else repr(v) if isinstance(v, float) else v) for v in r] + [version])
 os.replace(out + ".tmp", out)
 PY
-  echo "  done: $env $label"
+  echo "  done: $env $label${shard:+ piece $shard}"
 }
 
 # the variants' labels by config hash, for the table
@@ -115,7 +171,7 @@ study_labels() {
   for v in "${variants[@]}"; do
     IFS='|' read -r label opt _ <<<"$v"
     [[ $label == reference ]] && continue
-    for f in "$out"/parts/*__"$label".csv; do
+    for f in "$out"/parts/*__"$label".csv "$out"/parts/*__"$label"@*.csv; do
       [[ -e $f ]] || continue
       /usr/bin/python3 -c 'import csv, sys; print(*sorted({r["opt_config_hash"] for r in csv.DictReader(open(sys.argv[1]))}), sep="\n")' \
         "$f" | sed "s/\$/,$label/"
