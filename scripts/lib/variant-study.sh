@@ -22,13 +22,14 @@
 # that made them (it refuses, naming the file, otherwise: build that commit). The table is made from
 # the parts' CSVs, landed or not.
 #
-# A part whose runs take hours would still be lost whole with its machine, so a part runs in pieces:
-# the harness's deterministic slices of its runs (--shard I/N, by run key), N the smallest from the
-# part's run count to 64 that puts each run in a slice of its own (a part whose seeds share
-# episodes, which keeps a group's seeds in one slice, or one with no such N, runs whole). Each
-# piece is a part of one run: OUTDIR/parts/ENV__LABEL@IofN.{sqlite,csv}, landed as it finishes,
-# and two pieces of a part run at once. A part begun whole (its ENV__LABEL.sqlite in OUTDIR)
-# finishes whole.
+# A part whose runs take hours would still be lost whole with its machine, so a part runs in
+# pieces: the harness's deterministic slices of its runs that hold one run each
+# (scripts/lib/run-pieces.sh; a part whose seeds share episodes runs whole). Each piece is a part
+# of one run, OUTDIR/parts/ENV__LABEL@IofN.{sqlite,csv}, landed as it finishes; two pieces of a
+# part run at once. A part begun whole (its ENV__LABEL.sqlite in OUTDIR) finishes whole.
+# shellcheck source=scripts/lib/run-pieces.sh
+source "$(dirname "${BASH_SOURCE[0]}")/run-pieces.sh"
+
 variant_study() {
   local root out seeds=5 only='.' jobs=2 build
   root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
@@ -109,32 +110,12 @@ check_made_by() {
   return 1
 }
 
-# the runs of a part's grid (of its slice I/N when given), as `harness plan` counts them, and how
-# many of them take episodes from an earlier seed's run: "RUNS SHARING"
-part_runs() {
-  local env=$1 opt=$2 flags=$3 shard=${4:-} plan
-  # shellcheck disable=SC2086
-  plan=$("$harness" plan --env "$env" --optimizer "$opt" $flags --seeds "$seeds" --budget "$(budget_of "$env")" \
-    ${shard:+--shard "$shard"} --db "$out/parts/.plan-nothing.sqlite")
-  echo "$(sed -n 's/^plan: \([0-9]*\) runs in the grid.*/\1/p' <<<"$plan") $(sed -n 's/^ *sharing across seeds: \([0-9]*\) runs.*/\1/p' <<<"$plan")"
-}
-
-# the slices "I/N" that hold one run each of the part (ENV OPT FLAGS), or nothing when its seeds
-# share episodes or no N from the part's run count to 64 separates its runs
+# the pieces of a part (ENV OPT FLAGS): scripts/lib/run-pieces.sh
 part_pieces() {
-  local env=$1 opt=$2 flags=$3 total sharing n i k pieces
-  read -r total sharing < <(part_runs "$env" "$opt" "$flags")
-  ((total > 1 && ${sharing:-0} == 0)) || return 0
-  for ((n = total; n <= 64; n++)); do
-    pieces=()
-    for ((i = 0; i < n; i++)); do
-      read -r k _ < <(part_runs "$env" "$opt" "$flags" "$i/$n")
-      ((k <= 1)) || continue 2
-      ((k == 0)) || pieces+=("$i/$n")
-    done
-    printf '%s\n' "${pieces[@]}"
-    return 0
-  done
+  local env=$1 opt=$2 flags=$3
+  # shellcheck disable=SC2086
+  grid_pieces "$harness" "$out/parts/.plan-nothing.sqlite" --env "$env" --optimizer "$opt" $flags \
+    --seeds "$seeds" --budget "$(budget_of "$env")"
 }
 
 run_study_part() {

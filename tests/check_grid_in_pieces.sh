@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# scripts/grid-in-pieces.sh end to end on a cheap grid (sphere-10 x random, gd, cmaes x 3 seeds,
+# 50 episodes, a knob of cmaes set): the pieces hold one run each (gd's seeds share episodes: one
+# piece), their runs CSV equals the one exported from the same grid run directly (every column
+# but the wall time), a second run with the pieces landed runs nothing and writes the same file,
+# and a piece made by another commit is refused.
+set -euo pipefail
+build=${1:?usage: check_grid_in_pieces.sh BUILD_DIR SOURCE_DIR}
+src=${2:?usage: check_grid_in_pieces.sh BUILD_DIR SOURCE_DIR}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+grid=(--env sphere-10 --optimizer random,gd,cmaes --seeds 3 --budget 50 --set cmaes.sigma0=0.5)
+mkdir "$work/dest"
+"$src/scripts/grid-in-pieces.sh" "$work/out" "$work/dest" --jobs 2 "$build" -- "${grid[@]}" >"$work/log" 2>&1 ||
+  { cat "$work/log" >&2; exit 1; }
+"$build/bin/harness" "${grid[@]}" --jobs 2 --quiet --db "$work/direct.sqlite" 2>/dev/null
+/usr/bin/python3 "$src/scripts/study_results.py" export "$work/direct.sqlite" "$work/direct.csv" >/dev/null
+/usr/bin/python3 - "$work" <<'PY'
+import csv, glob, json, os, sqlite3, sys
+work = sys.argv[1]
+pieces = sorted(os.path.basename(p) for p in glob.glob(f"{work}/dest/*.csv"))
+by_opt = {}
+for p in pieces:
+    by_opt.setdefault(p.split("__")[1].split("@")[0].removesuffix(".csv"), []).append(p)
+assert sorted(by_opt) == ["cmaes", "gd", "random"], pieces
+assert by_opt["gd"] == ["sphere-10__gd.csv"], pieces  # shared episodes: whole
+for opt in ("random", "cmaes"):
+    assert len(by_opt[opt]) == 3 and all("@" in p for p in by_opt[opt]), pieces
+    for p in by_opt[opt]:
+        assert len(list(csv.DictReader(open(f"{work}/dest/{p}")))) == 1, p
+drop = lambda rows: [{k: v for k, v in r.items() if k != "wall_s"} for r in rows]
+mine = list(csv.DictReader(open(f"{work}/out/runs.csv")))
+direct = list(csv.DictReader(open(f"{work}/direct.csv")))
+assert len(mine) == 9, len(mine)
+assert drop(mine) == drop(direct), (mine, direct)
+# the knob reached cmaes's pieces, and only them
+con = sqlite3.connect(f"file:{work}/direct.sqlite?mode=ro", uri=True)
+cfg = {o: json.loads(j) for o, j in con.execute(
+    "SELECT DISTINCT r.optimizer, c.json FROM runs r JOIN configs c ON c.hash = r.opt_config_hash")}
+assert cfg["cmaes"]["sigma0"] == 0.5, cfg["cmaes"]
+print("pieces: 3 + 3 one-run pieces and gd whole; the runs CSV equals the direct grid's but for wall time")
+PY
+# landed pieces are taken as done: nothing runs, the same runs CSV
+"$src/scripts/grid-in-pieces.sh" "$work/again" "$work/dest" --jobs 2 "$build" -- "${grid[@]}" >"$work/again.log" 2>&1
+grep -q "0 pieces to run" "$work/again.log" || { cat "$work/again.log" >&2; exit 1; }
+if compgen -G "$work/again/pieces/*.sqlite" >/dev/null; then echo "a landed piece was run again" >&2; exit 1; fi
+cmp "$work/out/runs.csv" "$work/again/runs.csv"
+# a piece of another commit is refused, naming it
+mkdir "$work/other"
+cp "$work"/dest/*.csv "$work/other/"
+sed -i '2,$s/,[0-9a-f]*$/,000000000000/' "$work/other/sphere-10__gd.csv"
+set +e
+"$src/scripts/grid-in-pieces.sh" "$work/third" "$work/other" "$build" -- "${grid[@]}" >/dev/null 2>"$work/third.err"
+code=$?
+set -e
+[[ $code == 2 ]] || { echo "expected exit 2 for another commit's piece, got $code" >&2; exit 1; }
+grep -q "sphere-10__gd.csv was made by another commit" "$work/third.err" || { cat "$work/third.err" >&2; exit 1; }
+echo "landed pieces: taken without running, the same runs CSV; another commit's refused"
