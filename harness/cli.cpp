@@ -10,6 +10,8 @@
 #include <fmt/format.h>
 
 #include "common/error.hpp"
+#include "common/simd_path.hpp"
+#include "envs/mpm/lane_path.hpp"
 #include "git_sha.hpp"  // generated: DSB_GIT_SHA
 #include "harness/command.hpp"
 
@@ -43,6 +45,16 @@ int harness_main(int argc, char** argv) {
   } catch (const CLI::Success& e) {  // --help, --version
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "harness: error: %s\n", one_line(e.what()).c_str());
+    return 2;
+  }
+
+  // the kernel paths the environment may force (DSB_SIMD, DSB_MPM_LANES; docs/determinism.md): a
+  // bad value stops the command here, before anything is stored, rather than failing each run
+  try {
+    (void)simd_path();
+    (void)mpm::default_lane_path();
+  } catch (const std::runtime_error& e) {
     std::fprintf(stderr, "harness: error: %s\n", one_line(e.what()).c_str());
     return 2;
   }

@@ -314,6 +314,15 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
     EXPECT_NE(r.err.find(bad), std::string::npos) << args << ": " << r.err;
     EXPECT_EQ(read(db("keep.sqlite")), before) << args;
   }
+  // a kernel path forced from the environment that does not exist: refused before any run
+  for (const auto& [prefix, bad] : std::vector<std::pair<std::string, std::string>>{
+           {"DSB_SIMD=avx512", "avx512"}, {"DSB_MPM_LANES=neon", "neon"}}) {
+    const auto r = harness("--env sphere-2 --optimizer random --seeds 1 --db " + db("keep.sqlite"), prefix);
+    EXPECT_EQ(r.code, 2) << prefix;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << prefix << ": " << r.err;
+    EXPECT_NE(r.err.find(bad), std::string::npos) << prefix << ": " << r.err;
+    EXPECT_EQ(read(db("keep.sqlite")), before) << prefix;
+  }
   // eval: wrong dimension, a non-number, outside the box, unknown env
   const std::vector<std::pair<std::string, std::string>> eval_cases = {
       {"eval --env sphere-3 --x 0.1,0.2", "3"},

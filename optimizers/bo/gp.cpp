@@ -28,6 +28,7 @@
 #include "common/det_math.hpp"
 #include "common/error.hpp"
 #include "common/number_text.hpp"
+#include "optimizers/bo/gp_pairs.hpp"
 
 namespace dsb {
 
@@ -65,15 +66,43 @@ inline double sqdist(const double* a, const double* b, int d) {
   return r2;
 }
 
-// lower triangle of K + diag I (A is n x n) from scaled inputs Xs (d x n); the strict upper part
-// is untouched
-void build_kernel(const Eigen::MatrixXd& Xs, double s, double diag, Eigen::Ref<Eigen::MatrixXd> A) {
-  const int n = static_cast<int>(Xs.cols()), d = static_cast<int>(Xs.rows());
-  for (int b = 0; b < n; ++b) {
-    const double* xb = Xs.col(b).data();
-    double* col = A.col(b).data();
-    col[b] = s + diag;
-    for (int a = b + 1; a < n; ++a) col[a] = matern_r2(s, sqdist(Xs.col(a).data(), xb, d), nullptr);
+// scratch vector of at least n doubles, reused by the calling thread (no allocation once grown)
+double* scratch(std::vector<double>& v, std::size_t n) {
+  if (v.size() < n) v.resize(n);
+  return v.data();
+}
+
+// the inputs divided by the lengthscales, one column per dimension: Xt (n x d) from X (n x d)
+Eigen::MatrixXd scaled_columns(const Eigen::MatrixXd& X, const Eigen::VectorXd& lengthscales) {
+  Eigen::MatrixXd Xt(X.rows(), X.cols());
+  for (Eigen::Index i = 0; i < X.cols(); ++i) Xt.col(i) = X.col(i) / lengthscales[i];
+  return Xt;
+}
+
+// strict lower triangle of K (n x n) from the scaled inputs Xt (n x d): the pairs' squared
+// distances (gp_pairs), then k(r) per pair as matern_r2 computes it, the exps in batches of a
+// column (dm::exp_batch gives dm::exp's bits); with G, also gneg per pair in G's strict lower part
+void kernel_lower(const Eigen::MatrixXd& Xt, double s, Eigen::MatrixXd& K, Eigen::MatrixXd* G) {
+  const int n = static_cast<int>(Xt.rows()), d = static_cast<int>(Xt.cols());
+  K.resize(n, n);
+  if (G) G->resize(n, n);
+  gp_pairs::squared_distances(Xt.data(), n, d, K.data(), gp_pairs::default_path());
+  thread_local std::vector<double> buf_r, buf_e;
+  double* r = scratch(buf_r, static_cast<std::size_t>(n));
+  double* e = scratch(buf_e, static_cast<std::size_t>(n));
+  for (int b = 0; b + 1 < n; ++b) {
+    const int m = n - b - 1;
+    double* r2 = K.col(b).data() + b + 1;  // (m) squared distances, then kernel values
+    for (int k = 0; k < m; ++k) {
+      r[k] = std::sqrt(r2[k]);
+      e[k] = -kSqrt5 * r[k];
+    }
+    dm::exp_batch(e, e, static_cast<std::size_t>(m));
+    if (G) {
+      double* g = G->col(b).data() + b + 1;
+      for (int k = 0; k < m; ++k) g[k] = (5.0 / 3.0) * s * (1.0 + kSqrt5 * r[k]) * e[k];
+    }
+    for (int k = 0; k < m; ++k) r2[k] = s * (1.0 + kSqrt5 * r[k] + (5.0 / 3.0) * r2[k]) * e[k];
   }
 }
 
@@ -83,13 +112,15 @@ bool factor_ok(const Eigen::Ref<Eigen::MatrixXd>& L) {
   return true;
 }
 
-// Cholesky in place with the jitter ladder: plain, then + 1e-8 s, 1e-7 s, 1e-6 s on the diagonal.
-// A is n x n. Returns the jitter used, or NaN when every try failed (A then holds garbage).
-double factor_with_jitter(const Eigen::MatrixXd& Xs, double s, double noise, Eigen::Ref<Eigen::MatrixXd> A) {
+// Cholesky of K + noise I in place in A (n x n) with the jitter ladder: plain, then + 1e-8 s,
+// 1e-7 s, 1e-6 s on the diagonal; K's strict lower triangle holds the kernel (kernel_lower).
+// Returns the jitter used, or NaN when every try failed (A then holds garbage).
+double factor_with_jitter(const Eigen::MatrixXd& K, double s, double noise, Eigen::Ref<Eigen::MatrixXd> A) {
   double jitter = 0.0;
   for (int k = 0; k <= kJitterTries; ++k) {
     jitter = k == 0 ? 0.0 : kJitterBase * dm::pow(10.0, k - 1) * s;
-    build_kernel(Xs, s, noise + jitter, A);
+    A.triangularView<Eigen::StrictlyLower>() = K;
+    A.diagonal().setConstant(s + (noise + jitter));
     Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(A);
     if (llt.info() == Eigen::Success && factor_ok(A)) return jitter;
   }
@@ -200,12 +231,6 @@ double neg_objective(const std::vector<double>& x, std::vector<double>& grad, vo
   }
   for (std::size_t i = 0; i < grad.size(); ++i) grad[i] = -g[static_cast<Eigen::Index>(i)];
   return -v;
-}
-
-// scratch vector of at least n doubles, reused by the calling thread (no allocation once grown)
-double* scratch(std::vector<double>& v, std::size_t n) {
-  if (v.size() < n) v.resize(n);
-  return v.data();
 }
 
 }  // namespace
@@ -349,7 +374,9 @@ void GaussianProcess::refactor() {
   // exact size when the storage has to grow: a refit of n points need not pay for spare room
   if (Lbuf_.rows() < n) Lbuf_.resize(n, n);
   auto L = Lbuf_.topLeftCorner(n, n);
-  jitter_ = factor_with_jitter(Xs_, hyper_.outputscale, hyper_.noise, L);
+  Eigen::MatrixXd K;  // (n x n) strict lower triangle
+  kernel_lower(scaled_columns(X_, hyper_.lengthscales), hyper_.outputscale, K, nullptr);
+  jitter_ = factor_with_jitter(K, hyper_.outputscale, hyper_.noise, L);
   if (std::isnan(jitter_))
     throw std::runtime_error("gp: Cholesky factorization of the kernel matrix failed with jitter up to 1e-6 x "
                              "outputscale (n = " + std::to_string(n) + ")");
@@ -450,10 +477,11 @@ double GaussianProcess::fit_objective(const Eigen::VectorXd& theta, Eigen::Vecto
   }
 
   // factor K + noise I at theta (jitter ladder as in refactor)
-  Eigen::MatrixXd Xs(d, n);  // (d x n)
-  for (int i = 0; i < n; ++i) Xs.col(i) = X_.row(i).transpose().cwiseQuotient(h.lengthscales);
+  const Eigen::MatrixXd Xt = scaled_columns(X_, h.lengthscales);  // (n x d)
+  Eigen::MatrixXd K, G;  // (n x n) strict lower triangles: k per pair; gneg, then w gneg, per pair
+  kernel_lower(Xt, s, K, grad ? &G : nullptr);
   Eigen::MatrixXd A(n, n);  // L, then L^-1, then K^-1 in the lower triangle
-  const double jitter = factor_with_jitter(Xs, s, noise, A);
+  const double jitter = factor_with_jitter(K, s, noise, A);
   if (std::isnan(jitter)) {
     if (grad) *grad = Eigen::VectorXd::Zero(d + 3);
     return kFailedObjective;
@@ -471,28 +499,25 @@ double GaussianProcess::fit_objective(const Eigen::VectorXd& theta, Eigen::Vecto
     // dLML/dp = 0.5 tr(W dK/dp), W = alpha alpha^T - K^-1, summed over the lower triangle once
     trtri_lower(A);
     lauum_lower(A);
-    Eigen::VectorXd gl = Eigen::VectorXd::Zero(d);
     double gs = 0.0, gn = 0.0;
     for (int b = 0; b < n; ++b) {
-      const double* xb = Xs.col(b).data();
       const double* kinv = A.col(b).data();
+      const double* kb = K.col(b).data();
+      double* gb = G.col(b).data();
       const double ab = alpha[b];
       const double wbb = ab * ab - kinv[b];
       gs += 0.5 * wbb * s;
       gn += 0.5 * wbb;
       for (int a = b + 1; a < n; ++a) {
-        const double* xa = Xs.col(a).data();
         const double w = alpha[a] * ab - kinv[a];
-        double gneg = 0.0;
-        const double kab = matern_r2(s, sqdist(xa, xb, d), &gneg);
-        gs += w * kab;  // s dK/ds = K (off the diagonal)
-        const double c = w * gneg;  // l_i dk/dl_i = gneg ((a_i - b_i) / l_i)^2
-        for (int i = 0; i < d; ++i) {
-          const double t = xa[i] - xb[i];
-          gl[i] += c * t * t;
-        }
+        gs += w * kb[a];  // s dK/ds = K (off the diagonal)
+        gb[a] = w * gb[a];  // l_i dk/dl_i = gneg ((a_i - b_i) / l_i)^2
       }
     }
+    // gl_i = sum over the pairs of (w gneg) ((a_i - b_i) / l_i)^2, in the pairs' order above
+    Eigen::VectorXd gl = Eigen::VectorXd::Zero(d);
+    const Eigen::MatrixXd Xs = Xt.transpose();  // (d x n)
+    gp_pairs::ard_gradient(Xs.data(), n, d, G.data(), gl.data(), gp_pairs::default_path());
     g.head(d) += gl;
     g[d] += gs;
     g[d + 1] += (noise - cfg_.noise_floor) * gn;
