@@ -135,7 +135,8 @@ TEST(BoLeap, TheKnobsForWhatThePaperLeavesOpen) {
 TEST(BoLeap, DescentRunsJStepsWhileItImproves) {
   auto f = bowl_objective(2, 200);
   BoLeapConfig cfg;
-  cfg.adam.lr = 0.01;  // small steps on a bowl keep improving
+  cfg.adam.lr = 0.01;  // small steps on a bowl keep improving for 10 of them (19 from this start)
+  cfg.max_descent_steps = 10;
   const BoLeapStats s = run(f, 4, cfg);
   ASSERT_FALSE(s.descent_lengths.empty());
   EXPECT_EQ(s.descent_lengths.front(), cfg.max_descent_steps);
@@ -152,9 +153,9 @@ TEST(BoLeap, SameSeedBitIdenticalDifferentSeedDifferent) {
 }
 
 TEST(BoLeap, FindsTheBowlMinimum) {
-  // random search gets about 0.1 here with 400 samples; Adam with lr 0.1 and J = 10 steps per
-  // descent resolves the bowl to the scale of its step (d * (lr/2)^2 ~ 1e-2) and the shrinking
-  // CMA-ES population refines below that
+  // random search gets about 0.1 here with 400 samples; Adam's descents (lr 0.03, up to J = 30
+  // steps) resolve the bowl to the scale of their step and the shrinking CMA-ES population refines
+  // below that
   auto f = bowl_objective(5, 400);
   run(f, 5);
   EXPECT_LT(f.best(), 1e-2);

@@ -69,11 +69,12 @@ TEST(KnobTable, ErrorsNameTheKnobAndTheValue) {
 TEST(Knobs, ReachTheResolvedConfigAndItsHash) {
   const auto def = make_optimizer("boleap")->config();
   const auto same = make_optimizer("boleap", {{"sigma0", "0.3"}, {"elite", "5"}})->config();
-  const auto other = make_optimizer("boleap", {{"sigma0", "0.3"}, {"max_descent_steps", "30"}, {"lr", "0.03"}})->config();
+  const auto other = make_optimizer("boleap", {{"sigma0", "0.3"}, {"max_descent_steps", "10"}, {"lr", "0.03"}})->config();
   EXPECT_EQ(config_hash(def), config_hash(same));  // elite 5 is K / 2 = the default
   EXPECT_NE(config_hash(def), config_hash(other));
   EXPECT_EQ(other["sigma0"].get<double>(), 0.3);
-  EXPECT_EQ(other["max_descent_steps"].get<int>(), 30);
+  EXPECT_EQ(other["max_descent_steps"].get<int>(), 10);
+  EXPECT_EQ(def["max_descent_steps"].get<int>(), 30);
   EXPECT_EQ(other["adam"]["lr"].get<double>(), 0.03);
   EXPECT_EQ(def["elite"].get<int>(), 5);
 }
