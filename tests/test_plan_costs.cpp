@@ -329,8 +329,9 @@ TEST_F(PlanFromDatabase, CalibrationTimesShortRunsInRoundsAcrossThePairsAsAGridR
       [&] {
         // after the first round every pair has been timed once: a pair's repeats come after the
         // other pairs' runs, not back to back
-        if (++rounds == 1)
+        if (++rounds == 1) {
           for (const PlannedRun& run : plan.pending) EXPECT_TRUE(costs.probed(run).has_value()) << run.spec.env;
+        }
       });
   unsetenv("DSB_COST_CACHE");
   EXPECT_EQ(started, (std::vector<std::string>{"sphere-10", "branin"}));
