@@ -167,6 +167,16 @@ TEST(BoCost, ThePlansFitScheduleIsTheOneARunFollowsAndItsWorkIsCounted) {
   // the model grows as the fits do, and with the dimension
   EXPECT_GT(bo_own_seconds(10, 1000), 30.0 * bo_own_seconds(10, 300) / 10.0);
   EXPECT_GT(bo_own_seconds(200, 300), bo_own_seconds(10, 300));
+  // acquisitions: one LCB minimization (512 raw samples + 5 restarts x 60 = 812 posterior
+  // evaluations) per episode after the initial design, at the n points so far: in 10-D the design
+  // is 11 points, so a 13-episode run proposes at n = 11 and n = 12
+  EXPECT_EQ(lcb_evaluations(LcbConfig{}), 812);
+  EXPECT_DOUBLE_EQ(bo_acquisition_seconds(10, 13), kBoSecondsPerLcbTerm * 812 * (11.0 * 21.0 + 12.0 * 22.0));
+  EXPECT_EQ(bo_acquisition_seconds(10, 11), 0.0);
+  // and fits at n = 11, 12 and 13 (every point up to refit_every_until)
+  const double fits = kBoEvaluationsPerFit * (kBoSecondsPerN3 * (1331.0 + 1728.0 + 2197.0) +
+                                              kBoSecondsPerN2D * 10.0 * (121.0 + 144.0 + 169.0));
+  EXPECT_NEAR(bo_own_seconds(10, 13), fits + bo_acquisition_seconds(10, 13), 1e-12 * fits);
 }
 
 TEST(BoConfigTest, ValidationNamesTheField) {

@@ -30,13 +30,26 @@ int bo_fits(int dim, std::int64_t budget, const BoConfig& cfg) {
   return fits;
 }
 
+int lcb_evaluations(const LcbConfig& cfg) { return cfg.raw_samples + cfg.restarts * cfg.max_evaluations; }
+
+double bo_acquisition_seconds(int dim, std::int64_t budget, const BoConfig& cfg) {
+  // one LCB minimization per episode after the initial design, with the n points simulated so far
+  double terms = 0.0;
+  for (std::int64_t n = std::min<std::int64_t>(cfg.initial_points_for(dim), budget); n < budget; ++n) {
+    const double nd = static_cast<double>(n);
+    terms += nd * (nd + dim);
+  }
+  return kBoSecondsPerLcbTerm * lcb_evaluations(cfg.lcb) * terms;
+}
+
 double bo_own_seconds(int dim, std::int64_t budget, const BoConfig& cfg) {
   double n3 = 0.0, n2 = 0.0;
   for_each_fit(dim, budget, cfg, [&](double n) {
     n3 += n * n * n;
     n2 += n * n;
   });
-  return kBoEvaluationsPerFit * (kBoSecondsPerN3 * n3 + kBoSecondsPerN2D * n2 * dim);
+  return kBoEvaluationsPerFit * (kBoSecondsPerN3 * n3 + kBoSecondsPerN2D * n2 * dim) +
+         bo_acquisition_seconds(dim, budget, cfg);
 }
 
 namespace {
