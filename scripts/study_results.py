@@ -60,9 +60,14 @@ def medians_table(data) -> str:
 
 
 def claims_table(verdicts) -> str:
-    lines = ["| claim | env | verdict | the paper says |", "|---|---|---|---|"]
-    for r in verdicts.itertuples(index=False):
-        lines.append(f"| {r.id} | {r.env} | {r.verdict} | {r.statement} |")
+    """one row per claim and env; an unsettled row names the command that makes its runs (the
+    report's own column: `harness --claims --env ENV --seeds N`), a settled one '—'"""
+    from dsb_report.html import settle_text
+    lines = ["| claim | env | verdict | to settle, run | the paper says |", "|---|---|---|---|---|"]
+    for _, r in verdicts.iterrows():
+        cmd = settle_text(r)
+        cmd = f"`{cmd}`" if r["settle"] else cmd
+        lines.append(f"| {r['id']} | {r['env']} | {r['verdict']} | {cmd} | {r['statement']} |")
     return "\n".join(lines) + "\n"
 
 
