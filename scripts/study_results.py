@@ -4,11 +4,13 @@ final best loss per env and optimizer, the paper's claims with their verdicts, a
 reads the env's second metric, how many seeds of each optimizer reach its threshold.
 
     /usr/bin/python3 scripts/study_results.py export DB RUNS.csv
-    /usr/bin/python3 scripts/study_results.py tables RUNS.csv [--claims FILE] [--harness BIN]
-                                                            [--update FILE]
+    /usr/bin/python3 scripts/study_results.py tables RUNS.csv [MORE.csv ...] [--claims FILE]
+                                                     [--harness BIN] [--update FILE]
 
 `export` writes a database's runs (reports/dsb_report/runs_csv.py; a new file only). `tables`
-prints the three tables as Markdown; with --update it also replaces the text between the lines
+prints the three tables as Markdown, from one runs CSV or several (a study's grids published apart,
+such as data/study/runs.csv and the fluid grid's pieces data/study/fluid/*.csv; a run found in two
+of them is refused); with --update it also replaces the text between the lines
 `<!-- study_results.py: begin -->` and `<!-- study_results.py: end -->` of FILE (the README) with
 them. The verdicts are the report's (reports/dsb_report/claims.py) on the same runs: from the CSV
 or from the database they are the same. --harness BIN lets the claims table tell an env the
@@ -102,7 +104,7 @@ def metric_table(data, claims) -> str:
 def tables(args) -> int:
     from dsb_report import claims as claims_mod, runs_csv
     try:
-        data = runs_csv.load(args.runs)
+        data = runs_csv.load(*args.runs)
     except runs_csv.RunsCsvError as e:
         return fail(str(e))
     try:
@@ -155,7 +157,7 @@ def main(argv=None) -> int:
     e.add_argument("db")
     e.add_argument("out")
     t = sub.add_parser("tables", help="the tables from a runs CSV, as Markdown")
-    t.add_argument("runs")
+    t.add_argument("runs", nargs="+")
     t.add_argument("--claims", default=os.path.join(os.path.dirname(HERE), "reports", "paper_claims.csv"))
     t.add_argument("--harness", help="the harness, to tell a missing env from missing runs")
     t.add_argument("--update", help="a file whose study_results.py block gets the tables")

@@ -117,6 +117,47 @@ class StudyResults(unittest.TestCase):
         self.assertIn("| not testable from the database | none |", tip)
         self.assertIn("- cartpole1, metric at the best episode >= 0.5: bo 0 of 5; cmaes 5 of 5;", r.stdout)
 
+    def test_tables_from_several_files_are_those_from_one(self):
+        # the study's grids published apart (data/study/runs.csv and the fluid grid's pieces)
+        with open(self.csv, newline="") as f:
+            rows = list(csv.reader(f))
+        parts = []
+        for env in ("cartpole1", "sphere-2"):
+            path = os.path.join(self.tmp, f"part-{env}.csv")
+            with open(path, "w", newline="") as f:
+                csv.writer(f, lineterminator="\n").writerows([rows[0]] + [r for r in rows[1:] if r[0] == env])
+            parts.append(path)
+        whole = study("tables", self.csv, "--claims", self.claims)
+        split = study("tables", *parts, "--claims", self.claims)
+        self.assertEqual(split.returncode, 0, split.stderr)
+        self.assertEqual(split.stdout, whole.stdout)
+        self.assertIn("| sphere | sphere-2 | does not hold |", split.stdout)
+        # one run in two files: refused in one line naming the run and both files
+        dup = os.path.join(self.tmp, "dup.csv")
+        with open(dup, "w", newline="") as f:
+            csv.writer(f, lineterminator="\n").writerows([rows[0], next(r for r in rows[1:] if r[0] == "sphere-2")])
+        r = study("tables", *parts, dup, "--claims", self.claims)
+        self.assertEqual(r.returncode, 2)
+        self.assertEqual(r.stderr.count("\n"), 1)
+        self.assertIn("part-sphere-2.csv", r.stderr)
+        self.assertIn("dup.csv", r.stderr)
+        self.assertIn("sphere-2/", r.stderr)
+
+    def test_the_readme_block_is_the_published_data(self):
+        # the README's results block is what the script makes of data/study/ now: a run landed
+        # without regenerating it (or an edit by hand) fails here
+        import glob
+        with open(os.path.join(SOURCE, "README.md"), encoding="utf-8") as f:
+            readme = f.read()
+        begin, end = "<!-- study_results.py: begin -->\n", "<!-- study_results.py: end -->"
+        block = readme[readme.index(begin) + len(begin):readme.index(end)]
+        files = [os.path.join(SOURCE, "data", "study", "runs.csv")] + sorted(
+            glob.glob(os.path.join(SOURCE, "data", "study", "fluid", "*.csv")))
+        r = study("tables", *files, "--harness", HARNESS)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(block, r.stdout, "README's block is stale: rerun scripts/study_results.py tables "
+                         "data/study/runs.csv data/study/fluid/*.csv --harness build/bin/harness --update README.md")
+
     def test_update_replaces_its_block_only(self):
         readme = os.path.join(self.tmp, "README.md")
         with open(readme, "w") as f:

@@ -66,8 +66,10 @@ def write(data: Data, path: str) -> int:
     return len(data.runs)
 
 
-def load(path: str) -> Data:
-    """The runs of a runs CSV as a Data of final values (see the module's docstring)."""
+RUN_KEY = ["env", "optimizer", "seed", "budget", "env_config_hash", "opt_config_hash"]
+
+
+def _read(path: str) -> pd.DataFrame:
     try:
         runs = pd.read_csv(path, dtype={"env_config_hash": str, "opt_config_hash": str, "git_sha": str,
                                         "harness_version": str}, float_precision="round_trip",
@@ -77,6 +79,25 @@ def load(path: str) -> Data:
     absent = [c for c in RUNS_CSV_COLUMNS if c not in runs.columns]
     if absent:
         raise RunsCsvError(f"'{path}' lacks column(s) {', '.join(absent)}")
+    return runs[RUNS_CSV_COLUMNS]
+
+
+def load(*paths: str) -> Data:
+    """The runs of one or more runs CSVs (a study's grids published apart, for example
+    data/study/runs.csv and the fluid grid's pieces) as one Data of final values (see the module's
+    docstring). A run (env, optimizer, seed, budget, config hashes) in two files is refused, naming
+    both: the files are parts of one study, not versions of it."""
+    if not paths:
+        raise RunsCsvError("no runs CSV given")
+    frames, origin = [], {}
+    for path in paths:
+        runs = _read(path)
+        for key in runs[RUN_KEY].astype(str).itertuples(index=False, name=None):
+            if key in origin:
+                raise RunsCsvError(f"run {'/'.join(key[:4])} is in both '{origin[key]}' and '{path}'")
+            origin[key] = path
+        frames.append(runs)
+    runs = pd.concat(frames, ignore_index=True) if len(frames) > 1 else frames[0]
     runs = runs.copy()
     runs.insert(0, "run_id", np.arange(1, len(runs) + 1))
     for c in ("best_loss", "wall_s", "metric_at_best"):
@@ -91,5 +112,5 @@ def load(path: str) -> Data:
         slug = slugify(env if budgets_per_env[env] == 1 else f"{env}_b{budget}")
         panels.append(Panel(env, int(budget), slug, g, best, np.full(len(g), np.nan),
                             sorted(g["optimizer"].unique()), g["metric_at_best"].to_numpy(dtype=float)))
-    return Data(db_path=path, db_size=os.path.getsize(path), meta={}, runs=runs, selected=selected,
-                ignored=ignored, panels=panels, optimizers=sorted(runs["optimizer"].unique()))
+    return Data(db_path=", ".join(paths), db_size=sum(os.path.getsize(p) for p in paths), meta={}, runs=runs,
+                selected=selected, ignored=ignored, panels=panels, optimizers=sorted(runs["optimizer"].unique()))
