@@ -166,6 +166,12 @@ class ProbeListener : public EpisodeListener {
 
 }  // namespace
 
+bool probe_timed_enough(int timings, double total_s) {
+  if (timings <= 0) return false;
+  if (timings >= kProbeRepeatsMax || total_s >= kProbeOnceSeconds) return true;
+  return total_s >= kProbeRepeatSeconds && timings >= kProbeRepeatsMin;
+}
+
 namespace {
 
 // one timed run of a probe and its replay (the replay 0 when the optimizer drew before its first
@@ -208,7 +214,7 @@ void CostModel::calibrate_runs(const std::vector<PlannedRun>& runs,
     std::int64_t episodes = 1;
     double total = 0.0;
     bool done() const {
-      return !run_s.empty() && (total >= kProbeRepeatSeconds || static_cast<int>(run_s.size()) >= kProbeRepeatsMax);
+      return probe_timed_enough(static_cast<int>(run_s.size()), total);
     }
   };
   std::vector<Pending> pending;

@@ -45,6 +45,19 @@ inline constexpr double kProbeMaxEpisodeSeconds = 1e-3;
 // (calibrate_runs), the median kept
 inline constexpr double kProbeRepeatSeconds = 0.2;
 inline constexpr int kProbeRepeatsMax = 9;
+// and any probe is timed at least kProbeRepeatsMin times unless its timings reach
+// kProbeOnceSeconds: on this 2-core machine one 200-episode run of `bo` on rastrigin-10 timed
+// 1.59, 1.90, 2.09 and 2.35 s in four calibrations (the machine otherwise idle), so one timing of a
+// GP run is as noisy as the plan check's 30% band; the median of three is not moved by one outlier
+// (five calibrations with this rule gave 2.14, 2.03, 2.11, 2.11 and 1.55 s: the machine's fast and
+// slow spells can outlast a pair's three timings, and six separate runs of the grid took 1.75-2.25 s).
+// A probe of 10 s or more (an RL learner's, CMA-ES in 400-D) is timed once: its repeats would
+// cost calibrate minutes.
+inline constexpr int kProbeRepeatsMin = 3;
+inline constexpr double kProbeOnceSeconds = 10.0;
+// whether a pair's probe has been timed enough: `timings` runs (and replays) so far, `total_s`
+// their seconds in all
+bool probe_timed_enough(int timings, double total_s);
 // two of PPO's 2,048-decision rollouts with their updates; 41 episodes of a cartpole
 inline constexpr std::int64_t kProbeRlDecisions = 4096;
 
@@ -93,8 +106,9 @@ class CostModel {
   // back to back warms its own caches and predictors: on 10-D functions the first of nine repeats
   // took 1.1-2.5x their median; in seven alternating trials of 42 such pairs on 2 jobs, the
   // grid's runs took a median 1.27x a plan from back-to-back probes, 1.16x one from rounds). A
-  // pair repeats while its runs and replays total under kProbeRepeatSeconds, at most
-  // kProbeRepeatsMax times; the medians are kept. `starting(run)` is told before a pair's first
+  // pair repeats until probe_timed_enough (while its runs and replays total under
+  // kProbeRepeatSeconds, and at least kProbeRepeatsMin times unless they reach kProbeOnceSeconds;
+  // at most kProbeRepeatsMax times); the medians are kept. `starting(run)` is told before a pair's first
   // run, `after_round()` after each round (the caller saves there: an interrupted calibration
   // keeps what it measured).
   void calibrate_runs(const std::vector<PlannedRun>& runs, const std::function<void(const PlannedRun&)>& starting,

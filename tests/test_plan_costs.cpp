@@ -350,6 +350,24 @@ TEST_F(PlanFromDatabase, CalibrationTimesShortRunsInRoundsAcrossThePairsAsAGridR
   EXPECT_EQ(costs.probed(plan.pending[0])->replay_s_per_episode, 0.0);
 }
 
+TEST(ProbeRepeats, AShortOrNoisyProbeIsTimedThreeTimesALongOneOnce) {
+  EXPECT_FALSE(probe_timed_enough(0, 0.0));
+  // a 50-ms run: until 0.2 s in all (4 timings)
+  EXPECT_FALSE(probe_timed_enough(3, 0.15));
+  EXPECT_TRUE(probe_timed_enough(4, 0.2));
+  // a 0.1-ms run: nine timings at most
+  EXPECT_FALSE(probe_timed_enough(8, 0.0008));
+  EXPECT_TRUE(probe_timed_enough(9, 0.0009));
+  // a 2-s GP run: three timings, the median kept (one timing alone was 1.59 s against 1.90-2.35)
+  EXPECT_FALSE(probe_timed_enough(1, 2.0));
+  EXPECT_FALSE(probe_timed_enough(2, 4.0));
+  EXPECT_TRUE(probe_timed_enough(3, 6.0));
+  // a 6-s run: two (12 s in all); a 30-s RL probe: one
+  EXPECT_FALSE(probe_timed_enough(1, 6.0));
+  EXPECT_TRUE(probe_timed_enough(2, 12.0));
+  EXPECT_TRUE(probe_timed_enough(1, 30.0));
+}
+
 TEST_F(PlanFromDatabase, ACalibrationBelongsToTheBuildThatMadeIt) {
   const std::string cache = "DSB_COST_CACHE=" + path("costs.json");
   const std::string grid = "--env cartpole3 --optimizer cmaes --seeds 1 --budget 50";
