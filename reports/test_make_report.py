@@ -580,6 +580,29 @@ class TestPaperClaims(ReportCase):
         got = {i: self.claim(i, "plb-torus")["verdict"] for i in ("lifts", "drops", "wrong")}
         self.assertEqual(got, {"lifts": "holds", "drops": "holds", "wrong": "does not hold"})
 
+    def test_seeds_reaching_each_metric_threshold_per_optimizer(self):
+        # every optimizer with a done run of the env, counted as SQLite counts them
+        con = sqlite3.connect(self.db)
+        want = {}
+        for env, thr in (("plb-torus", 0.5), ("fluid", 0.2)):
+            for opt, runs, reached, with_metric in con.execute(
+                    "SELECT r.optimizer, COUNT(*), SUM(e.metric >= ?), COUNT(e.metric) FROM runs r JOIN evals e "
+                    "ON e.run_id = r.run_id AND e.episode = 1 WHERE r.env = ? AND r.status = 'done' "
+                    "GROUP BY r.optimizer", (thr, env)):
+                want[(env, opt)] = (str(reached or 0), str(runs), str(with_metric))
+        got = {(r["env"], r["optimizer"]): (r["reached"], r["runs"], r["with_metric"])
+               for r in read_csv(self.file("claims_metric_counts.csv"))}
+        self.assertEqual(got, want)
+        self.assertEqual(got[("plb-torus", "boleap")], ("6", "6", "6"))
+        self.assertEqual(got[("plb-torus", "cmaes")], ("0", "6", "6"))
+        self.assertEqual(got[("fluid", "boleap")][2], "0")  # no metric stored
+        rows = {c[0]: c for c in (row_cells(x) for x in html_rows(section(self.html, "claims-detail")))
+                if len(c) == 4}
+        self.assertEqual(rows["plb-torus"], ["plb-torus", "0.5", "6 of 6", "0 of 6"])
+        self.assertEqual(rows["fluid"], ["fluid", "0.2", "no metric", "no metric"])
+        with open(self.file("summary.md"), encoding="utf-8") as f:
+            self.assertIn("| plb-torus | 0.5 | 6 of 6 | 0 of 6 |", f.read())
+
     def test_table_near_the_top_of_the_page(self):
         rows = [row_cells(x) for x in html_rows(section(self.html, "claims-detail"))]
         verdicts = {c[7] for c in rows if len(c) == 10}

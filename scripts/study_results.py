@@ -75,29 +75,9 @@ def claims_table(verdicts) -> str:
 
 def metric_table(data, claims) -> str:
     """for each env of a metric claim: per optimizer, the seeds whose metric at their best episode
-    reaches the claim's threshold"""
-    import numpy as np
-    from dsb_report import data as data_mod
-    by_env = {p.env: p for p in data_mod.main_panels(data)}
-    lines = []
-    seen = set()
-    for c in claims:
-        if c.kind not in ("metric_most", "metric_few"):
-            continue
-        for env in c.envs:
-            if (env, c.threshold) in seen:
-                continue
-            seen.add((env, c.threshold))
-            p = by_env.get(env)
-            if p is None:
-                lines.append(f"- {env}: no done run")
-                continue
-            parts = []
-            for o in p.optimizers:
-                m = p.metric_at_best[p.rows(o)]
-                parts.append(f"{o} {int(np.sum(m >= c.threshold))} of {m.size}" if np.any(np.isfinite(m))
-                             else f"{o} no metric")
-            lines.append(f"- {env}, metric at the best episode >= {c.threshold:g}: " + "; ".join(parts))
+    reaches the claim's threshold (reports/dsb_report/metric_counts.py, as the report shows it)"""
+    from dsb_report import data as data_mod, metric_counts
+    lines = metric_counts.lines(claims, data_mod.main_panels(data))
     return "\n".join(lines) + ("\n" if lines else "")
 
 

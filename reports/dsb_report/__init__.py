@@ -6,6 +6,7 @@ Modules, one purpose each:
   stats       per-cell statistics, Student-t CIs, Mann-Whitney + Holm, A12, ranks, ECDF of targets
   claims      the paper's qualitative claims (paper_claims.csv) tested over the database, verdicts
   claim_runs  what an unsettled claim lacks (env, runs missing or not done) and its command
+  metric_counts  per optimizer, the seeds over a metric claim's threshold (the cube over the rim)
   registry    `harness list`: which envs exist, which optimizers --all runs on each
   style       palette (one fixed color per optimizer), fonts, the log-scale rule
   plots       the figures: curves, finals, ranks, ECDF

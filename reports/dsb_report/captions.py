@@ -73,6 +73,11 @@ CLAIMS_SETTLE = ("A claim the database cannot settle yet says what it lacks: 'en
                  "or failed), and names the command that makes its runs: the claims grid of the "
                  "harness restricted to that env.")
 
+METRIC_COUNTS = ("For each env of a claim on its second metric (fluid: the cube's height, lifted over the "
+                 "tank's rim at 0.2 m), every optimizer's runs at the env's largest budget whose "
+                 "metric at the episode of their final best loss reaches the claim's threshold, of "
+                 "its runs there; the claim itself judges only the optimizers it names.")
+
 SIGNIFICANCE = ("For each env, the best optimizer is the one with the lowest median final loss. Every "
                 "other optimizer's final best losses over seeds are compared with the best one's by a "
                 "one-sided Mann-Whitney U test, whether they tend to be higher (scipy.stats."

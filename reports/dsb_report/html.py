@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from html import escape
 
-from . import captions, renders
+from . import captions, metric_counts, renders
 from .claim_runs import CLAIMS_SEEDS
 from .registry import base_env
 from . import gradient_quality as gq
@@ -109,7 +109,19 @@ def _claims(ctx) -> str:
             f"<p>{escape(counts or 'No claims.')} ({link('claims.csv')}; every comparison: "
             f"{link('claims_comparisons.csv')})</p>\n" +
             table(["claim", "env (budget)", "the paper says", "tested as", "seeds", "p (Holm)", "A12",
-                   "verdict", "why", "to settle, run"], rows, cls, numeric={5, 6}))
+                   "verdict", "why", "to settle, run"], rows, cls, numeric={5, 6}) + _metric_counts(ctx))
+
+
+def _metric_counts(ctx) -> str:
+    """Per optimizer, the seeds whose metric at their best episode reaches a metric claim's
+    threshold (the cube over the rim), every optimizer with a done run of the env."""
+    t = ctx["metric_counts"]
+    if t.empty:
+        return ""
+    headers, rows = metric_counts.wide(t)
+    return ('\n<h3 id="claims-metric">Seeds that reach the metric claims\' thresholds</h3>\n<p>' +
+            escape(captions.METRIC_COUNTS) + f" ({link('claims_metric_counts.csv')})</p>\n" +
+            table(headers, rows))
 
 
 def heat(score: float) -> str:

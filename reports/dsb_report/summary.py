@@ -1,7 +1,7 @@
 """summary.md: the report's tables in Markdown (overview, per-env finals, ranks, problems)."""
 from __future__ import annotations
 
-from . import captions
+from . import captions, metric_counts
 from .claim_runs import CLAIMS_SEEDS
 from . import gradient_quality as gq
 from .html import settle_text
@@ -17,6 +17,10 @@ def render(ctx) -> str:
         [[r["id"], f"{r['env']} ({r['budget']})" if r["budget"] != "" else r["env"], r["test"],
           r["n"], fmt(r["p_claim"], 3), fmt(r["a12_claim"], 2), r["verdict"], r["reason"],
           settle_text(r)] for _, r in c.iterrows()]), ""]
+    t = ctx["metric_counts"]
+    if not t.empty:
+        out += ["### Seeds that reach the metric claims' thresholds", "", captions.METRIC_COUNTS, "",
+                md_table(*metric_counts.wide(t)), ""]
     opts = ctx["optimizers"]
     out += ["## Overview: final results per env and optimizer", "", captions.OVERVIEW, "",
             md_table(["env (budget)"] + list(opts),
