@@ -10,7 +10,8 @@ import numpy as np
 import pandas as pd
 import scipy
 
-from . import captions, claims, grid, html, landscape, metric_counts, optima, plots, renders, stats, style, summary
+from . import (captions, claims, grid, html, landscape, metric_counts, optima, plots, renders, stats, style,
+               summary)
 from .data import main_panels, slugify
 from .tables import FINAL_COLUMNS, SIGNIFICANCE_COLUMNS, failures, mark, overview, write_csv
 
@@ -192,7 +193,8 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
         notes=notes,
         provenance=_provenance(data, build_type, made, int(sum(p.best.size for p in data.panels)),
                                registry),
-        claims=verdicts, metric_counts=reached, panels=items, mean_ranks=mr, ranks_png="ranks.png", ecdf_png="ecdf.png",
+        claims=verdicts, metric_counts=reached, panels=items, mean_ranks=mr, ranks_png="ranks.png",
+        ecdf_png="ecdf.png",
         targets=tinfo, gradient_quality=gradient_quality,
         gradient_quality_path=gradient_quality_path,
         overview=overview(items, data.optimizers),
