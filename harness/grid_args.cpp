@@ -145,7 +145,7 @@ CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
     char tail = 0;
     if (std::sscanf(a.shard.c_str(), "%d/%d%c", &i, &n, &tail) != 2 || n < 1 || n > 100000 || i < 0 || i >= n)
       throw UsageError("--shard must be I/N with 0 <= I < N <= 100000, got '" + a.shard + "'");
-    shard = {i, n};
+    shard = {i, n, !a.no_sharing};
   }
   if (a.db.empty()) throw UsageError("--db must name a file, got ''");
   if (a.jobs < 0 || a.jobs > 1024)

@@ -29,10 +29,10 @@ const ResolvedConfig& resolve(std::map<std::string, ResolvedConfig>& cache, cons
 
 }  // namespace
 
-int shard_of(const RunKey& key, int count) {
+int shard_of(const RunKey& key, int count, bool group_seeds) {
   // the seeds of a group that shares across seeds go to one shard, where they can share
-  const bool grouped =
-      key.optimizer.rfind("ext:", 0) != 0 && optimizer_entry(key.optimizer).seed_use != SeedUse::at_start;
+  const bool grouped = group_seeds && key.optimizer.rfind("ext:", 0) != 0 &&
+                       optimizer_entry(key.optimizer).seed_use != SeedUse::at_start;
   std::string text;
   for (const std::string& part : {key.env, key.optimizer, grouped ? std::string() : std::to_string(key.seed),
                                   std::to_string(key.budget), key.env_config_hash, key.opt_config_hash}) {
@@ -53,7 +53,7 @@ GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& don
     const ResolvedConfig& opt =
         resolve(plan.opt_configs, spec.optimizer, [&](const std::string&) { return make_run_optimizer(spec)->config(); });
     RunKey key{spec.env, spec.optimizer, spec.seed, spec.budget, env.hash, opt.hash, harness_version};
-    if (shard.count > 1 && shard_of(key, shard.count) != shard.index) continue;
+    if (shard.count > 1 && shard_of(key, shard.count, shard.group_seeds) != shard.index) continue;
     ++plan.runs;
     if (done.count(key)) {
       ++plan.skipped;

@@ -43,16 +43,20 @@ struct GridPlan {
 };
 
 // A shard I/N of the grid: the runs whose key hashes to I mod N (shard_of), so adding an env or an
-// optimizer, or reordering the names, moves no run to another shard.
+// optimizer, or reordering the names, moves no run to another shard. group_seeds: a sharing
+// group's seeds fall in one shard (they share there); false under --no-sharing, where every run
+// is cut on its own (a 5-seed group of hours can then run as five slices)
 struct Shard {
   int index = 0, count = 1;
+  bool group_seeds = true;
 };
 
 // the shard of a run: FNV-1a over "env\0optimizer\0seed\0budget\0env_config_hash\0opt_config_hash",
 // mixed by splitmix64, mod count (the harness version is not hashed: a new version keeps the cut);
 // the seed is left out (an empty string) for optimizers that share across seeds, so that a
-// group's seeds share a shard and its later seeds replay the first one's seed-free episodes
-int shard_of(const RunKey& key, int count);
+// group's seeds share a shard and its later seeds replay the first one's seed-free episodes;
+// with group_seeds false (nothing is shared: --no-sharing) every run hashes its own seed
+int shard_of(const RunKey& key, int count, bool group_seeds = true);
 
 GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done,
                    const std::string& harness_version, Shard shard = {});

@@ -2,13 +2,17 @@
 # A harness grid run in pieces of one run that land as they finish, for a grid longer than one
 # machine's life (issue 29's fluid grid: about 16 core-hours, several sessions of this machine).
 #
-#   scripts/grid-in-pieces.sh OUTDIR DEST [--jobs J] BUILD_DIR -- GRID_FLAGS...
+#   scripts/grid-in-pieces.sh OUTDIR DEST [--jobs J] [--split-groups-over S] BUILD_DIR -- GRID_FLAGS...
 #   e.g. scripts/grid-in-pieces.sh /scratch/fluid data/study/fluid --jobs 2 build -- --all --env fluid --seeds 5
 #
 # Each (env, optimizer) of the grid, cheapest first as `harness plan GRID_FLAGS` orders them, is
 # cut into pieces of one run each (scripts/lib/run-pieces.sh: the harness's own deterministic
 # slices, --shard I/N; a group whose seeds share episodes is one piece, run whole so that its later
-# seeds replay the first). A piece runs into OUTDIR/pieces/ENV__OPT@IofN.sqlite (ENV__OPT.sqlite
+# seeds replay the first). --split-groups-over S cuts such a group into one-run pieces too when
+# the plan gives it more than S seconds (a group longer than the machine's life would never land):
+# its pieces run with --no-sharing, each seed simulating the episodes it would have replayed, with
+# the same results bit for bit (docs/determinism.md; a harness older than this option keeps the
+# group whole, and says so). A piece runs into OUTDIR/pieces/ENV__OPT@IofN.sqlite (ENV__OPT.sqlite
 # when whole) and resumes there when interrupted; once its runs are done (or failed, which are
 # results) they are written in the runs CSV format (scripts/study_results.py export,
 # reports/dsb_report/runs_csv.py) and copied into DEST under the same name, never over a file
@@ -17,15 +21,17 @@
 # OUTDIR/runs.csv holds the runs of every piece of the grid, DEST's and new, sorted, for
 # `scripts/study_results.py tables`. Interrupted? Run the same command again.
 set -euo pipefail
-usage="usage: grid-in-pieces.sh OUTDIR DEST [--jobs J] BUILD_DIR -- GRID_FLAGS..."
+usage="usage: grid-in-pieces.sh OUTDIR DEST [--jobs J] [--split-groups-over S] BUILD_DIR -- GRID_FLAGS..."
 out=${1:?$usage}
 dest=${2:?$usage}
 shift 2
 jobs=2
+split_over=
 build=
 while (($#)); do
   case $1 in
     --jobs) jobs=${2:?$usage}; shift 2 ;;
+    --split-groups-over) split_over=${2:?$usage}; shift 2 ;;
     --) shift; break ;;
     -*) echo "grid-in-pieces: unknown option '$1'" >&2; exit 2 ;;
     *) build=$1; shift ;;
@@ -33,6 +39,8 @@ while (($#)); do
 done
 (($#)) || { echo "grid-in-pieces: no grid flags after '--' ($usage)" >&2; exit 2; }
 [[ $jobs =~ ^[1-9][0-9]*$ ]] || { echo "grid-in-pieces: --jobs must be a whole number from 1, got '$jobs'" >&2; exit 2; }
+[[ -z $split_over || $split_over =~ ^[0-9]+$ ]] ||
+  { echo "grid-in-pieces: --split-groups-over must be a whole number of seconds, got '$split_over'" >&2; exit 2; }
 root=$(cd "$(dirname "$0")/.." && pwd)
 harness=${build:?$usage}/bin/harness
 [[ -x $harness ]] || { echo "grid-in-pieces: no harness at $harness" >&2; exit 2; }
@@ -42,17 +50,21 @@ grid=("$@")
 source "$root/scripts/lib/run-pieces.sh"
 mkdir -p "$out/pieces"
 plan_db=$out/pieces/.plan-nothing.sqlite
-sha=$("$harness" --version | sed -n 's/.*(git \([0-9a-f]*\).*/\1/p')
+# the commit as the harness stamps its runs (git_sha), "-dirty" included for a build of uncommitted
+# changes: such pieces name no commit, fine for a try, not for data to publish
+sha=$("$harness" --version | sed -n 's/.*(git \([0-9a-f]*\(-dirty\)\{0,1\}\).*/\1/p')
 [[ -n $sha ]] || { echo "grid-in-pieces: cannot read the commit from '$harness --version'" >&2; exit 2; }
+[[ $sha != *-dirty ]] || echo "grid-in-pieces: warning: $harness is built from uncommitted changes ($sha)" >&2
 
 # the grid's (env, optimizer) pairs, cheapest first (the plan's start ranks), each with the flags
 # of its own grid: --env ENV --optimizer OPT --seeds --budget as the plan has them, and the grid's
 # --set, --ext and --ext-timeout flags that concern the pair (the harness refuses a --set naming
-# neither an env nor an optimizer of its grid). A line: ENV OPT base64(NUL-separated flags).
+# neither an env nor an optimizer of its grid). A line: ENV OPT PLANNED_S base64(NUL-separated
+# flags), PLANNED_S the plan's seconds for the pair's runs (rounded up).
 "$harness" plan "${grid[@]}" --db "$plan_db" --runs-csv "$out/pieces/.plan.csv.tmp" >/dev/null
 mv "$out/pieces/.plan.csv.tmp" "$out/pieces/plan.csv"
 mapfile -t pairs < <(/usr/bin/python3 - "$out/pieces/plan.csv" "${grid[@]}" <<'PY'
-import base64, csv, sys
+import base64, csv, math, sys
 plan, flags = sys.argv[1], sys.argv[2:]
 # the grid's flags that may concern one pair: (flag, value)
 kept = []
@@ -68,7 +80,8 @@ while i < len(flags):
     i += 1
 pairs = {}
 for r in csv.DictReader(open(plan)):
-    p = pairs.setdefault((r["env"], r["optimizer"]), {"rank": 1 << 62, "seeds": 0, "budgets": set()})
+    p = pairs.setdefault((r["env"], r["optimizer"]), {"rank": 1 << 62, "seeds": 0, "budgets": set(), "s": 0.0})
+    p["s"] += float(r["planned_s"])
     p["rank"] = min(p["rank"], int(r["start_rank"]))
     p["seeds"] = max(p["seeds"], int(r["seed"]) + 1)
     p["budgets"].add(r["budget"])
@@ -82,7 +95,7 @@ for (env, opt), p in sorted(pairs.items(), key=lambda kv: (kv[1]["rank"], kv[0])
         if name == "--ext" and "ext:" + val.split("=", 1)[0] != opt:
             continue
         own += [name, val]
-    print(env, opt, base64.b64encode("\0".join(own).encode() + b"\0").decode())
+    print(env, opt, math.ceil(p["s"]), base64.b64encode("\0".join(own).encode() + b"\0").decode())
 PY
 )
 ((${#pairs[@]})) || { echo "grid-in-pieces: the grid has no runs" >&2; exit 2; }
@@ -98,9 +111,20 @@ PY
 
 todo=()
 for pair in "${pairs[@]}"; do
-  read -r env opt flags64 <<<"$pair"
+  read -r env opt planned flags64 <<<"$pair"
   mapfile -d '' -t flags < <(base64 -d <<<"$flags64")
   mapfile -t slices < <(grid_pieces "$harness" "$plan_db" "${flags[@]}")
+  if ((${#slices[@]} == 0)) && [[ -n $split_over ]] && ((planned > split_over)) && [[ ! -f $dest/${env}__$opt.csv ]]; then
+    # a sharing group over the limit (and not landed whole): one-run pieces without sharing, if
+    # this harness cuts them. Give the same option when resuming, or the group runs whole again.
+    mapfile -t slices < <(grid_pieces "$harness" "$plan_db" "${flags[@]}" --no-sharing)
+    if ((${#slices[@]})); then
+      echo "  $env x $opt: planned ${planned} s over --split-groups-over $split_over: ${#slices[@]} one-run pieces, --no-sharing"
+      flags64=$(printf '%s\0' "${flags[@]}" --no-sharing | base64 -w0)
+    else
+      echo "  $env x $opt: planned ${planned} s over --split-groups-over $split_over, but this harness keeps a sharing group's seeds in one slice even with --no-sharing: whole"
+    fi
+  fi
   ((${#slices[@]})) || slices=("")
   for slice in "${slices[@]}"; do
     name=${env}__$opt${slice:+@${slice/\//of}}

@@ -3,7 +3,8 @@
 # 50 episodes, a knob of cmaes set): the pieces hold one run each (gd's seeds share episodes: one
 # piece), their runs CSV equals the one exported from the same grid run directly (every column
 # but the wall time), a second run with the pieces landed runs nothing and writes the same file,
-# and a piece made by another commit is refused.
+# a piece made by another commit is refused, and --split-groups-over cuts gd's group into one-run
+# pieces (without sharing) that give the same runs.
 set -euo pipefail
 build=${1:?usage: check_grid_in_pieces.sh BUILD_DIR SOURCE_DIR}
 src=${2:?usage: check_grid_in_pieces.sh BUILD_DIR SOURCE_DIR}
@@ -45,10 +46,28 @@ PY
 grep -q "0 pieces to run" "$work/again.log" || { cat "$work/again.log" >&2; exit 1; }
 if compgen -G "$work/again/pieces/*.sqlite" >/dev/null; then echo "a landed piece was run again" >&2; exit 1; fi
 cmp "$work/out/runs.csv" "$work/again/runs.csv"
+# --split-groups-over 0: gd's sharing group runs as one-run pieces without sharing, the same runs
+mkdir "$work/split"
+"$src/scripts/grid-in-pieces.sh" "$work/splitout" "$work/split" --jobs 2 --split-groups-over 0 "$build" -- "${grid[@]}" \
+  >"$work/split.log" 2>&1 || { cat "$work/split.log" >&2; exit 1; }
+grep -q "sphere-10 x gd: planned .* s over --split-groups-over 0: 3 one-run pieces, --no-sharing" "$work/split.log" ||
+  { cat "$work/split.log" >&2; exit 1; }
+[[ ! -e $work/split/sphere-10__gd.csv && $(compgen -G "$work/split/sphere-10__gd@*of*.csv" | wc -l) == 3 ]] ||
+  { ls "$work/split" >&2; exit 1; }
+/usr/bin/python3 - "$work/out/runs.csv" "$work/splitout/runs.csv" <<'PY'
+import csv, sys
+drop = lambda f: [{k: v for k, v in r.items() if k != "wall_s"} for r in csv.DictReader(open(f))]
+a, b = drop(sys.argv[1]), drop(sys.argv[2])
+assert len(a) == 9 and a == b, (a, b)
+PY
+"$src/scripts/grid-in-pieces.sh" "$work/split" "$work/split" --split-groups-over x "$build" -- "${grid[@]}" 2>"$work/bad.err" &&
+  { echo "a bad --split-groups-over was taken" >&2; exit 1; }
+grep -q "got 'x'" "$work/bad.err" || { cat "$work/bad.err" >&2; exit 1; }
+echo "--split-groups-over 0: gd in 3 one-run pieces without sharing, the same runs CSV"
 # a piece of another commit is refused, naming it
 mkdir "$work/other"
 cp "$work"/dest/*.csv "$work/other/"
-sed -i '2,$s/,[0-9a-f]*$/,000000000000/' "$work/other/sphere-10__gd.csv"
+sed -i '2,$s/,[0-9a-f]*\(-dirty\)\{0,1\}$/,000000000000/' "$work/other/sphere-10__gd.csv"
 set +e
 "$src/scripts/grid-in-pieces.sh" "$work/third" "$work/other" "$build" -- "${grid[@]}" >/dev/null 2>"$work/third.err"
 code=$?

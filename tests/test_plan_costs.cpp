@@ -182,6 +182,30 @@ TEST(Shards, AShardIsAFunctionOfTheRunKeyAlone) {
   }
 }
 
+TEST(Shards, ASharingGroupIsOneSliceUnlessNothingIsShared) {
+  // gd never draws: its seeds share, so they fall in one shard; with --no-sharing (group_seeds
+  // false) each run hashes its own seed and 1,000 seeds spread over 10 shards like cmaes's
+  RunKey gd{"fluid", "gd", 0, 1000, "e", "o", "0.1.0"};
+  const int group_shard = shard_of(gd, 10);
+  std::vector<int> grouped(10, 0), alone(10, 0);
+  for (int s = 0; s < 1000; ++s) {
+    gd.seed = s;
+    ++grouped[static_cast<std::size_t>(shard_of(gd, 10))];
+    ++alone[static_cast<std::size_t>(shard_of(gd, 10, false))];
+  }
+  EXPECT_EQ(grouped[static_cast<std::size_t>(group_shard)], 1000);
+  for (int c : alone) {
+    EXPECT_GT(c, 70);
+    EXPECT_LT(c, 130);
+  }
+  // an optimizer that draws at its start never groups: group_seeds changes nothing for it
+  RunKey cmaes{"fluid", "cmaes", 0, 1000, "e", "o", "0.1.0"};
+  for (int s = 0; s < 50; ++s) {
+    cmaes.seed = s;
+    EXPECT_EQ(shard_of(cmaes, 10), shard_of(cmaes, 10, false));
+  }
+}
+
 TEST(Plan, DurationsReadAsTheyShould) {
   EXPECT_EQ(human_duration(0.0042), "0.0042 s");
   EXPECT_EQ(human_duration(42.0), "42 s");
