@@ -23,6 +23,13 @@
 #   ablation                   K = 1 (no search distribution: each leap is one descent from the
 #                              LCB point), against rand-descents (the same descents from uniform
 #                              random starts)
+#   rand-descents.leap_descents  the ablation's control (added 2026-12-02, after the ablation ran on
+#                              rastrigin-10 and cartpole1): rand-descents with the leap's descents,
+#                              at most 10 Adam steps, stopped after more than 3 non-improving steps
+#                              (max_steps 10, patience 4, min_improvement 0), so that the ablation and
+#                              it differ only in where a descent starts: BO's LCB point or a uniform
+#                              random one. Plain rand-descents' descents are up to 100 steps with
+#                              patience 10, so against it the ablation also differs in descent length.
 # and, once the single moves are in, "pair": the two single moves on different knobs with the best
 # mean rank combined (set by PAIR_FLAGS in the environment; without it the pair is not run).
 #
@@ -60,6 +67,7 @@ variants=(
   "boleap.plain_steps|boleap|$(with plain_steps=true step_size=0.1)"
   "boleap.adam_per_leap|boleap|$(with adam_per_leap=true)"
   "boleap.ablation|boleap|$(with population=1)"
+  "rand-descents.leap_descents|rand-descents|--set rand-descents.max_steps=10 --set rand-descents.patience=4 --set rand-descents.min_improvement=0"
 )
 # PAIR_FLAGS: KEY=VALUE pairs, e.g. PAIR_FLAGS="sigma0=0.1 max_descent_steps=30"
 # shellcheck disable=SC2086
