@@ -84,3 +84,26 @@ set -e
 grep -q "sphere-10__reference.csv differs" "$work/land.err" || { cat "$work/land.err" >&2; exit 1; }
 [[ ! -e $work/landed/$piece ]] || { echo "copied despite the refusal" >&2; exit 1; }
 echo "landing: new parts copied, a differing landed part refused"
+# --table runs nothing: the table from the landed parts alone, naming the parts it left out
+STUDY_LANDED=$work/parts "$src/scripts/knob-study.sh" "$work/table" --envs sphere-10 --seeds 3 \
+  --only '^(reference|rand-descents(\.start_scale=0\.(1|5))?)$' --table "$build" >"$work/table.log"
+grep -q "not landed, left out: sphere-10 rand-descents.start_scale=0.5 piece" "$work/table.log" ||
+  { cat "$work/table.log" >&2; exit 1; }
+if compgen -G "$work/table/parts/*.sqlite" >/dev/null || [[ -e $work/table/knob-study.sqlite ]]; then
+  echo "--table ran a part or merged" >&2; exit 1
+fi
+cmp "$work/knob_study.csv" "$work/table/knob_study.csv"
+echo "--table: nothing run, the same table, the part not landed named"
+# a variant of a reference optimizer (boleap-study's rand-descents.leap_descents) leaves the plain
+# one named "default", not by its hash
+"$src/scripts/boleap-study.sh" "$work/bl" --envs sphere-10 --seeds 2 --only '^(reference|rand-descents\.leap_descents)$' \
+  "$build" >/dev/null
+/usr/bin/python3 - "$work/bl/boleap_study.csv" <<'PY'
+import csv, sys
+rows = {(r["optimizer"], r["variant"]): r for r in csv.DictReader(open(sys.argv[1]))}
+assert set(rows) == {(o, "default") for o in ("random", "gd", "cmaes", "rand-descents")} | {
+    ("rand-descents", "leap_descents")}, sorted(rows)
+v, base = rows[("rand-descents", "leap_descents")], rows[("rand-descents", "default")]
+assert abs(float(v["ratio"]) - float(v["median"]) / float(base["median"])) < 1e-12, v
+print("a reference optimizer's variant: rows", sorted(rows))
+PY

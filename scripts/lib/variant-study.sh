@@ -7,7 +7,7 @@
 #   budget_of    function ENV -> budget
 #   cost_rank    function ENV LABEL -> a number; parts run cheapest first
 # and then call `variant_study "$@"` with the script's arguments:
-#   OUTDIR [--envs E1,E2] [--seeds N] [--only REGEX] [--jobs J] [BUILD_DIR]
+#   OUTDIR [--envs E1,E2] [--seeds N] [--only REGEX] [--jobs J] [--table] [BUILD_DIR]
 # Each (env, variant) runs into OUTDIR/parts/ENV__LABEL.sqlite (one writer per file, J at once),
 # then `harness merge` joins them into OUTDIR/$study.sqlite (variants differ by opt_config_hash;
 # OUTDIR/variants.csv names each hash by its label) and scripts/knob_study_table.py writes the
@@ -20,7 +20,9 @@
 # into data/$study/ (or point $STUDY_LANDED at them) and a later run of the study, on a machine that
 # lost OUTDIR, takes those parts from there instead of running them, provided its binary is the one
 # that made them (it refuses, naming the file, otherwise: build that commit). The table is made from
-# the parts' CSVs, landed or not.
+# the parts' CSVs, landed or not. --table runs nothing: it makes the table from the landed parts
+# alone (a study still running elsewhere, published as far as it has come; the table's seeds
+# column says how many runs each row has) and names what it left out.
 #
 # A part whose runs take hours would still be lost whole with its machine, so a part runs in
 # pieces: the harness's deterministic slices of its runs that hold one run each
@@ -31,9 +33,9 @@
 source "$(dirname "${BASH_SOURCE[0]}")/run-pieces.sh"
 
 variant_study() {
-  local root out seeds=5 only='.' jobs=2 build
+  local root out seeds=5 only='.' jobs=2 build table_only=0
   root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
-  out=${1:?usage: $study OUTDIR [--envs E1,E2] [--seeds N] [--only REGEX] [--jobs J] [BUILD_DIR]}
+  out=${1:?usage: $study OUTDIR [--envs E1,E2] [--seeds N] [--only REGEX] [--jobs J] [--table] [BUILD_DIR]}
   shift
   build=$root/build
   while (($#)); do
@@ -42,6 +44,7 @@ variant_study() {
       --seeds) seeds=$2; shift 2 ;;
       --only) only=$2; shift 2 ;;
       --jobs) jobs=$2; shift 2 ;;
+      --table) table_only=1; shift ;;
       -*) echo "$study: unknown option '$1'" >&2; return 2 ;;
       *) build=$1; shift ;;
     esac
@@ -86,14 +89,24 @@ variant_study() {
     done
   done
   mapfile -t parts < <(printf '%s\n' "${parts[@]}" | sort -t'|' -k1,1n -s)
+  if ((table_only)); then
+    local p
+    for p in "${parts[@]}"; do
+      [[ -n $p ]] || continue
+      IFS='|' read -r _ env label _ _ piece <<<"$p"
+      echo "  not landed, left out: $env $label${piece:+ piece $piece}"
+    done
+    parts=()
+  fi
   echo "$study: ${#parts[@]} parts or pieces of parts (env x variant), $seeds seeds, $jobs at once, into $out"
 
   export -f run_study_part budget_of
   export harness seeds out version
   ((${#parts[@]} == 0)) || printf '%s\n' "${parts[@]}" | xargs -d '\n' -P "$jobs" -I{} bash -c 'run_study_part "$@"' _ {}
 
-  rm -f "$out/$study.sqlite"
-  if compgen -G "$out/parts/*.sqlite" >/dev/null; then
+  # the merged database (not with --table: a part running in OUTDIR is not a result yet)
+  ((table_only)) || rm -f "$out/$study.sqlite"
+  if ((!table_only)) && compgen -G "$out/parts/*.sqlite" >/dev/null; then
     "$harness" merge --into "$out/$study.sqlite" "$out"/parts/*.sqlite
   fi
   { echo "opt_config_hash,variant"; study_labels; } >"$out/variants.csv"
@@ -146,9 +159,15 @@ PY
   echo "  done: $env $label${shard:+ piece $shard}"
 }
 
-# the variants' labels by config hash, for the table
+# the variants' labels by config hash, for the table; a reference optimizer's config is labelled
+# with its name (its default), so that a variant of it (rand-descents.leap_descents) does not leave
+# the plain one unnamed; where one hash has two labels the variant's (sorted after) is kept
 study_labels() {
   local v label opt f
+  for f in "$out"/parts/*__reference.csv "$out"/parts/*__reference@*.csv; do
+    [[ -e $f ]] || continue
+    /usr/bin/python3 -c 'import csv, sys; print(*sorted({r["opt_config_hash"] + "," + r["optimizer"] for r in csv.DictReader(open(sys.argv[1]))}), sep="\n")' "$f"
+  done
   for v in "${variants[@]}"; do
     IFS='|' read -r label opt _ <<<"$v"
     [[ $label == reference ]] && continue
