@@ -427,6 +427,12 @@ CLAIM_CELLS = {
     ("cartpole1", "bo"): [20, 21, 22, 23, 24, 25],
     ("fluid", "boleap"): [1, 2, 3, 4, 5, 6],             # best, but no lift metric stored
     ("fluid", "cmaes"): [11, 12, 13, 14, None, 16],      # None: a run without a finite loss
+    ("branin", "boleap"): [1, 3, 5, 7, 9],               # interleaved with cmaes: p >= alpha, and
+    ("branin", "cmaes"): [2, 4, 6, 8, 10],               # random's 2 seeds cannot change that
+    ("branin", "random"): [20, 21],
+    ("sphere-2", "boleap"): [1, 2, 3, 4, 5],             # clearly below cmaes, random short: open
+    ("sphere-2", "cmaes"): [11, 12, 13, 14, 15],
+    ("sphere-2", "random"): [20, 21],
 }
 # 5 seeds of 8 optimizers for a claim of 4 x 4 one-sided comparisons ("many"): Holm's smallest
 # reachable p is 16 / C(10, 5) = 0.063 >= 0.05, so it needs 6 seeds (16 / C(12, 6) = 0.017)
@@ -468,6 +474,8 @@ def _paper_and_metric_claims(tmp):
         w.writerow(["wrong", "plb-torus", "metric_most", "cmaes", "", "0.5", "wrong", "t", ""])
         w.writerow(["many", "hartmann6", "a_below_b", " ".join(MANY_A), " ".join(MANY_B), "",
                     "many", "t", ""])
+        w.writerow(["early-fail", "branin", "a_below_b", "boleap", "cmaes random", "", "early", "t", ""])
+        w.writerow(["early-open", "sphere-2", "a_below_b", "boleap", "cmaes random", "", "open", "t", ""])
     return ("--claims", path)
 
 
@@ -540,6 +548,20 @@ class TestPaperClaims(ReportCase):
         self.assertEqual(r["verdict"], "runs missing: 40 of 48 done", r["reason"])
         self.assertIn(f"Absent: {', '.join(MANY_A + MANY_B)} seed 5.", r["reason"])
         self.assertEqual(r["settle"], "harness --claims --env hartmann6 --seeds 6")
+
+    def test_a_failing_comparison_settles_before_the_short_ones(self):
+        # boleap vs cmaes interleaved (p >= alpha before Holm) and boleap vs random's 2 seeds short
+        # (2 x 1/C(7, 2) = 0.095): no run of random can make "boleap below both" hold
+        r = self.claim("early-fail", "branin")
+        self.assertEqual(r["verdict"], "does not hold", r["reason"])
+        self.assertTrue(r["reason"].startswith("boleap vs cmaes: p 0.") and
+                        r["reason"].endswith("before Holm; 1 comparison(s) short of seeds cannot change that"),
+                        r["reason"])
+        self.assertEqual(r["settle"], "")
+        # the same short comparison beside a significant one leaves the claim open
+        r = self.claim("early-open", "sphere-2")
+        self.assertEqual(r["verdict"], "runs missing: 12 of 15 done", r["reason"])
+        self.assertEqual(r["settle"], "harness --claims --env sphere-2 --seeds 5")
 
     def test_env_or_optimizer_missing(self):
         need_harness()        # runs missing vs env missing: `harness list` says plb-triplemove exists

@@ -19,7 +19,9 @@ the env's largest budget; NULL = +inf, stats.final_values):
 Holm runs over the comparisons of one claim on one env. Verdicts: 'holds', 'does not hold', 'not
 testable from the database', and for a claim the data cannot settle yet (no done run of the env
 or of an optimizer of the claim, or 'not enough data': some comparison could not reach alpha even
-with perfectly separated samples, comparisons x smallest exact p >= alpha, see stats.min_seeds)
+with perfectly separated samples, comparisons x smallest exact p >= alpha, see stats.min_seeds;
+but a claim needing every comparison significant does not hold once a testable one has p >= alpha
+before Holm, whatever its short ones would give)
 what it still needs (claim_runs.assess): 'env missing' (the harness has no such env), 'runs
 missing: k of n done' (runs it needs are absent from the database), 'runs incomplete: k of n done'
 (some of them are running or failed), or 'not enough data' when every run it needs is done. Such
@@ -205,6 +207,18 @@ def _judge_tests(c: Claim, b: list, panel, comps: list) -> dict:
                    max(a12, key=lambda e: abs(e - 0.5)))
     short = [(x, y) for x, y in pairs
              if m * stats.min_exact_p(len(vals[x]), len(vals[y]), sides) >= stats.ALPHA]
+    # a claim that needs every comparison significant fails on a testable one whose p is >= alpha
+    # before Holm (Holm's p is never below the raw p): the comparisons still short of seeds cannot
+    # make it hold, so they do not hold the verdict back
+    unreachable = sorted(((x, y, p) for (x, y), p in zip(pairs, raw) if (x, y) not in short and p >= stats.ALPHA),
+                         key=lambda t: -t[2]) if want_significant and short else []
+    if unreachable:
+        x, y, p = unreachable[0]
+        out.update(verdict=FAILS, reason=(
+            f"{x} vs {y}: p {p:.3g} >= {stats.ALPHA} before Holm"
+            + (f" (and {len(unreachable) - 1} more)" if len(unreachable) > 1 else "")
+            + f"; {len(short)} comparison(s) short of seeds cannot change that"))
+        return out
     if short:
         x, y = short[0]
         out.update(verdict=NO_DATA, reason=(
