@@ -161,7 +161,7 @@ PY
 
 # the variants' labels by config hash, for the table; a reference optimizer's config is labelled
 # with its name (its default), so that a variant of it (rand-descents.leap_descents) does not leave
-# the plain one unnamed; where one hash has two labels the variant's (sorted after) is kept
+# the plain one unnamed; where one hash has two labels the variant's (printed after) is kept
 study_labels() {
   local v label opt f
   for f in "$out"/parts/*__reference.csv "$out"/parts/*__reference@*.csv; do
