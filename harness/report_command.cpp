@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -73,6 +74,13 @@ int command_report(const std::string& db_path, const std::string& out_dir, const
     if (quiet) {
       const int devnull = open("/dev/null", O_WRONLY);
       if (devnull >= 0) dup2(devnull, STDOUT_FILENO);
+      // a refresh during a grid finishes what it writes: the Ctrl-C or closed terminal that stops
+      // the grid reaches the terminal's whole process group, this child too, and would kill it
+      // mid-write (a Python traceback, a half-written report) although the harness stops in order
+      // and builds the report once more at the end. Ignored signals stay ignored across exec, and
+      // Python then installs no KeyboardInterrupt handler.
+      ::signal(SIGINT, SIG_IGN);
+      ::signal(SIGHUP, SIG_IGN);
     }
     execvp(argv[0], argv.data());
     std::perror(("harness: cannot run " + python).c_str());
@@ -80,7 +88,8 @@ int command_report(const std::string& db_path, const std::string& out_dir, const
   }
   int status = 0;
   if (pid < 0 || waitpid(pid, &status, 0) < 0) throw std::runtime_error("cannot start the report generator");
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
+  // the shell's convention: 128 + the signal that killed the generator
+  return WIFEXITED(status) ? WEXITSTATUS(status) : WIFSIGNALED(status) ? 128 + WTERMSIG(status) : 1;
 }
 
 Command report_command() {

@@ -8,10 +8,12 @@ namespace dsb {
 // index.html is ours); any other folder only with force (the option's name in the message)
 void check_report_folder(const std::string& dir, bool force, const std::string& option = "--out");
 // Runs the Python report generator (reports/make_report.py) with Debian's system interpreter.
-// quiet: the generator's stdout is dropped (refreshes during a grid run); gradient_quality: a CSV of
+// quiet: the generator's stdout is dropped and it ignores SIGINT and SIGHUP, so the terminal's stop
+// of a grid does not cut a report short (refreshes during a grid run); gradient_quality: a CSV of
 // scripts/gradient-quality.sh for the "Gradient quality" section (empty: the generator's default,
 // data/gradient_quality.csv); renders: a folder of scripts/render-best.sh's render_<env>.png
 int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
                    bool quiet = false, const std::string& gradient_quality = "", const std::string& renders = "");
+// (the exit code: the generator's, or 128 + the signal that killed it)
 
 }  // namespace dsb

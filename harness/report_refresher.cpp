@@ -31,7 +31,11 @@ void ReportRefresher::run_finished() {
 int ReportRefresher::build() {
   try {
     const int rc = command_report(db_, dir_, "", /*quiet=*/true);
-    std::fprintf(stderr, "harness: report %s %s\n", rc == 0 ? "written to" : "FAILED, not written to", dir_.c_str());
+    if (rc > 128)
+      std::fprintf(stderr, "harness: report not written to %s: its generator was killed by signal %d\n", dir_.c_str(),
+                   rc - 128);
+    else
+      std::fprintf(stderr, "harness: report %s %s\n", rc == 0 ? "written to" : "FAILED, not written to", dir_.c_str());
     return rc;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "harness: report not refreshed: %s\n", e.what());

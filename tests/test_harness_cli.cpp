@@ -583,6 +583,23 @@ TEST_F(HarnessCli, ReportOptionWritesTheReportWhenTheGridEnds) {
   EXPECT_TRUE(fs::exists(dir_ / "rep" / "index.html"));
 }
 
+TEST_F(HarnessCli, ACtrlCDuringTheReportBuildLetsTheReportFinish) {
+  // A stand-in generator (DSB_PYTHON=/bin/sh runs DSB_REPORTS_DIR/make_report.py) does what a
+  // terminal's Ctrl-C does while the end-of-grid report is being written: SIGINT to the whole
+  // foreground process group (setsid gives the harness a group of its own). The generator must
+  // live on and finish; the harness stops in order (exit 130) and says the report was written.
+  fs::create_directories(dir_ / "gen");
+  std::ofstream(dir_ / "gen" / "make_report.py") << "kill -INT 0\necho finished > " << path("gen/finished") << "\n";
+  const auto r = harness("--env sphere-2 --optimizer random --seeds 1 --budget 5 --quiet --db " + db("r.sqlite") +
+                             " --report " + db("rep"),
+                         "DSB_PYTHON=/bin/sh DSB_REPORTS_DIR=" + path("gen") + " setsid --wait");
+  EXPECT_EQ(r.code, 128 + SIGINT) << r.err;
+  EXPECT_NE(r.err.find("report written to " + db("rep")), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("FAILED"), std::string::npos) << r.err;
+  EXPECT_EQ(read(dir_ / "gen" / "finished"), "finished\n");
+  EXPECT_EQ(scalar(db("r.sqlite"), "SELECT count(*) FROM runs WHERE status='done'"), "1");
+}
+
 TEST_F(HarnessCli, MergeCombinesShardsAndRefusesConflicts) {
   const std::string grid = "--env sphere-2,branin,cartpole1 --optimizer random,cmaes,gd --seeds 2 --budget 8 --quiet";
   ASSERT_EQ(harness(grid + " --db " + db("all.sqlite")).code, 0);
