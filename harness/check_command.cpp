@@ -23,6 +23,7 @@ namespace dsb {
 namespace {
 
 int command_check(const std::string& db_path, const std::string& baseline_path) {
+  check_database_path("--db", db_path, true);  // the database first: its problems are named first
   std::vector<ResultRow> baseline;
   try {
     baseline = read_result_csv(baseline_path);

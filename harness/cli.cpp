@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "common/error.hpp"
+#include "common/shown_value.hpp"
 #include "common/simd_path.hpp"
 #include "envs/mpm/lane_path.hpp"
 #include "git_sha.hpp"  // generated: DSB_GIT_SHA
@@ -18,11 +19,11 @@
 namespace dsb {
 namespace {
 
+// a message as one line with no control character: what it echoes from the user (a path with a
+// newline or an escape sequence) shows as escapes and cannot forge lines or drive the terminal
 std::string one_line(std::string s) {
-  for (auto& c : s)
-    if (c == '\n' || c == '\r') c = ' ';
-  while (!s.empty() && s.back() == ' ') s.pop_back();
-  return s;
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\n' || s.back() == '\r')) s.pop_back();
+  return shown_value(s);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 
 #include "common/error.hpp"
 #include "common/parallel.hpp"
+#include "common/regular_file.hpp"
 #include "envs/registry.hpp"
 #include "harness/grid.hpp"
 #include "harness/runner.hpp"
@@ -81,10 +82,14 @@ std::string human_duration(double s) {
 }
 
 CostModel::CostModel() : path_(default_cache_path()), build_(harness_build()), cpu_(cpu_model_name()) {
-  std::ifstream in(path_);
-  if (!in) return;
+  std::string text;
   try {
-    const auto j = nlohmann::json::parse(in);
+    text = read_regular_file("", path_);  // never blocks on a FIFO put in its place
+  } catch (const UsageError&) {
+    return;  // missing or unreadable: no measurements
+  }
+  try {
+    const auto j = nlohmann::json::parse(text);
     for (const auto& [k, v] : j.at("costs").items()) {
       table_[k] = {v.at("forward_s").get<double>(), v.at("gradient_s").get<double>(), v.at("decisions").get<int>(), true};
       // env|env config hash|build|CPU model: another build's measurement on this CPU

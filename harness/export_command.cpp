@@ -17,6 +17,7 @@
 #include "harness/output_path.hpp"
 #include "harness/report_command.hpp"
 #include "harness/result_table.hpp"
+#include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
 
 namespace dsb {
@@ -25,13 +26,14 @@ namespace {
 // --out for ioh is a folder that does not exist yet (created) or an empty folder, so an export
 // never mixes with other files; with force, another folder (files of the export's names replaced)
 int export_ioh(const std::string& db_path, const std::string& out_path, bool force) {
-  if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
+  check_database_path("--db", db_path, true);
   check_output_folder("--out", out_path, force, [](const std::string&) { return false; });
   std::error_code ec;
   const std::filesystem::path out(out_path);
   std::vector<IohRun> runs;
   try {
     Database db(db_path, Database::Mode::read_only);
+    require_harness_tables(db);  // a newer or foreign file: the message every command gives
     runs = read_ioh_runs(db);
   } catch (const StoreError& e) {
     const std::string why = e.what();  // SQLite's message, without the statement it quotes

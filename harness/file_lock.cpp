@@ -13,6 +13,8 @@
 #include <sstream>
 #include <string>
 
+#include "common/error.hpp"
+#include "common/regular_file.hpp"
 #include "harness/sqlite_db.hpp"
 
 namespace dsb {
@@ -50,18 +52,23 @@ std::string flock_holder(int fd) {
 }  // namespace
 
 FileLock::FileLock(const std::string& database_path) {
-  fd_ = ::open(database_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOCTTY, 0644);
+  // never blocks: a FIFO or device is refused by its kind, like every path a command is given
+  refuse_special_file("database", database_path);
+  fd_ = ::open(database_path.c_str(), O_RDWR | O_CREAT | O_NONBLOCK | O_CLOEXEC | O_NOCTTY, 0644);
   if (fd_ < 0) {
     const int err = errno;
-    if (err == EISDIR) throw StoreError("cannot open database '" + database_path + "': it is a directory");
-    throw StoreError("cannot open database '" + database_path + "' for writing: " + std::strerror(err));
+    if (err == EISDIR) throw UsageError(not_regular_message("database", database_path, S_IFDIR));
+    throw StoreError("cannot open database '" + shown_value(database_path) + "' for writing: " + std::strerror(err));
   }
   struct stat st {};
   if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
+    const mode_t mode = st.st_mode;
     ::close(fd_);
     fd_ = -1;
-    throw StoreError("cannot open database '" + database_path + "': not a regular file");
+    throw UsageError(not_regular_message("database", database_path, mode));
   }
+  device_ = st.st_dev;
+  inode_ = st.st_ino;
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     const std::string holder = err == EWOULDBLOCK ? flock_holder(fd_) : std::string();
@@ -73,6 +80,22 @@ FileLock::FileLock(const std::string& database_path) {
                        "): wait for it to finish or stop it (it resumes later), or use another --db");
     throw StoreError("cannot lock database '" + database_path + "': " + std::strerror(err));
   }
+}
+
+bool FileLock::names_locked_file(const std::string& path) const {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && st.st_dev == device_ && st.st_ino == inode_;
+}
+
+std::string FileLock::current_path() const {
+  char target[4096];
+  const std::string link = "/proc/self/fd/" + std::to_string(fd_);
+  const ssize_t n = ::readlink(link.c_str(), target, sizeof target - 1);
+  if (n <= 0) return {};
+  std::string p(target, static_cast<std::size_t>(n));
+  static const std::string deleted = " (deleted)";
+  if (p.size() >= deleted.size() && p.compare(p.size() - deleted.size(), deleted.size(), deleted) == 0) return {};
+  return p;
 }
 
 FileLock::~FileLock() {

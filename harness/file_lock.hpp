@@ -22,8 +22,15 @@ class FileLock {
   FileLock(const FileLock&) = delete;
   FileLock& operator=(const FileLock&) = delete;
 
+  // Whether `path` names the locked file now (same device and inode): false once the file was
+  // moved, replaced or removed.
+  bool names_locked_file(const std::string& path) const;
+  // Where the locked file is now, as /proc/self/fd shows it; empty when it was deleted.
+  std::string current_path() const;
+
  private:
   int fd_ = -1;
+  unsigned long long device_ = 0, inode_ = 0;
 };
 
 }  // namespace dsb

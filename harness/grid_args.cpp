@@ -16,6 +16,7 @@
 #include "envs/registry.hpp"
 #include "harness/claims_grid.hpp"
 #include "harness/slurm_command.hpp"
+#include "harness/sqlite_db.hpp"
 #include "optimizers/registry.hpp"
 
 namespace dsb {
@@ -147,7 +148,7 @@ CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
       throw UsageError("--shard must be I/N with 0 <= I < N <= 100000, got '" + a.shard + "'");
     shard = {i, n, !a.no_sharing};
   }
-  if (a.db.empty()) throw UsageError("--db must name a file, got ''");
+  check_database_path("--db", a.db, false);  // a FIFO, device or folder is refused before it is opened
   if (a.jobs < 0 || a.jobs > 1024)
     throw UsageError("--jobs must be from 1 to 1024, or 0 for the CPUs this process may use over --threads, got " +
                      std::to_string(a.jobs));

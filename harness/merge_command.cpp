@@ -230,7 +230,7 @@ auto reading(const std::string& input, F&& f) {
 void check_input(const std::string& in, const std::string& into) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  if (!fs::exists(in)) throw UsageError("merge: input '" + in + "' does not exist");
+  check_database_path("merge input", in, true);  // missing, a folder, a FIFO: refused before it is opened
   if (fs::exists(into) && fs::equivalent(in, into, ec))
     throw UsageError("merge: input '" + in + "' is the output itself");
   reading(in, [&] {
@@ -310,7 +310,7 @@ MergeCounts merge_inputs(Store& store, const std::vector<std::string>& inputs) {
 }  // namespace
 
 int command_merge(const std::string& into, const std::vector<std::string>& inputs) {
-  if (into.empty()) throw UsageError("--into must name a file, got ''");
+  check_database_path("--into", into, false);
   if (inputs.empty()) throw UsageError("merge: give the shard databases to merge after --into FILE");
   for (const auto& in : inputs) check_input(in, into);
   const bool created = !std::filesystem::exists(into);

@@ -83,6 +83,12 @@ bool same_file(const std::string& a, const std::string& b) {
 
 void check_output_file(const std::string& option, const std::string& path, bool force) {
   if (path.empty()) throw UsageError(option + " must name a file, got ''");
+  // SQLite's own names beside a database: a file of such a name may be taken for a database's
+  // log or journal (a hot journal is deleted, or rolled into the database, by the next opener)
+  for (const char* suffix : {"-journal", "-wal", "-shm"})
+    if (ends_with(path, suffix))
+      throw UsageError(quoted(option, path) + " ends in '" + suffix +
+                       "', a name SQLite gives the files beside a database; name the output otherwise");
   switch (path_kind(path)) {
     case PathKind::sqlite:
       throw UsageError(quoted(option, path) +
@@ -107,7 +113,21 @@ OutputFile::OutputFile(std::string option, std::string path, bool force)
     : option_(std::move(option)), path_(std::move(path)), force_(force) {
   check_output_file(option_, path_, force_);
   if (path_kind(path_) == PathKind::stream) {  // a device or a pipe: written as it goes
-    out_.open(path_, std::ios::binary);
+    // opened without blocking first: a FIFO nobody reads would hold open(2) forever (ENXIO now)
+    const int fd = ::open(path_.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0) {
+      const int err = errno;
+      if (err == ENXIO) throw UsageError(quoted(option_, path_) + " is a FIFO (named pipe) that nobody reads");
+      throw UsageError(quoted(option_, path_) + ": cannot write: " + std::strerror(err));
+    }
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || S_ISDIR(st.st_mode) || S_ISREG(st.st_mode)) {
+      ::close(fd);
+      throw UsageError(quoted(option_, path_) + " changed while it was opened; try again");
+    }
+    // the same file again, blocking, while our descriptor keeps the pipe's write side open
+    out_.open("/proc/self/fd/" + std::to_string(fd), std::ios::binary);
+    ::close(fd);
     if (!out_) throw UsageError(quoted(option_, path_) + ": cannot write: " + std::strerror(errno));
     return;
   }

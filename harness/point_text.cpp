@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 
 #include <fmt/format.h>
 
@@ -25,6 +26,20 @@ std::vector<double> parse_number_list(const std::string& option, const std::stri
     const char* end = token.data() + token.size();
     if (!token.empty() && *begin == '+') ++begin;
     const auto [ptr, ec] = std::from_chars(begin, end, v);
+    if (!token.empty() && ec == std::errc::result_out_of_range && ptr == end) {
+      // a number, but outside the normal doubles: a subnormal one is kept, else say which way it
+      // falls out
+      const double rounded = std::strtod(token.c_str(), nullptr);
+      if (std::isfinite(rounded) && rounded != 0.0) {
+        values.push_back(rounded);
+        if (comma == std::string::npos) break;
+        pos = comma + 1;
+        continue;
+      }
+      throw UsageError(option + ": '" + token + "' " +
+                       (std::isinf(rounded) ? "overflows a double (its magnitude is above 1.8e308)"
+                                            : "underflows a double (its magnitude is below 4.9e-324); write 0 for zero"));
+    }
     if (token.empty() || ec != std::errc() || ptr != end || !std::isfinite(v))
       throw UsageError(option + ": '" + token + "' is not a finite number");
     values.push_back(v);

@@ -23,6 +23,7 @@
 namespace dsb {
 
 BestRun best_run_of(const std::string& db_path, const std::string& env) {
+  check_database_path("--best-of", db_path, true);
   try {
     Database db(db_path, Database::Mode::read_only);
     check_schema(db);

@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 
 #include "common/error.hpp"
+#include "common/regular_file.hpp"
 #include "harness/command.hpp"
 #include "harness/export_ioh.hpp"
 #include "harness/output_path.hpp"
@@ -26,10 +27,12 @@ namespace dsb {
 void check_report_folder(const std::string& dir, bool force, const std::string& option) {
   // ours: its index.html is a report's (reports/dsb_report/html.py writes this title)
   const auto is_report = [](const std::string& d) {
-    std::ifstream index(std::filesystem::path(d) / "index.html");
-    std::string head(4096, '\0');
-    index.read(head.data(), static_cast<std::streamsize>(head.size()));
-    head.resize(static_cast<std::size_t>(index.gcount()));
+    std::string head;
+    try {
+      head = read_regular_file("", (std::filesystem::path(d) / "index.html").string());  // a FIFO never blocks
+    } catch (const UsageError&) {
+      return false;  // no index.html, or not a regular file: not a report of ours
+    }
     return head.find("<title>diffsim-bench report</title>") != std::string::npos;
   };
   check_output_folder(option, dir, force, is_report, option == "--out" ? "--force" : "");
@@ -37,7 +40,7 @@ void check_report_folder(const std::string& dir, bool force, const std::string& 
 
 int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
                    bool quiet, const std::string& gradient_quality, const std::string& renders) {
-  if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
+  check_database_path("--db", db_path, true);
   // Debian's pandas/matplotlib/scipy import only in Debian's interpreter; DSB_PYTHON overrides
   const char* python_env = std::getenv("DSB_PYTHON");
   const std::string python = python_env ? python_env

@@ -12,6 +12,8 @@
 #include <filesystem>
 
 #include "common/error.hpp"
+#include "common/regular_file.hpp"
+#include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
 
 namespace dsb {
@@ -68,8 +70,12 @@ std::vector<ResultRow> read_result_table(Database& db) {
 }
 
 std::vector<ResultRow> read_result_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw BaselineError("cannot read baseline '" + path + "'");
+  std::istringstream in;
+  try {
+    in.str(read_regular_file("", path));  // never blocks: a FIFO or device is refused by its kind
+  } catch (const UsageError& e) {
+    throw BaselineError(std::string("baseline ") + e.what());
+  }
   std::string line;
   if (!std::getline(in, line) || line != kResultTableHeader)
     throw BaselineError("baseline '" + path + "' line 1: header must be '" + kResultTableHeader + "'");
@@ -155,9 +161,10 @@ void print_diff(const TableDiff& d, std::ostream& out, std::size_t limit) {
 }
 
 std::vector<ResultRow> result_table_of_file(const std::string& db_path) {
-  if (!std::filesystem::is_regular_file(db_path)) throw UsageError("--db: no database file '" + db_path + "'");
+  check_database_path("--db", db_path, true);
   try {
     Database db(db_path, Database::Mode::read_only);
+    require_harness_tables(db);  // a newer or foreign file: the message every command gives
     return read_result_table(db);
   } catch (const StoreError& e) {
     throw UsageError(std::string("--db: ") + e.what());

@@ -67,6 +67,8 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
   const auto s = run_grid(pending, pending_cost, plan.skipped, *store, run.jobs, a.threads, progress,
                           reports ? std::function<void()>([&] { reports->run_finished(); }) : std::function<void()>(),
                           !a.no_sharing, run.tape_memory_bytes);
+  // runs are reported done only if they are in the file the path names
+  store->check_path();
   if (s.shared_runs > 0)
     std::fprintf(stderr,
                  "harness: %lld runs took %lld episodes from an earlier seed's run (the episodes before the "

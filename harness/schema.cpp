@@ -210,6 +210,12 @@ int check_schema(Database& db) {
   return version;
 }
 
+int require_harness_tables(Database& db) {
+  const int version = check_schema(db);
+  if (version == 0) not_ours(db, "it has no tables");
+  return version;
+}
+
 void prepare_schema(Database& db) {
   // refuse a foreign or newer file before the first write; an existing SQLite file without any
   // table is somebody's database too (only a missing or 0-byte file becomes a new one)

@@ -27,6 +27,10 @@ inline constexpr int kSchemaVersion = 4;
 // columns of that version) or when its version is newer than kSchemaVersion. Reads only.
 int check_schema(Database& db);
 
+// check_schema for a command that only reads: also refuses a database without any tables ("is
+// not a harness database (it has no tables)"). Returns the version.
+int require_harness_tables(Database& db);
+
 // Makes `db` a harness database of version kSchemaVersion: checks it (check_schema, so a
 // foreign or newer file is refused before anything is written), switches it to WAL, then in one
 // transaction creates the schema (empty file) or applies the migration steps from its version on.

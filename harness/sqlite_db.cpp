@@ -10,6 +10,9 @@
 
 #include <sqlite3.h>
 
+#include "common/error.hpp"
+#include "common/regular_file.hpp"
+
 namespace dsb {
 
 namespace {
@@ -97,7 +100,17 @@ bool Statement::column_is_null(int col) const {
   return sqlite3_column_type(stmt_, col) == SQLITE_NULL;
 }
 
+void check_database_path(const std::string& option, const std::string& path, bool must_exist) {
+  if (path.empty()) throw UsageError(option + " must name a file, got ''");
+  if (must_exist)
+    require_regular_file(option, path);
+  else
+    refuse_special_file(option, path);
+}
+
 Database::Database(const std::string& path, Mode mode) : path_(path) {
+  // SQLite's open(2) of a FIFO for reading waits for a writer forever: refused before it
+  refuse_special_file("database", path);
   const int flags = (mode == Mode::read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE) |
                     (mode == Mode::write_create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
   open(path, flags);

@@ -42,6 +42,13 @@ class Statement {
   sqlite3_stmt* stmt_ = nullptr;
 };
 
+// UsageError naming the option when `path` cannot be a database file: it exists and is not a
+// regular file ("--db: 'PATH' is a FIFO (named pipe), not a regular file": the same words from every
+// command), or it is missing and must_exist ("--db: 'PATH': no such file"). Looks at the path
+// without opening it, so a FIFO or a device never blocks the command. Database refuses such a path
+// too; commands check first so that the message names their option.
+void check_database_path(const std::string& option, const std::string& path, bool must_exist);
+
 class Database {
  public:
   enum class Mode { write_create, write, read_only };

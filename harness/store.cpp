@@ -6,7 +6,10 @@
 #include <ctime>
 #include <stdexcept>
 
+#include <unistd.h>
+
 #include "common/config_hash.hpp"
+#include "common/shown_value.hpp"
 
 namespace dsb {
 
@@ -25,8 +28,44 @@ std::string RunKey::text() const {
 }
 
 Store::Store(const std::string& path, Provenance provenance)
-    : lock_(path), db_(path), provenance_(std::move(provenance)) {
+    : path_(path), lock_(path), db_(path), provenance_(std::move(provenance)) {
   prepare_schema(db_);
+}
+
+void Store::check_path() {
+  std::lock_guard lock(mutex_);
+  refuse_if_moved();
+}
+
+void Store::refuse_if_moved() {
+  if (lock_.names_locked_file(path_)) return;
+  // What this process committed may still sit in the write-ahead log, which keeps the old name:
+  // a checkpoint through the open descriptors copies it into the file itself, wherever it is now.
+  bool complete = false;
+  try {
+    Statement cp(db_.handle(), "PRAGMA wal_checkpoint(TRUNCATE)");
+    complete = cp.step() && cp.column_int(0) == 0;  // busy = 0: every frame copied
+  } catch (const StoreError&) {
+  }
+  const std::string now = lock_.current_path();
+  const std::string was = "database '" + shown_value(path_) + "' was ";
+  if (!now.empty() && complete)
+    throw StoreError(was + "moved or replaced while this harness wrote it: everything it committed is in '" +
+                     shown_value(now) + "' (the file it opened), and it stopped writing; resume with --db '" +
+                     shown_value(now) + "'");
+  // deleted, or the log could not be emptied: a complete copy beside the old name, made now
+  const std::string rescue = path_ + ".rescued-" + std::to_string(::getpid()) + ".sqlite";
+  try {
+    Statement copy(db_.handle(), "VACUUM INTO ?");
+    copy.bind(1, rescue).run();
+  } catch (const StoreError& e) {
+    throw StoreError(was + (now.empty() ? "deleted" : "moved or replaced") +
+                     " while this harness wrote it, and it stopped writing; a copy of what it committed could not be "
+                     "made (" + e.what() + ")");
+  }
+  throw StoreError(was + (now.empty() ? "deleted" : "moved or replaced") +
+                   " while this harness wrote it, and it stopped writing: a copy of everything it committed is in '" +
+                   shown_value(rescue) + "'; resume with --db naming it");
 }
 
 std::set<RunKey> Store::done_keys() {
@@ -108,6 +147,7 @@ Donor find_donor(Database& db, const RunKey& key) {
 RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohmann::json& env_config,
                           const nlohmann::json& opt_config, bool share) {
   std::lock_guard lock(mutex_);
+  refuse_if_moved();  // before a commit: the path must still name the file this store opened
   Transaction tx(db_);
   Statement cfg(db_.handle(), "INSERT OR IGNORE INTO configs(hash, kind, json) VALUES (?, ?, ?)");
   cfg.bind(1, key.env_config_hash).bind(2, std::string("env")).bind(3, canonical_json(env_config)).run();
@@ -214,6 +254,7 @@ void insert_evals(Database& db, std::int64_t run_id, std::span<const EvalRecord>
 void Store::append_progress(std::int64_t run_id, std::span<const EvalRecord> evals, std::int64_t first_seq,
                             const std::vector<ReplayEntry>& journal, const SeedFreePrefix& seed_free) {
   std::lock_guard lock(mutex_);
+  refuse_if_moved();  // before a commit: the path must still name the file this store opened
   Transaction tx(db_);
   insert_evals(db_, run_id, evals);
   Statement ins(db_.handle(),
@@ -235,6 +276,7 @@ void Store::append_progress(std::int64_t run_id, std::span<const EvalRecord> eva
 
 void Store::reset_progress(std::int64_t run_id) {
   std::lock_guard lock(mutex_);
+  refuse_if_moved();  // before a commit: the path must still name the file this store opened
   Transaction tx(db_);
   Statement del_evals(db_.handle(), "DELETE FROM evals WHERE run_id=?");
   del_evals.bind(1, run_id).run();
@@ -286,6 +328,7 @@ void Store::keep_seed_free_prefix(std::int64_t run_id, const RunResult& r) {
 
 void Store::finish_run(std::int64_t run_id, const RunResult& r) {
   std::lock_guard lock(mutex_);
+  refuse_if_moved();  // before a commit: the path must still name the file this store opened
   Transaction tx(db_);
   Statement del(db_.handle(), "DELETE FROM evals WHERE run_id=?");
   del.bind(1, run_id).run();

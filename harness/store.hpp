@@ -94,9 +94,18 @@ class Store {
 
   Database& db() { return db_; }
 
+  // Throws StoreError when the path no longer names the file this store opened (moved, replaced
+  // or deleted while it ran; device and inode compared). Every write checks it first, so nothing
+  // is committed to a file the path no longer names; a grid checks once more at its end. The
+  // message says where the committed data is: the moved file (after a checkpoint that empties the
+  // write-ahead log, which keeps the old name), or a copy made beside the old name.
+  void check_path();
+
  private:
   void keep_seed_free_prefix(std::int64_t run_id, const RunResult& result);
+  void refuse_if_moved();  // check_path, with mutex_ held
 
+  std::string path_;
   FileLock lock_;
   Database db_;
   Provenance provenance_;

@@ -16,6 +16,7 @@ import datetime
 import importlib
 import os
 import re
+import stat
 import sys
 import time
 
@@ -48,6 +49,21 @@ def missing_modules() -> list:
 def fail(msg: str) -> int:
     print(f"make_report: {msg}", file=sys.stderr)
     return 2
+
+
+def not_regular(option: str, path: str):
+    """The refusal of a path that must name a regular file, in the harness's words (never opened:
+    a FIFO would block the read forever), or None when it is one."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as e:
+        return f"{option}: '{path}': cannot open: {e.strerror}"
+    if stat.S_ISREG(mode):
+        return None
+    kind = ("a directory" if stat.S_ISDIR(mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(mode)
+            else "a character device" if stat.S_ISCHR(mode) else "a block device" if stat.S_ISBLK(mode)
+            else "a socket" if stat.S_ISSOCK(mode) else None)
+    return f"{option}: '{path}' is " + (f"{kind}, not a regular file" if kind else "not a regular file")
 
 
 def parse_args(argv):
@@ -95,6 +111,10 @@ def main(argv=None) -> int:
     from dsb_report.data import DataError, load
 
     t0 = time.monotonic()
+    for option, path in (("--db", args.db), ("--claims", args.claims), ("--gradient-quality", args.gradient_quality)):
+        problem = path is not None and not_regular(option, path)
+        if problem:
+            return fail(problem.encode("unicode_escape").decode("ascii") if not problem.isprintable() else problem)
     try:
         data = load(args.db)
     except DataError as e:

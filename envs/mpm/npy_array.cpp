@@ -1,10 +1,11 @@
 #include "envs/mpm/npy_array.hpp"
 
+#include <sys/stat.h>
+
 #include <bit>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -12,6 +13,7 @@
 #include <string_view>
 
 #include "common/error.hpp"
+#include "common/regular_file.hpp"
 
 namespace dsb::mpm {
 
@@ -19,7 +21,6 @@ static_assert(std::endian::native == std::endian::little, "the .npy reader copie
 
 namespace {
 
-namespace fs = std::filesystem;
 
 constexpr std::size_t kMaxValues = std::size_t{1} << 27;
 constexpr std::size_t kMaxHeaderBytes = std::size_t{1} << 20;  // np.save writes about a hundred
@@ -160,12 +161,14 @@ std::string npy_shape_text(const std::vector<std::size_t>& shape) {
 }
 
 NpyArray read_npy(const std::string& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) refuse(path, "is a folder, not a .npy file");
-  std::ifstream in(path, std::ios::binary);
+  // opened without blocking and checked as a regular file (a FIFO would wait for a writer forever),
+  // then read through the open descriptor, so the file checked is the file read
+  const RegularFile checked = open_regular_file("target file", path);
+  std::ifstream in("/proc/self/fd/" + std::to_string(checked.fd()), std::ios::binary);
   if (!in) refuse(path, std::string("cannot open: ") + std::strerror(errno));
-  const std::uintmax_t file_size = fs::file_size(path, ec);
-  if (ec) refuse(path, "cannot read its size: " + ec.message());
+  struct stat st {};
+  if (::fstat(checked.fd(), &st) != 0) refuse(path, std::string("cannot read its size: ") + std::strerror(errno));
+  const auto file_size = static_cast<std::uintmax_t>(st.st_size);
 
   unsigned char lead[12] = {};
   in.read(reinterpret_cast<char*>(lead), 8);

@@ -15,6 +15,7 @@
 
 #include "common/error.hpp"
 #include "common/number_text.hpp"
+#include "common/regular_file.hpp"
 
 namespace dsb::mpm {
 
@@ -314,10 +315,8 @@ void write_grid_gz(const std::string& path, const NodeGrid& g) {
 }
 
 NodeGrid read_grid_gz(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) fail(path, "cannot open (missing or unreadable)");
-  const std::string raw{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
-  if (file.bad()) fail(path, "read error");
+  // never blocks on a FIFO or device: opened without blocking and checked as a regular file
+  const std::string raw = read_regular_file("target grid file", path);
   const std::string text = gunzip(path, raw);
 
   std::size_t pos = 0;

@@ -16,6 +16,9 @@
 #include <cstring>
 #include <stdexcept>
 #include <thread>
+#include <vector>
+
+#include "optimizers/ext/descendant_mark.hpp"
 
 extern char** environ;
 
@@ -72,7 +75,7 @@ void unregister_group(int& slot) {
 // only. It ignores the signals a terminal or `kill` sends the harness's group, keeps no
 // descriptor of the harness's but the pipe's read end, and waits: a byte disarms it, end of file
 // (the harness is gone) kills the child's group.
-[[noreturn]] void watchdog_main(int read_end, pid_t group) {
+[[noreturn]] void watchdog_main(int read_end, pid_t group, const char* mark) {
   struct sigaction ignore {};
   ignore.sa_handler = SIG_IGN;
   for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE}) ::sigaction(sig, &ignore, nullptr);
@@ -87,7 +90,10 @@ void unregister_group(int& slot) {
   for (;;) {
     const ssize_t n = ::read(3, &byte, 1);
     if (n < 0 && errno == EINTR) continue;
-    if (n == 0) ::kill(-group, SIGKILL);
+    if (n == 0) {
+      ::kill(-group, SIGKILL);
+      kill_marked_processes(mark);  // and the descendants that left the group
+    }
     ::_exit(0);
   }
 }
@@ -108,7 +114,7 @@ void ChildProcess::start_watchdog() {
   if (::pipe2(guard, O_CLOEXEC) != 0) return;  // no watchdog: only a killed harness would orphan the child
   const pid_t group = pid_;
   const pid_t w = ::fork();
-  if (w == 0) watchdog_main(guard[0], group);
+  if (w == 0) watchdog_main(guard[0], group, mark_.c_str());
   ::close(guard[0]);
   if (w < 0) {
     ::close(guard[1]);
@@ -177,7 +183,14 @@ ChildProcess::ChildProcess(const std::string& command) {
   posix_spawnattr_setpgroup(&attr, 0);  // its own process group
   posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
   const char* argv[] = {"/bin/sh", "-c", command.c_str(), nullptr};
-  const int rc = ::posix_spawn(&pid_, "/bin/sh", &actions, &attr, const_cast<char* const*>(argv), environ);
+  // our environment plus the mark its descendants inherit (descendant_mark.hpp)
+  mark_ = new_descendant_mark();
+  std::vector<char*> envp;
+  for (char** e = environ; *e; ++e)
+    if (std::strncmp(*e, "DSB_EXT_RUN=", 12) != 0) envp.push_back(*e);  // not a parent harness's mark
+  envp.push_back(mark_.data());
+  envp.push_back(nullptr);
+  const int rc = ::posix_spawn(&pid_, "/bin/sh", &actions, &attr, const_cast<char* const*>(argv), envp.data());
   posix_spawn_file_actions_destroy(&actions);
   posix_spawnattr_destroy(&attr);
   ::close(in_pair[1]);
@@ -331,6 +344,8 @@ void ChildProcess::kill() {
     reaped_ = true;
     status_ = status;
   }
+  // whatever it started that left its group (setsid, a daemon) ends with it too
+  if (!mark_.empty()) kill_marked_processes(mark_.c_str());
   stop_watchdog();
 }
 

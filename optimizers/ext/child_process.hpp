@@ -12,7 +12,10 @@
 // - a harness that dies without a word (SIGKILL, a crash) leaves no orphan: each child has a
 //   watchdog, a small forked process that holds the read end of a pipe whose write end only the
 //   harness has. The harness's death closes it; the watchdog reads end of file and kills the
-//   child's group. A child that ends normally disarms it with one byte first.
+//   child's group. A child that ends normally disarms it with one byte first;
+// - descendants that left the child's group (setsid, a double fork) are found by the mark in
+//   their environment (descendant_mark.hpp) and killed when the child is killed or reaped, and
+//   by the watchdog when the harness dies.
 #include <sys/types.h>
 
 #include <chrono>
@@ -78,6 +81,7 @@ class ChildProcess {
 
   pid_t pid_ = -1;
   pid_t watchdog_pid_ = -1;
+  std::string mark_;   // the environment entry its descendants inherit (descendant_mark.hpp)
   int guard_fd_ = -1;  // our end of the watchdog's pipe
   int slot_ = -1;      // our entry in the table terminate_all() walks
   bool reaped_ = false;

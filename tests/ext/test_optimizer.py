@@ -10,7 +10,8 @@ time, default 1), `echo` (asks one random point BATCH times per ask, for timing 
 `stop-early` (10 episodes, then returns), `roundtrip` (sends back each loss and gradient
 component as the next point's x[0], x[1]), `roundtrip-binary` (the same in base64, numpy). Modes that break it, after 3 good episodes: `crash`
 (exits 3 with a traceback-like stderr line), `garbage` (a line that is not JSON), `outside`
-(a point with x[1] = 1.5), `hang` (sleeps for an hour), `hang-ignoring-term` (the same with
+(a point with x[1] = 1.5), `leak-detached` (starts `sleep 300` in a session of its own holding
+its stdout, writes its pid to $TEST_OPT_PIDFILE, exits 3), `hang` (sleeps for an hour), `hang-ignoring-term` (the same with
 SIGTERM ignored: only SIGKILL ends it), `after-end` (asks again after the end),
 `grad` (asks for a gradient, whatever the hello said), `bad-base64` (a binary ask that is not
 base64); `bad-probe` fails the probe (exit 4 before
@@ -76,6 +77,15 @@ def optimize(s):
         sys.exit(0)
     for _ in range(3):
         s.evaluate(point())
+    if MODE == "leak-detached":
+        # a child in a session of its own (setsid), holding our stdout, its pid in $TEST_OPT_PIDFILE;
+        # then a crash: the child must end with the run
+        import subprocess
+        child = subprocess.Popen(["sleep", "300"], start_new_session=True)
+        with open(os.environ["TEST_OPT_PIDFILE"] + ".tmp", "w") as f:
+            f.write(str(child.pid))
+        os.rename(os.environ["TEST_OPT_PIDFILE"] + ".tmp", os.environ["TEST_OPT_PIDFILE"])
+        sys.exit(3)
     if MODE == "crash":
         sys.stderr.write("Traceback (most recent call last):\nZeroDivisionError: division by zero\n")
         sys.exit(3)
