@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <regex>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -211,6 +213,29 @@ echo "array job $array: @SHARDS@ shards, logs in $dir/logs, databases in $dir/sh
 echo "merge job $merge: after the array succeeds, into $dir/results.sqlite"
 )SH";
 
+// A value as a message echoes it: control characters as escapes (\n, \t, \x1b), so that a message
+// stays one line. (Local until the common helper common/shown_value.hpp is on main.)
+std::string echoed(std::string_view s) {
+  std::string out;
+  for (const char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u != 0x7f) {
+      out += c;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", u);
+      out += buf;
+    }
+  }
+  return out;
+}
+
 std::string replace_all(std::string text, const std::map<std::string, std::string>& values) {
   for (const auto& [key, value] : values) {
     const std::string token = "@" + key + "@";
@@ -271,14 +296,14 @@ void check_options(const SlurmOptions& o, std::size_t grid_runs) {
     throw UsageError(fmt::format("--cpus-per-task must be from 1 to 1024, got {}", o.cpus_per_task));
   if (!o.time.empty()) {
     const long long s = time_seconds(o.time);
-    if (s < 0) throw UsageError("--time must look like HH:MM:SS, D-HH:MM:SS or minutes, got '" + o.time + "'");
+    if (s < 0) throw UsageError("--time must look like HH:MM:SS, D-HH:MM:SS or minutes, got '" + echoed(o.time) + "'");
     if (s < kMinTimeSeconds)
       throw UsageError(fmt::format("--time {} is under {} minutes: each task gets TERM {} s before its limit to "
                                    "copy its database back", o.time, kMinTimeSeconds / 60, kTermLeadSeconds));
   }
   static const std::regex partition("[A-Za-z0-9_.,-]+");
   if (!o.partition.empty() && !std::regex_match(o.partition, partition))
-    throw UsageError("--partition must be Slurm partition names (letters, digits, _ . - ,), got '" + o.partition + "'");
+    throw UsageError("--partition must be Slurm partition names (letters, digits, _ . - ,), got '" + echoed(o.partition) + "'");
 }
 
 // a script, whole or not at all: an exclusive temporary file beside it, moved into place (over an

@@ -122,6 +122,10 @@ TEST_F(SlurmScripts, AFolderWithFilesItDidNotWriteIsRefusedAndLeftAsItWas) {
   expect_refused_unchanged("slurm " + kGrid + " --shards 2 --dir '" + work("new dir") + "'", "must not contain spaces");
   expect_refused_unchanged("slurm " + kGrid + " --shards 2 --dir " + work("new") + "$(printf '\\033')x",
                            "got '" + work("new") + "\\x1bx'");  // a control character, escaped
+  expect_refused_unchanged("slurm " + kGrid + " --shards 2 --time \"$(printf '1\\033[2J')\" --dir " + work("new"),
+                           "got '1\\x1b[2J'");
+  expect_refused_unchanged("slurm " + kGrid + " --shards 2 --partition \"$(printf 'p\\tq')\" --dir " + work("new"),
+                           "got 'p\\tq'");
   EXPECT_FALSE(fs::exists(work("new")));
 }
 
