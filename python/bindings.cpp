@@ -91,9 +91,11 @@ bool is_numpy(const py::handle& v, const char* type) {
 // 0-d numpy array of one; else why not ("a str", "None", "a bool"). A bool (Python's or numpy's) is
 // True or False, not a number, and a str is text even when it reads as one.
 std::string not_a_real_number(const py::handle& v) {
+  if (PyBool_Check(v.ptr())) return "a bool";                 // before int: bool is an int in Python
+  if (PyLong_Check(v.ptr()) || PyFloat_Check(v.ptr())) return "";  // numpy's float64 is a float
   if (v.is_none()) return "None";
-  if (PyBool_Check(v.ptr()) || is_numpy(v, "bool_")) return "a bool";
-  if (PyLong_Check(v.ptr()) || PyFloat_Check(v.ptr()) || is_numpy(v, "integer") || is_numpy(v, "floating")) return "";
+  if (is_numpy(v, "bool_")) return "a bool";
+  if (is_numpy(v, "integer") || is_numpy(v, "floating")) return "";
   if (py::isinstance<py::array>(v)) {
     const auto a = py::reinterpret_borrow<py::array>(v);
     const char kind = a.dtype().kind();
@@ -129,18 +131,18 @@ std::vector<double> to_vector(const py::object& obj, const char* what) {
   out.reserve(seq.size());
   for (std::size_t i = 0; i < seq.size(); ++i) {
     const py::object v = seq[i];
-    const std::string at = ": value " + shown(v) + " at position " + std::to_string(i);
+    const auto at = [&] { return ": value " + shown(v) + " at position " + std::to_string(i); };  // errors only
     const bool nested = py::isinstance<py::array>(v)
                             ? py::reinterpret_borrow<py::array>(v).ndim() > 0
                             : PySequence_Check(v.ptr()) && !PyUnicode_Check(v.ptr()) && !PyBytes_Check(v.ptr());
     if (nested)
-      throw py::value_error(w + " must be 1-D" + at + " is a " + type_name(v));
+      throw py::value_error(w + " must be 1-D" + at() + " is a " + type_name(v));
     if (const std::string why = not_a_real_number(v); !why.empty())
-      throw py::type_error(w + at + " is " + why + ", not a real number");
+      throw py::type_error(w + at() + " is " + why + ", not a real number");
     const double d = PyFloat_AsDouble(v.ptr());
     if (d == -1.0 && PyErr_Occurred()) {
       PyErr_Clear();
-      throw py::value_error(w + at + " is too large for a double");
+      throw py::value_error(w + at() + " is too large for a double");
     }
     out.push_back(d);
   }
