@@ -61,18 +61,33 @@ class RegularFile {
   int fd_ = -1;
 };
 
+// Opens `path` for reading into `file` without blocking; returns "" when it is a regular file, else
+// the problem as a phrase that follows the path ("cannot open: No such file or directory", "is a
+// FIFO (named pipe), not a regular file"), for callers that word their own messages.
+inline std::string open_regular_problem(const std::string& path, RegularFile& file) {
+  RegularFile f(::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY));
+  if (f.fd() < 0) return std::string("cannot open: ") + std::strerror(errno);
+  struct stat st {};
+  if (::fstat(f.fd(), &st) != 0) return std::string("cannot stat: ") + std::strerror(errno);
+  if (!S_ISREG(st.st_mode)) {
+    const std::string kind = special_file_kind(st.st_mode);
+    return kind == "not a regular file" ? "is " + kind : "is " + kind + ", not a regular file";
+  }
+  const int flags = ::fcntl(f.fd(), F_GETFL);
+  if (flags >= 0) ::fcntl(f.fd(), F_SETFL, flags & ~O_NONBLOCK);
+  file = std::move(f);
+  return {};
+}
+
 // Opens `path` for reading. UsageError "LABEL: 'PATH' ..." when it is missing or unreadable ("cannot
 // open: No such file or directory") or not a regular file ("is a FIFO (named pipe), not a regular
 // file"); never blocks on a FIFO or device.
 inline RegularFile open_regular_file(const std::string& label, const std::string& path) {
   if (path.empty()) throw UsageError((label.empty() ? std::string() : label + ": ") + "the path is empty");
-  RegularFile f(::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY));
-  if (f.fd() < 0) throw UsageError(labelled_path(label, path) + ": cannot open: " + std::strerror(errno));
-  struct stat st {};
-  if (::fstat(f.fd(), &st) != 0) throw UsageError(labelled_path(label, path) + ": cannot stat: " + std::strerror(errno));
-  if (!S_ISREG(st.st_mode)) throw UsageError(not_regular_message(label, path, st.st_mode));
-  const int flags = ::fcntl(f.fd(), F_GETFL);
-  if (flags >= 0) ::fcntl(f.fd(), F_SETFL, flags & ~O_NONBLOCK);
+  RegularFile f;
+  const std::string problem = open_regular_problem(path, f);
+  if (!problem.empty())
+    throw UsageError(labelled_path(label, path) + (problem.rfind("is ", 0) == 0 ? " " : ": ") + problem);
   return f;
 }
 

@@ -3,7 +3,9 @@
 // Slurm cluster"): DIR/array.sbatch (task I of N runs shard I/N of the grid in a node-local SQLite file,
 // resumes from and copies back to DIR/shards/shard-I.sqlite, also when a time limit sends TERM),
 // DIR/merge.sbatch (`harness merge` of the N shards into DIR/results.sqlite) and DIR/submit.sh
-// (the array, then the merge after every task succeeded). It submits nothing itself.
+// (the array, then the merge after every task succeeded). It submits nothing itself. DIR must be
+// new, empty or its own (slurm_dir.hpp); the scripts never write over a file they did not create:
+// a task replaces only the shard file it resumed from, the merge never replaces results.sqlite.
 #include <cstddef>
 #include <cstdint>
 #include <ostream>
@@ -36,8 +38,9 @@ struct SlurmOptions {
   std::string partition;   // empty = the cluster's default
 };
 
-// Checks the options (UsageError naming the bad value), creates DIR, DIR/logs and DIR/shards, writes
-// the three scripts and prints what it wrote and how to submit. grid_runs is the size of the whole
+// Checks the options and DIR (UsageError naming the bad value; nothing is created before every
+// check passed), creates DIR, DIR/logs and DIR/shards, writes the three scripts and prints what it
+// wrote and how to submit. grid_runs is the size of the whole
 // grid, shard_runs[I] the runs of shard I/N (shard_of); harness_path the binary the tasks run
 // (absolute). Returns 0.
 int command_slurm(const SlurmGridFlags& grid, std::size_t grid_runs, const std::vector<std::int64_t>& shard_runs,

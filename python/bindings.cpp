@@ -14,11 +14,15 @@
 // concurrent calls on the same object wait for each other.
 // Errors: bad input raises ValueError naming the value (a wrong length names the length);
 // a failed rollout (the simulation blew up) returns nan, as the harness records it.
+#include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <mutex>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <pybind11/numpy.h>
@@ -27,6 +31,7 @@
 
 #include "common/error.hpp"
 #include "git_sha.hpp"  // generated: DSB_GIT_SHA
+#include "common/shown_value.hpp"
 #include "common/thread_team.hpp"
 #include "common/unit_box.hpp"
 #include "common/usable_cpus.hpp"
@@ -42,14 +47,84 @@ using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
 std::string repr(double v) { return py::repr(py::float_(v)).cast<std::string>(); }
 
-// A 1-D numpy array or sequence of numbers as doubles (copied: the caller's buffer may change
-// while the GIL is released). `what` names the argument in messages.
+// a Python value as a message shows it: its repr(), control characters escaped, at most 80 characters
+std::string shown(const py::handle& v) {
+  std::string r;
+  try {
+    r = py::repr(v).cast<std::string>();
+  } catch (const py::error_already_set&) {
+    r = "<unprintable>";
+  }
+  if (r.size() > 80) r = r.substr(0, 77) + "...";
+  return shown_value(r);
+}
+
+std::string type_name(const py::handle& v) { return Py_TYPE(v.ptr())->tp_name; }
+
+bool is_numpy(const py::handle& v, const char* type) {
+  return py::isinstance(v, py::module_::import("numpy").attr(type));
+}
+
+// Empty when v is a real number: a Python int or float, a numpy integer or floating scalar, or a
+// 0-d numpy array of one; else why not ("a str", "None", "a bool"). A bool (Python's or numpy's) is
+// True or False, not a number, and a str is text even when it reads as one.
+std::string not_a_real_number(const py::handle& v) {
+  if (PyBool_Check(v.ptr())) return "a bool";                 // before int: bool is an int in Python
+  if (PyLong_Check(v.ptr()) || PyFloat_Check(v.ptr())) return "";  // numpy's float64 is a float
+  if (v.is_none()) return "None";
+  if (is_numpy(v, "bool_")) return "a bool";
+  if (is_numpy(v, "integer") || is_numpy(v, "floating")) return "";
+  if (py::isinstance<py::array>(v)) {
+    const auto a = py::reinterpret_borrow<py::array>(v);
+    const char kind = a.dtype().kind();
+    if (a.ndim() == 0 && (kind == 'f' || kind == 'i' || kind == 'u')) return "";
+  }
+  return "a " + type_name(v);
+}
+
+// A 1-D numpy array or sequence of real numbers (not_a_real_number) as doubles, copied: the
+// caller's buffer may change while the GIL is released. `what` names the argument in messages.
+// TypeError for anything else, naming the value that is not a number and its position.
 std::vector<double> to_vector(const py::object& obj, const char* what) {
-  Array a = Array::ensure(obj);
-  if (!a) throw py::type_error(std::string(what) + " must be a 1-D numpy array or sequence of numbers");
-  if (a.ndim() != 1)
-    throw py::value_error(std::string(what) + " must be 1-D, got " + std::to_string(a.ndim()) + " dimensions");
-  return std::vector<double>(a.data(), a.data() + a.size());
+  const std::string w = what;
+  if (py::isinstance<py::array>(obj)) {
+    const auto a = py::reinterpret_borrow<py::array>(obj);
+    if (a.ndim() != 1) throw py::value_error(w + " must be 1-D, got " + std::to_string(a.ndim()) + " dimensions");
+    const char kind = a.dtype().kind();
+    if (kind == 'f' || kind == 'i' || kind == 'u') {
+      const Array d = Array::ensure(obj);
+      if (!d) throw py::error_already_set();
+      return std::vector<double>(d.data(), d.data() + d.size());
+    }
+    if (kind != 'O')  // bool, complex, text, dates: an object array's items are checked one by one below
+      throw py::type_error(w + " must hold real numbers, got a numpy array of dtype " +
+                           shown_value(py::str(a.dtype()).cast<std::string>()));
+  } else if (PyUnicode_Check(obj.ptr()) || PyBytes_Check(obj.ptr()) || PyByteArray_Check(obj.ptr()) ||
+             !PySequence_Check(obj.ptr())) {
+    throw py::type_error(w + " must be a 1-D numpy array or sequence of numbers, got " + type_name(obj) + " " +
+                         shown(obj));
+  }
+  const py::sequence seq = py::reinterpret_borrow<py::sequence>(obj);
+  std::vector<double> out;
+  out.reserve(seq.size());
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    const py::object v = seq[i];
+    const auto at = [&] { return ": value " + shown(v) + " at position " + std::to_string(i); };  // errors only
+    const bool nested = py::isinstance<py::array>(v)
+                            ? py::reinterpret_borrow<py::array>(v).ndim() > 0
+                            : PySequence_Check(v.ptr()) && !PyUnicode_Check(v.ptr()) && !PyBytes_Check(v.ptr());
+    if (nested)
+      throw py::value_error(w + " must be 1-D" + at() + " is a " + type_name(v));
+    if (const std::string why = not_a_real_number(v); !why.empty())
+      throw py::type_error(w + at() + " is " + why + ", not a real number");
+    const double d = PyFloat_AsDouble(v.ptr());
+    if (d == -1.0 && PyErr_Occurred()) {
+      PyErr_Clear();
+      throw py::value_error(w + at() + " is too large for a double");
+    }
+    out.push_back(d);
+  }
+  return out;
 }
 
 // x for a rollout of `env`: dim values inside [-1, 1] (the wording of `harness eval`)
@@ -99,6 +174,41 @@ py::list list_envs() {
     for (const auto& name : family.grid_names)
       out.append(info_dict(shared_env(name)->info(), family_description(family, name)));
   return out;
+}
+
+// whether option `key` of env `name` names a file (EnvOptionInfo::path); false when the env or the
+// option is unknown (make then reports it as the harness does)
+bool option_is_path(const std::string& name, const std::string& key) {
+  for (const auto& family : env_families()) {
+    if (!family.try_make(name)) continue;
+    for (const auto& o : family.options)
+      if (o.key == key) return o.path;
+    return false;
+  }
+  return false;
+}
+
+// An env option's value as `harness --set ENV.KEY=VALUE` takes it. A path option takes what open()
+// takes: a str, bytes or os.PathLike, as the file name's bytes (os.fsencode: a bytes path is the
+// name itself, never the text "b'...'"); any other option a str or a real number. TypeError
+// naming the value otherwise (`target=5` is no path).
+std::string option_text(const std::string& name, const std::string& key, const py::handle& value) {
+  const std::string label = name + "." + key;
+  if (option_is_path(name, key)) {
+    const py::module_ os = py::module_::import("os");
+    const bool path_like = PyUnicode_Check(value.ptr()) || PyBytes_Check(value.ptr()) ||
+                           py::isinstance(value, os.attr("PathLike"));
+    if (!path_like)
+      throw py::type_error(label + " must be a path (str, bytes or os.PathLike), got " + type_name(value) + " " +
+                           shown(value));
+    const std::string bytes = os.attr("fsencode")(value).cast<std::string>();
+    if (bytes.find('\0') != std::string::npos)
+      throw py::value_error(label + ": the path " + shown(value) + " holds a null byte");
+    return bytes;
+  }
+  if (PyUnicode_Check(value.ptr())) return value.cast<std::string>();
+  if (not_a_real_number(value).empty()) return py::str(value).cast<std::string>();
+  throw py::type_error(label + " must be a str or a number, got " + type_name(value) + " " + shown(value));
 }
 
 // The RL view (reset / observe / step) of one env; holds the env so its model outlives the view.
@@ -302,12 +412,20 @@ PYBIND11_MODULE(diffsim_bench, m) {
         "differentiable, rl, description, threaded, cost_hint_s and metric. Builds no model.");
   m.def(
       "make",
-      [](const std::string& name, int threads, const py::kwargs& kwargs) {
-        // each keyword is an env option, its value as text (a pathlib.Path gives its path)
+      [](const std::string& name, const py::object& threads, const py::kwargs& kwargs) {
+        // each keyword is an env option, its value as text (option_text)
         dsb::EnvOptions options;
-        for (const auto& [key, value] : kwargs)
-          options[key.cast<std::string>()] = py::str(value).cast<std::string>();
-        return std::make_unique<PyEnv>(name, threads, options);
+        for (const auto& [key, value] : kwargs) {
+          const std::string k = key.cast<std::string>();
+          options[k] = option_text(name, k, value);
+        }
+        if (!PyLong_Check(threads.ptr()) || PyBool_Check(threads.ptr()))
+          throw py::type_error("threads must be an int, got " + type_name(threads) + " " + shown(threads));
+        int overflow = 0;
+        const long long t = PyLong_AsLongLongAndOverflow(threads.ptr(), &overflow);
+        const int n = overflow != 0 ? (overflow > 0 ? INT_MAX : INT_MIN)
+                                    : static_cast<int>(std::clamp<long long>(t, INT_MIN, INT_MAX));
+        return std::make_unique<PyEnv>(name, n, options);
       },
       py::arg("name"), py::arg("threads") = 1,
       "The env NAME (any name the harness takes, e.g. 'sphere-3' or 'fluid-h5') with a team of THREADS "

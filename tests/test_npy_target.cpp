@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -94,6 +95,51 @@ np.save(d + '/target_nan.npy', tn)
 np.save(d + '/target_fortran.npy', np.asfortranarray(t))
 whole = open(d + '/target_a.npy', 'rb').read()
 save_bytes('target_truncated.npy', whole[:len(whole) // 2])
+
+# not mass grids: a cell at -5, every cell at -1, a cell just below -1e-4, no mass, a cell at
+# 1.7e308; and grids that are: PlasticineLab-like tiny negatives (-2.3e-5 and the bound -1e-4, far
+# from the plasticine, and a copy with them positive), every cell at the upper bound 1e299
+for name, value in (('negative', -5.0), ('below_tolerance', -1.0001e-4), ('huge', 1.7e308)):
+    tb = t.copy()
+    tb[5, 6, 7] = value
+    np.save(d + '/target_%s.npy' % name, tb)
+np.save(d + '/target_all_negative.npy', -np.ones((64, 64, 64)))
+np.save(d + '/target_zero.npy', np.zeros((64, 64, 64)))
+for name, sign in (('tiny_negative', -1.0), ('tiny_positive', 1.0)):
+    tb = t.copy()
+    tb[60, 60, 60] = sign * 2.3e-5
+    tb[62, 1, 3] = sign * 1e-4
+    np.save(d + '/target_%s.npy' % name, tb)
+np.save(d + '/target_at_bound.npy', np.full((64, 64, 64), 1e299))
+
+# headers by Python's literal rules, each with numpy's own verdict (np.load) beside it
+import struct
+verdicts = []
+def with_header(name, header, major=1, values=np.zeros(2)):
+    h = header.encode('latin1')
+    length = struct.pack('<H', len(h)) if major == 1 else struct.pack('<I', len(h))
+    save_bytes(name, b'\x93NUMPY' + bytes([major, 0]) + length + h + values.astype('<f8').tobytes())
+    try:
+        np.load(d + '/' + name)
+        verdicts.append(name + ' accepts')
+    except Exception:
+        verdicts.append(name + ' refuses')
+head = "{'descr': '<f8', 'fortran_order': False, 'shape': %s, }\n"
+with_header('h_plain.npy', head % '(2,)')
+with_header('h_leading_zero.npy', head % '(02,)')
+with_header('h_zeros.npy', head % '(00,)', values=np.zeros(0))
+with_header('h_list.npy', head % '[2]')
+with_header('h_parenthesised_int.npy', head % '(2)')
+with_header('h_nested_parens.npy', head % '((2,))')
+with_header('h_spaced.npy', head % '( 2 , )')
+with_header('h_long_v1.npy', head % '(2L,)')
+with_header('h_long_v2.npy', head % '(2L,)', major=2)
+with_header('h_long_v3.npy', head % '(2L,)', major=3)
+with_header('h_leading_space.npy', ' ' + head % '(2,)')
+with_header('h_escape.npy', "{'descr': '<f8\x1b[2J', 'fortran_order': False, 'shape': (2,), }\n")
+with_header('target_leading_zero.npy', head % '(064, 64, 64)', values=t)
+with open(d + '/numpy_verdicts.txt', 'w') as f:
+    f.write('\n'.join(verdicts) + '\n')
 
 for name in ('table', 'pinch'):
     ours = np.fromfile(d + '/ours_%s.bin' % name, dtype='<f8').reshape(64, 64, 64)
@@ -194,7 +240,115 @@ TEST_F(NpyTarget, RefusesBadFilesWithOneLineNamingFileAndProblem) {
     EXPECT_NE(why.find(problem), std::string::npos) << why;
     EXPECT_EQ(why.find('\n'), std::string::npos) << why;
   }
-  EXPECT_NE(refusal([&] { read_npy(dir_.string()); }).find("is a folder"), std::string::npos);
+  EXPECT_NE(refusal([&] { read_npy(dir_.string()); }).find("is a directory, not a regular file"), std::string::npos);
+}
+
+// the loss and gradient of one env at x
+std::pair<double, std::vector<double>> loss_and_grad(const Env& env, const std::vector<double>& x) {
+  std::vector<double> g(x.size());
+  const double loss = env.loss_and_grad(x, g);
+  return {loss, g};
+}
+
+std::vector<double> seeded_point(int dim, std::uint64_t seed) {
+  Rng rng(seed);
+  std::vector<double> x(static_cast<std::size_t>(dim));
+  for (auto& v : x) v = 0.8 * (2.0 * rng.uniform() - 1.0);
+  return x;
+}
+
+TEST_F(NpyTarget, HeadersAreReadByPythonsLiteralRulesAsNumpyReadsThem) {
+  // numpy's verdict on each header, from np.load in the files' script
+  std::map<std::string, std::string> numpy;
+  {
+    std::ifstream in(dir_ / "numpy_verdicts.txt");
+    for (std::string name, verdict; in >> name >> verdict;) numpy[name] = verdict;
+  }
+  ASSERT_EQ(numpy.size(), 13u);
+  struct Case {
+    const char* name;
+    const char* problem;  // "" when we read it
+  };
+  const Case cases[] = {
+      {"h_plain.npy", ""},
+      {"h_leading_zero.npy", "the integer '02' with a leading zero, which Python's literals (and so numpy) refuse"},
+      {"h_zeros.npy", ""},  // 00 is Python's 0
+      {"h_list.npy", "shape is not a tuple"},
+      {"h_parenthesised_int.npy", "shape is not a tuple"},  // (2) is the integer 2
+      {"h_nested_parens.npy", ""},
+      {"h_spaced.npy", ""},
+      {"h_long_v1.npy", ""},  // numpy reads versions 1.0 and 2.0 again with Python 2's L dropped
+      {"h_long_v2.npy", ""},
+      {"h_long_v3.npy", "Python 2's long suffix 'L', which numpy reads in format versions 1.0 and 2.0 only"},
+      // numpy on Python 3.10 and later reads it, on earlier ones not: we keep to what both read
+      {"h_leading_space.npy", "'{' expected first"},
+      {"h_escape.npy", "dtype '<f8\\x1b[2J' is not read"},  // a control character shown as its escape
+      {"target_leading_zero.npy", "the integer '064' with a leading zero"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string why = refusal([&] { read_npy(file(c.name)); });
+    if (std::string(c.problem).empty()) {
+      EXPECT_EQ(why, "");
+    } else {
+      EXPECT_NE(why.find(c.problem), std::string::npos) << why;
+      EXPECT_EQ(why.rfind(file(c.name) + ": ", 0), 0u) << why;
+      EXPECT_EQ(why.find_first_of("\n\x1b"), std::string::npos) << why;
+    }
+    // what numpy refuses, we refuse
+    if (numpy.at(c.name) == "refuses") EXPECT_NE(why, "");
+  }
+  EXPECT_EQ(numpy.at("h_leading_zero.npy"), "refuses");
+  EXPECT_EQ(numpy.at("target_leading_zero.npy"), "refuses");
+  EXPECT_EQ(numpy.at("h_list.npy"), "refuses");
+  EXPECT_EQ(numpy.at("h_parenthesised_int.npy"), "refuses");
+  EXPECT_EQ(numpy.at("h_long_v3.npy"), "refuses");
+  EXPECT_EQ(numpy.at("h_long_v1.npy"), "accepts");
+  EXPECT_EQ(read_npy(file("h_long_v1.npy")).shape, std::vector<std::size_t>{2});
+  EXPECT_EQ(read_npy(file("h_nested_parens.npy")).shape, std::vector<std::size_t>{2});
+  EXPECT_EQ(read_npy(file("h_zeros.npy")).shape, std::vector<std::size_t>{0});
+}
+
+TEST_F(NpyTarget, ATargetMustBeAMassGrid) {
+  const auto cfg = mpm::plb_config("pinch");
+  const std::pair<const char*, const char*> bad[] = {
+      {"target_negative.npy", "value -5 at [5, 6, 7] is negative: a target is a grid of masses"},
+      {"target_all_negative.npy", "value -1 at [0, 0, 0] is negative"},
+      {"target_below_tolerance.npy", "value -0.00010001 at [5, 6, 7] is negative"},
+      {"target_zero.npy", "no positive mass (the largest value is 0)"},
+      {"target_huge.npy", "value 1.7e+308 at [5, 6, 7] is above 1e+299, where the loss could overflow"},
+  };
+  for (const auto& [name, problem] : bad) {
+    SCOPED_TRACE(name);
+    const std::string why = refusal([&] { read_plb_target(file(name), cfg.mpm); });
+    EXPECT_EQ(why.rfind(file(name) + ": ", 0), 0u) << why;
+    EXPECT_NE(why.find(problem), std::string::npos) << why;
+    EXPECT_EQ(why.find('\n'), std::string::npos) << why;
+  }
+  // PlasticineLab's own files hold negatives down to -2.3e-5: those load, and so does -1e-4 itself
+  const auto tiny = read_plb_target(file("target_tiny_negative.npy"), cfg.mpm);
+  EXPECT_EQ(tiny.grid.at(61, 61, 61), -2.3e-5);
+  EXPECT_EQ(tiny.grid.at(63, 2, 4), -1e-4);
+  EXPECT_EQ(-mpm::kTargetNegativeTolerance, -1e-4);
+  // the density term sums |m - t| as it says, the negatives included: where no plasticine reaches,
+  // a cell at -v adds what one at +v adds, so the loss and gradient are the same bits (the sum of
+  // t there, as before, made them differ)
+  const auto negative = make_env("plb-pinch-h5", {{"target", file("target_tiny_negative.npy")}});
+  const auto positive = make_env("plb-pinch-h5", {{"target", file("target_tiny_positive.npy")}});
+  const auto x = seeded_point(negative->dim(), 9);
+  const auto [ln, gn] = loss_and_grad(*negative, x);
+  const auto [lp, gp] = loss_and_grad(*positive, x);
+  EXPECT_TRUE(std::isfinite(ln));
+  EXPECT_EQ(ln, lp);
+  EXPECT_EQ(gn, gp);
+  // every cell at the upper bound: loss and gradient finite, the density term as large as the bound
+  // allows (h5: 5 steps x 10 x 64^3 x 1e299 = 1.3e306; 50 steps would be 1.3e307 < 1.8e308)
+  const auto at_bound = make_env("plb-pinch-h5", {{"target", file("target_at_bound.npy")}});
+  const auto [lb, gb] = loss_and_grad(*at_bound, x);
+  EXPECT_TRUE(std::isfinite(lb)) << lb;
+  EXPECT_GT(lb, 1.3e306);
+  EXPECT_LT(lb, 1.32e306);
+  for (double g : gb) EXPECT_TRUE(std::isfinite(g)) << g;
 }
 
 TEST_F(NpyTarget, TargetLandsOnOurNodesAndIsKnownByItsValues) {
@@ -304,20 +458,6 @@ TEST_F(NpyTarget, OptionsTheEnvDoesNotTakeAreRefusedByKey) {
   EXPECT_TRUE(env_family_of("sphere-10").options.empty());
 }
 
-// the loss and gradient of one env at x
-std::pair<double, std::vector<double>> loss_and_grad(const Env& env, const std::vector<double>& x) {
-  std::vector<double> g(x.size());
-  const double loss = env.loss_and_grad(x, g);
-  return {loss, g};
-}
-
-std::vector<double> seeded_point(int dim, std::uint64_t seed) {
-  Rng rng(seed);
-  std::vector<double> x(static_cast<std::size_t>(dim));
-  for (auto& v : x) v = 0.8 * (2.0 * rng.uniform() - 1.0);
-  return x;
-}
-
 TEST_F(NpyTarget, LoadedCopyOfOurTargetGivesTheBuiltInLossBitForBit) {
   // Table's generated target has no mass on the pad nodes PlasticineLab's grid lacks, so its
   // .npy copy is the whole target: the same loss and gradient, bit for bit
@@ -391,6 +531,11 @@ TEST_F(NpyTarget, HarnessEvalTakesTheTargetAndRefusesBadFiles) {
       {"version4.npy", "unsupported .npy version 4.0"}, {"int32.npy", "dtype '<i4'"},
       {"target_2d.npy", "shape (64, 64)"},      {"target_fortran.npy", "Fortran order"},
       {"target_truncated.npy", "truncated data"},
+      {"target_negative.npy", "value -5 at [5, 6, 7] is negative"},
+      {"target_all_negative.npy", "value -1 at [0, 0, 0] is negative"},
+      {"target_zero.npy", "no positive mass"},
+      {"target_huge.npy", "value 1.7e+308 at [5, 6, 7] is above 1e+299"},
+      {"target_leading_zero.npy", "the integer '064' with a leading zero"},
   };
   for (const auto& [name, problem] : bad) {
     SCOPED_TRACE(name);

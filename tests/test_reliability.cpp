@@ -147,7 +147,7 @@ TEST_F(Reliability, NoOutputGoesOverTheWriteAheadLogOfALiveDatabase) {
   const std::string wal = read_file(b + "-wal");
   for (const std::string side : {"-wal", "-shm"}) {
     const auto r = harness("export --db " + b + " --out " + b + side + " --force");
-    expect_refused(r, "is a SQLite database (or one of its files)", side);
+    expect_refused(r, "ends in '" + side + "', a name SQLite gives the files beside a database", side);
   }
   EXPECT_EQ(read_file(b + "-wal"), wal);
   sqlite3_close(h);

@@ -5,6 +5,7 @@
 #include <bit>
 #include <cerrno>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -14,6 +15,7 @@
 
 #include "common/error.hpp"
 #include "common/regular_file.hpp"
+#include "common/shown_value.hpp"
 
 namespace dsb::mpm {
 
@@ -27,27 +29,35 @@ constexpr std::size_t kMaxHeaderBytes = std::size_t{1} << 20;  // np.save writes
 
 // A value of the header's Python literal: only the kinds a .npy header holds.
 struct PyValue {
-  enum class Kind { string, boolean, none, integer, sequence } kind = Kind::none;
+  enum class Kind { string, boolean, none, integer, tuple, list } kind = Kind::none;
   std::string text;               // string
   bool flag = false;              // boolean
   std::uint64_t number = 0;       // integer (non-negative, as shapes are)
   std::vector<PyValue> items;     // tuple or list
 };
 
-// Recursive descent over the header text; std::runtime_error says what is wrong where.
+// Recursive descent over the header text, by Python's literal rules as numpy reads the header
+// (ast.literal_eval), a subset of what they allow: what we accept, numpy accepts. In particular
+// `(64)` is the integer 64, not a tuple (a one-value tuple needs its comma: `(64,)`); `[64]` is a
+// list; a nonzero integer has no leading zero (`064` is a syntax error in Python 3; `00` is 0);
+// Python 2's long suffix (`64L`) only in format versions 1.0 and 2.0, whose headers numpy reads
+// again with the suffixes dropped (version 3.0 has no such fallback). The header starts with its
+// '{' as np.save writes it (Python before 3.10 refuses leading spaces). std::runtime_error says
+// what is wrong where.
 class HeaderParser {
  public:
-  explicit HeaderParser(std::string_view text) : t_(text) {}
+  HeaderParser(std::string_view text, bool long_suffix) : t_(text), long_suffix_(long_suffix) {}
 
   // the whole header: one dict of string keys, then only spaces and the newline
   std::map<std::string, PyValue> dict() {
     std::map<std::string, PyValue> d;
+    if (t_.empty() || t_[0] != '{') fail("'{' expected first");
     expect('{');
     while (!eat('}')) {
       const PyValue key = value();
       if (key.kind != PyValue::Kind::string) fail("a key that is not a string");
       expect(':');
-      if (!d.emplace(key.text, value()).second) fail("key '" + key.text + "' twice");
+      if (!d.emplace(key.text, value()).second) fail("key '" + shown_value(key.text) + "' twice");
       if (!eat(',')) {
         expect('}');
         break;
@@ -99,23 +109,35 @@ class HeaderParser {
     } else if (c == '(' || c == '[') {
       const char close = c == '(' ? ')' : ']';
       ++pos_;
-      v.kind = PyValue::Kind::sequence;
+      v.kind = c == '(' ? PyValue::Kind::tuple : PyValue::Kind::list;
+      bool comma = false;  // a comma after a value: (64,) is a tuple, (64) the integer 64
       while (!eat(close)) {
         v.items.push_back(value());
-        if (!eat(',')) {
+        comma = eat(',');
+        if (!comma) {
           expect(close);
           break;
         }
       }
+      if (v.kind == PyValue::Kind::tuple && v.items.size() == 1 && !comma) return v.items.front();
     } else if (c >= '0' && c <= '9') {
       v.kind = PyValue::Kind::integer;
+      const std::size_t start = pos_;
+      bool nonzero = false;
       while (pos_ < t_.size() && t_[pos_] >= '0' && t_[pos_] <= '9') {
         const std::uint64_t digit = static_cast<std::uint64_t>(t_[pos_] - '0');
         if (v.number > (std::numeric_limits<std::uint64_t>::max() - digit) / 10) fail("an integer too large");
         v.number = v.number * 10 + digit;
+        nonzero = nonzero || digit != 0;
         ++pos_;
       }
-      if (pos_ < t_.size() && t_[pos_] == 'L') ++pos_;  // Python 2's long suffix, as old numpy wrote shapes
+      if (t_[start] == '0' && nonzero)
+        fail("the integer '" + std::string(t_.substr(start, pos_ - start)) +
+             "' with a leading zero, which Python's literals (and so numpy) refuse");
+      if (pos_ < t_.size() && t_[pos_] == 'L') {  // Python 2's long suffix, as old numpy wrote shapes
+        if (!long_suffix_) fail("Python 2's long suffix 'L', which numpy reads in format versions 1.0 and 2.0 only");
+        ++pos_;
+      }
     } else if (word("True")) {
       v.kind = PyValue::Kind::boolean;
       v.flag = true;
@@ -124,17 +146,18 @@ class HeaderParser {
     } else if (word("None")) {
       v.kind = PyValue::Kind::none;
     } else {
-      fail(std::string("an unexpected '") + c + "'");
+      fail("an unexpected '" + shown_value(std::string_view(&t_[pos_], 1)) + "'");
     }
     return v;
   }
 
   std::string_view t_;
+  bool long_suffix_;
   std::size_t pos_ = 0;
 };
 
 [[noreturn]] void refuse(const std::string& path, const std::string& problem) {
-  throw UsageError(path + ": " + problem);
+  throw UsageError(shown_value(path) + ": " + problem);
 }
 
 std::uint64_t little_endian(const unsigned char* b, int bytes) {
@@ -143,13 +166,12 @@ std::uint64_t little_endian(const unsigned char* b, int bytes) {
   return v;
 }
 
-// the header text for a message: one line, at most 120 characters
+// the header text for a message: one line (control characters escaped; the padding and the
+// newline that end it dropped), at most 120 characters of it
 std::string shown(std::string_view header) {
-  std::string s(header.substr(0, 120));
-  for (char& c : s)
-    if (c == '\n' || c == '\r' || static_cast<unsigned char>(c) < 0x20) c = ' ';
-  while (!s.empty() && s.back() == ' ') s.pop_back();
-  return s + (header.size() > 120 ? " ..." : "");
+  std::string_view s = header.substr(0, 120);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\n')) s.remove_suffix(1);
+  return shown_value(s) + (header.size() > 120 ? " ..." : "");
 }
 
 }  // namespace
@@ -163,7 +185,8 @@ std::string npy_shape_text(const std::vector<std::size_t>& shape) {
 NpyArray read_npy(const std::string& path) {
   // opened without blocking and checked as a regular file (a FIFO would wait for a writer forever),
   // then read through the open descriptor, so the file checked is the file read
-  const RegularFile checked = open_regular_file("target file", path);
+  RegularFile checked;
+  if (const std::string problem = open_regular_problem(path, checked); !problem.empty()) refuse(path, problem);
   std::ifstream in("/proc/self/fd/" + std::to_string(checked.fd()), std::ios::binary);
   if (!in) refuse(path, std::string("cannot open: ") + std::strerror(errno));
   struct stat st {};
@@ -195,7 +218,7 @@ NpyArray read_npy(const std::string& path) {
 
   std::map<std::string, PyValue> fields;
   try {
-    fields = HeaderParser(header).dict();
+    fields = HeaderParser(header, major <= 2).dict();
   } catch (const std::runtime_error& e) {
     refuse(path, std::string("malformed header (") + e.what() + "): " + shown(header));
   }
@@ -210,14 +233,14 @@ NpyArray read_npy(const std::string& path) {
     refuse(path, "dtype is a structured type; only float64 '<f8' and float32 '<f4' are read");
   a.dtype = descr.text;
   if (a.dtype != "<f8" && a.dtype != "<f4")
-    refuse(path, "dtype '" + a.dtype + "' is not read; only float64 '<f8' and float32 '<f4' (little-endian)");
+    refuse(path, "dtype '" + shown_value(a.dtype) + "' is not read; only float64 '<f8' and float32 '<f4' (little-endian)");
   const PyValue& order = fields.at("fortran_order");
   if (order.kind != PyValue::Kind::boolean) refuse(path, "malformed header: fortran_order is not True or False");
   if (order.flag)
     refuse(path, "Fortran order (fortran_order: True) is not read; save the array in C order, e.g. "
                  "np.save(path, np.ascontiguousarray(a))");
   const PyValue& shape = fields.at("shape");
-  if (shape.kind != PyValue::Kind::sequence) refuse(path, "malformed header: shape is not a tuple");
+  if (shape.kind != PyValue::Kind::tuple) refuse(path, "malformed header: shape is not a tuple in " + shown(header));
   std::size_t count = 1;
   for (const PyValue& d : shape.items) {
     if (d.kind != PyValue::Kind::integer) refuse(path, "malformed header: shape holds a value that is not an integer");

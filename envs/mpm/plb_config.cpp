@@ -1,6 +1,7 @@
 #include "envs/mpm/plb_config.hpp"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "common/error.hpp"
@@ -43,6 +44,12 @@ void PlbConfig::validate() const {
                       {"contact_weight", contact_weight}})
     if (!(std::isfinite(v) && v >= 0.0)) fail(f, "must be finite and >= 0");
   if (observed_particles < 1) fail("observed_particles", "must be >= 1");
+  // a target file's values are bounded by kMaxTargetMass so that the density term, summed over the
+  // steps and nodes, stays far below the largest double (plb_target_file.hpp derives it)
+  const double nodes = static_cast<double>(mpm.grid[0]) * mpm.grid[1] * mpm.grid[2];
+  if (static_cast<double>(env_steps) * density_weight * nodes * kMaxTargetMass > 0.1 * std::numeric_limits<double>::max())
+    fail("density_weight", "with " + std::to_string(env_steps) + " env steps and " + std::to_string(mpm.grid[0]) +
+                               "^3 nodes, a target of kMaxTargetMass per node could overflow the loss");
 }
 
 namespace {

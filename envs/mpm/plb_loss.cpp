@@ -93,7 +93,7 @@ PlbLossTerms PlbObjective::terms(const std::vector<Particle>& particles, const s
           for_each_node_of_block(L, active[b], [&](int, int, int, int n) {
             const double m = scratch_.mass[n];
             acc.dm += d[n] * m;
-            acc.dev += std::abs(m - t[n]) - t[n];
+            acc.dev += std::abs(m - t[n]) - std::abs(t[n]);
             acc.mt += m * t[n];
             acc.m += m;
             acc.max_m = std::max(acc.max_m, m);
@@ -103,8 +103,9 @@ PlbLossTerms PlbObjective::terms(const std::vector<Particle>& particles, const s
       add);
   PlbLossTerms r;
   r.sdf = s.dm;
-  // sum over every node of |m - t|: nodes outside the active blocks have m = 0 and add t
-  r.density = s.dev + model_.target_sum;
+  // sum over every node of |m - t|: nodes outside the active blocks have m = 0 and add |t| (a
+  // target's tiny negatives included: plb_target_file.hpp)
+  r.density = s.dev + model_.target_abs_sum;
   for (int k : model_.movable) {
     const double c = closest(k, particles, poses[k], team).first;
     r.contact += c * c;

@@ -69,6 +69,7 @@ PlbModel build_plb_model(const PlbConfig& cfg) {
   model.target_sdf = distance_to_mass(model.target, cfg.target_threshold, cfg.mpm.dx);
   for (double v : model.target.values) {
     model.target_sum += v;
+    model.target_abs_sum += std::abs(v);
     model.target_max = std::max(model.target_max, v);
   }
   for (std::size_t i = 0; i < model.mpm.primitives.size(); ++i)

@@ -19,6 +19,26 @@
 
 namespace dsb::mpm {
 
+// A target is a grid of masses, so read_plb_target refuses what none is:
+//
+// kTargetNegativeTolerance: the most negative value taken is -1e-4. A grid of masses (P2G of
+// particle masses with non-negative B-spline weights) is >= 0 everywhere, but PlasticineLab's own
+// target files hold tiny negatives (Rope, TripleMove, Writer; down to -2.3e-5 in TripleMove; how
+// they were made is not documented), and those must load. 1e-4 is 4.3x the deepest of them, and
+// it is the SDF loss's threshold (PlbConfig::target_threshold): a node at or below it is empty to
+// that term, so a value in [-1e-4, 0) is as empty to the loss as 0 and moves the density term by
+// at most 1e-4 (plb_loss.hpp sums |m_I - t_I| as it is). A cell at -5, or a grid of -1 (once
+// taken, a loss of -12 million, below any real solution's), is refused.
+inline constexpr double kTargetNegativeTolerance = 1e-4;
+// kMaxTargetMass: the largest value taken is 1e299. The loss (plb_loss.hpp) sums over at most 50 env
+// steps density_weight (10) x sum_I |m_I - t_I| over the 64^3 = 262,144 nodes, besides terms of the
+// plasticine alone; with every t_I at the bound that is at most 50 x 10 x 262,144 x 1e299 = 1.3e307
+// plus the plasticine's mass, 13x below the largest double (1.8e308); the soft IoU's sum_I m_I t_I
+// is the plasticine's mass (0.61) times at most the same. A cell at 1.7e308 made loss and gradient
+// nan. PlbConfig::validate checks that its steps, weight and grid keep within this bound.
+inline constexpr double kMaxTargetMass = 1e299;
+// ... and a grid with no value above 0 (no mass at all) is refused too.
+
 struct PlbTargetFile {
   NodeGrid grid;          // on the scene's nodes (pad included), as build_plb_model uses a target
   std::string hash;       // FNV-1a 64 (hex) of the file's values as little-endian doubles in C order
@@ -26,8 +46,9 @@ struct PlbTargetFile {
 };
 
 // Reads `path` for a scene of config `mpm`: the shape must be mpm.grid (PlasticineLab's
-// (64, 64, 64)) and every value finite. Throws UsageError "PATH: problem" (npy_array.hpp's
-// refusals, a wrong shape, a value that is not finite).
+// (64, 64, 64)), every value finite and in [-kTargetNegativeTolerance, kMaxTargetMass], and one
+// above 0. Throws UsageError "PATH: problem", one line (npy_array.hpp's refusals, a wrong shape; a
+// value out of range with its cell [i, j, k], the first in C order; no positive value).
 PlbTargetFile read_plb_target(const std::string& path, const MpmConfig& mpm);
 
 // The other way: the values of a grid on the scene's nodes at PlasticineLab's nodes (shape

@@ -11,6 +11,7 @@ import json
 import math
 import os
 import pathlib
+import re
 import subprocess
 import tempfile
 import threading
@@ -172,6 +173,49 @@ class EnvOptionsTest(unittest.TestCase):
             dsb.make("plb-pinch-h5", target=os.path.join(self.dir.name, "flat.npy"))
 
 
+    def test_paths_are_str_bytes_or_path_like(self):
+        env = dsb.make("plb-pinch-h5", target=self.target)
+        # bytes: the file's name as the OS has it, never the text "b'...'"
+        self.assertEqual(dsb.make("plb-pinch-h5", target=os.fsencode(self.target)).config, env.config)
+        odd = os.path.join(os.fsencode(self.dir.name), b"t\xff.npy")  # not UTF-8
+        with open(self.target, "rb") as src, open(odd, "wb") as dst:
+            dst.write(src.read())
+        self.assertEqual(dsb.make("plb-pinch-h5", target=odd).config, env.config)
+        self.assertEqual(dsb.make("plb-pinch-h5", target=os.fsdecode(odd)).config, env.config)
+        missing = os.path.join(self.dir.name, "missing.npy")
+        with self.assertRaises(ValueError) as caught:
+            dsb.make("plb-pinch-h5", target=os.fsencode(missing))
+        self.assertIn(missing, str(caught.exception))
+        self.assertNotIn("b'", str(caught.exception))
+        # what is no path is refused as such, naming it
+        for value, shown in ((5, "int 5"), (None, "NoneType None"), (1.5, "float 1.5"), ([self.target], "list")):
+            with self.assertRaisesRegex(TypeError, r"plb-pinch-h5\.target must be a path \(str, bytes or "
+                                                   r"os\.PathLike\), got " + re.escape(shown)):
+                dsb.make("plb-pinch-h5", target=value)
+        with self.assertRaisesRegex(ValueError, "null byte"):
+            dsb.make("plb-pinch-h5", target=self.target + "\0x")
+        # threads: an int, not a bool or a float
+        with self.assertRaisesRegex(TypeError, "threads must be an int, got bool True"):
+            dsb.make("bounce", threads=True)
+        with self.assertRaisesRegex(TypeError, "threads must be an int, got float 1.0"):
+            dsb.make("bounce", threads=1.0)
+        with self.assertRaisesRegex(ValueError, "threads must be >= 1, got -3"):
+            dsb.make("bounce", threads=-3)
+
+    def test_a_target_must_be_a_mass_grid(self):
+        t = np.zeros((64, 64, 64))
+        t[24:40, 0:12, 24:40] = 2e-4
+        t[3, 4, 5] = -5.0
+        bad = os.path.join(self.dir.name, "negative.npy")
+        np.save(bad, t)
+        with self.assertRaisesRegex(ValueError, re.escape(bad) + r": value -5 at \[3, 4, 5\] is negative"):
+            dsb.make("plb-pinch-h5", target=bad)
+        zero = os.path.join(self.dir.name, "zero.npy")
+        np.save(zero, np.zeros((64, 64, 64)))
+        with self.assertRaisesRegex(ValueError, "no positive mass"):
+            dsb.make("plb-pinch-h5", target=zero)
+
+
 class RlViewTest(unittest.TestCase):
     """The RL view driven with x's per-step actions gives loss(x), bit for bit."""
 
@@ -230,6 +274,40 @@ class BadInputTest(unittest.TestCase):
             env.loss(np.zeros((1, 3)))
         with self.assertRaises(TypeError):
             env.loss(["a", "b", "c"])
+
+    def test_only_real_numbers_are_numbers(self):
+        env = dsb.make("bounce")
+        refused = [
+            (["0.1", 0, 0], r"x: value '0\.1' at position 0 is a str, not a real number"),
+            ([0, None, 0], r"x: value None at position 1 is None, not a real number"),
+            ([0, 0, True], r"x: value True at position 2 is a bool, not a real number"),
+            ([np.bool_(False), 0, 0], r"x: value (np\.)?False(_)? at position 0 is a bool"),
+            ([0, 0.5j, 0], r"x: value 0\.5j at position 1 is a complex, not a real number"),
+            (np.array([True, False, True]), r"x must hold real numbers, got a numpy array of dtype bool"),
+            (np.array(["0.1", "0", "0"]), r"x must hold real numbers, got a numpy array of dtype <U3"),
+            (np.array([0.1, "a", 0], dtype=object), r"x: value 'a' at position 1 is a str"),
+            ("0.1,0,0", r"x must be a 1-D numpy array or sequence of numbers, got str '0\.1,0,0'"),
+            (["\x1b[2J", 0, 0], r"x: value '\\x1b\[2J' at position 0 is a str"),
+        ]
+        for x, message in refused:
+            with self.subTest(x=repr(x)):
+                with self.assertRaisesRegex(TypeError, message) as caught:
+                    env.loss(x)
+                self.assertNotIn("\x1b", str(caught.exception))
+                with self.assertRaises(TypeError):
+                    env.loss_and_grad(x)
+        with self.assertRaisesRegex(ValueError, r"x: value 1000000000.* at position 0 is too large for a double"):
+            env.loss([10 ** 400, 0, 0])
+        with self.assertRaisesRegex(TypeError, r"action: value '0' at position 1 is a str"):
+            dsb.make("cartpole1").rl().step([0.0, "0"])
+        # every kind of real number, as the same doubles
+        reference = bits(env.loss([0.0, 0.5, 0.25]))
+        for x in ([0, 0.5, 0.25], [np.int64(0), np.float64(0.5), np.float32(0.25)], (0, 0.5, 0.25),
+                  np.array([0.0, 0.5, 0.25], dtype=np.float32), np.array([0.0, 0.5, 0.25], dtype=object),
+                  [np.array(0.0), 0.5, 0.25]):
+            with self.subTest(x=repr(x)):
+                self.assertEqual(bits(env.loss(x)), reference)
+        self.assertEqual(bits(env.loss(np.zeros(3, dtype=np.int32))), bits(env.loss([0.0, 0.0, 0.0])))
 
     def test_value_outside_the_box_names_the_value(self):
         env = dsb.make("bounce")

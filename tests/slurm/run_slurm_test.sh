@@ -4,6 +4,8 @@
 # merged database's result table must equal a single-process run's byte for byte. Then the TERM
 # case: a task stopped mid-grid by TERM (as at a time limit) copies back what it committed, its
 # merge never runs, a second submit resumes it, and the result again equals a single-process run.
+# Then a user's database: a --dir holding one is refused, and one put there later survives the
+# array and its merge byte for byte.
 # Usage: run_slurm_test.sh BUILD_DIR. Exit 77 (skipped) when not root: the daemons run as root.
 set -euo pipefail
 
@@ -140,5 +142,45 @@ grep -q "resuming: 3 runs already done" "$work"/term/logs/shard-0-job-"$array_id
 grep -q "resumed 1 interrupted run" "$work"/term/logs/shard-0-job-"$array_id".out || fail "the run in progress was not resumed"
 [[ -f $work/term/results.sqlite ]] || fail "no merged database after the resubmission"
 expect_single_process_result "$work/term/results.sqlite" "after-TERM-and-resume"
+
+# 6. a user's database is never at risk: `harness slurm` refuses a --dir that holds one (exit 2,
+#    nothing created), and one put there after the scripts were written survives the array and its
+#    merge byte for byte (the merge fails and says so); the folders have a '%' in their names, which
+#    the #SBATCH lines must carry as '%%' for the logs to land there (%j is Slurm's job id)
+user_db=$work/merged-shards-single.sqlite
+user_sum=$(sha256sum "$user_db" | cut -d' ' -f1)
+grid=(--env sphere-10,branin --optimizer random --seeds 2 --budget 20)
+mkdir "$work/user%db"
+cp "$user_db" "$work/user%db/results.sqlite"
+before=$(cd "$work/user%db" && ls -A)
+status=0
+out=$(cd "$work/user%db" && "$harness" slurm "${grid[@]}" --shards 2 --dir . 2>&1) || status=$?
+echo "  $out"
+((status == 2)) || fail "slurm --dir . beside a user's results.sqlite exited $status, not 2"
+[[ $(cd "$work/user%db" && ls -A) == "$before" ]] || fail "the refused slurm created files in the user's folder"
+[[ $(sha256sum "$work/user%db/results.sqlite" | cut -d' ' -f1) == "$user_sum" ]] || fail "the user's database changed"
+echo "slurm: --dir holding a user's database refused (exit 2), nothing created, the database unchanged"
+
+t=$(now)
+"$harness" slurm "${grid[@]}" --shards 2 --cpus-per-task 1 --dir "$work/late%j" >/dev/null
+cp "$user_db" "$work/late%j/results.sqlite"
+submit "$work/late%j"
+wait_jobs 180 "$array_id,$merge_id"
+echo "slurm: user's database put in --dir after the scripts: array $array_id [$(job_states "$array_id")], merge $merge_id [$(job_states "$merge_id")] in $(since "$t") s"
+[[ $(job_states "$array_id") == "2 COMPLETED" ]] || fail "not every array task completed"
+[[ $(job_states "$merge_id") == "1 FAILED" ]] || fail "the merge did not fail beside the user's results.sqlite"
+[[ $(sha256sum "$work/late%j/results.sqlite" | cut -d' ' -f1) == "$user_sum" ]] ||
+  fail "the merge changed the user's results.sqlite"
+merge_log=$work/late%j/logs/merge-job-$merge_id.out
+[[ -f $merge_log ]] || fail "no merge log at $merge_log (a '%' in the folder not carried as '%%')"
+show_log "$merge_log"
+grep -q "results.sqlite exists: a merge never writes over a file" "$merge_log" || fail "the merge's log does not say why"
+# moved away, the merge runs on the next submit, and its result is the single process's
+mv "$work/late%j/results.sqlite" "$work/user-moved.sqlite"
+submit "$work/late%j"
+wait_jobs 180 "$array_id,$merge_id"
+[[ $(job_states "$merge_id") == "1 COMPLETED" ]] || fail "the merge did not complete once results.sqlite was moved"
+expect_single_process_result "$work/late%j/results.sqlite" "merged-in-percent-j"
+[[ $(sha256sum "$work/user-moved.sqlite" | cut -d' ' -f1) == "$user_sum" ]] || fail "the user's database changed"
 
 echo "slurm: passed"
