@@ -12,6 +12,7 @@ import math
 import os
 import pathlib
 import re
+import signal
 import subprocess
 import tempfile
 import threading
@@ -159,6 +160,18 @@ class EnvOptionsTest(unittest.TestCase):
         ref = harness_eval("plb-pinch-h5", x, grad=False, sets=["plb-pinch-h5.target=" + self.target])
         self.assertEqual(bits(env.loss(x)), bits(ref["loss"]))
         self.assertNotEqual(bits(dsb.make("plb-pinch-h5").loss(x)), bits(ref["loss"]))
+
+    def test_a_fifo_as_a_target_is_refused_at_once(self):
+        # open(2) of a FIFO waits for a writer; the alarm turns a regression into a failure, not a hang
+        fifo = os.path.join(self.dir.name, "fifo-target.npy")
+        os.mkfifo(fifo)
+        signal.signal(signal.SIGALRM, lambda *_: (_ for _ in ()).throw(TimeoutError("make() blocked on a FIFO")))
+        signal.alarm(20)
+        try:
+            with self.assertRaisesRegex(ValueError, re.escape(fifo) + ": is a FIFO \\(named pipe\\), not a regular file"):
+                dsb.make("plb-pinch-h5", target=fifo)
+        finally:
+            signal.alarm(0)
 
     def test_bad_options_raise_value_error_naming_them(self):
         missing = os.path.join(self.dir.name, "missing.npy")
