@@ -161,6 +161,22 @@ void BudgetedObjective::values(std::span<const double> xs, std::span<double> out
   if (n < out.size()) throw BudgetExhausted{};
 }
 
+bool BudgetedObjective::recall(std::uint64_t key, std::span<double> out) {
+  note_first_draw();  // work that drew belongs after the seed-free prefix
+  const ReplayEntry* e = journal_.recall(key, rl_episode_.open);
+  if (!e) return false;
+  if (e->payload.size() != out.size())
+    throw ReplayDiverged("resume: a journal result of the optimizer's work of " + std::to_string(e->payload.size()) +
+                         " values, expected " + std::to_string(out.size()));
+  std::copy(e->payload.begin(), e->payload.end(), out.begin());
+  return true;
+}
+
+void BudgetedObjective::remember(std::uint64_t key, std::span<const double> result) {
+  note_first_draw();
+  journal_.remember(key, {result.begin(), result.end()}, rl_episode_.open);
+}
+
 RlEnv& BudgetedObjective::rl_env() {
   if (!env_.supports_rl()) throw std::logic_error("env '" + env_.name() + "' has no RL view");
   if (!rl_) rl_ = env_.make_rl();

@@ -62,6 +62,10 @@ class BudgetedObjective : public Objective {
   RlSpec rl_spec() const override;
   void rl_reset(std::span<double> observation) override;
   RlStep rl_step(std::span<const double> action, std::span<double> observation) override;
+  // the optimizer's own work, kept in the journal (ReplayJournal::recall, remember); a recalled
+  // result of another size than `out` is ReplayDiverged
+  bool recall(std::uint64_t key, std::span<double> out) override;
+  void remember(std::uint64_t key, std::span<const double> result) override;
 
   const std::vector<EvalRecord>& evals() const { return log_.evals(); }
   double best_loss() const { return log_.best_loss(); }  // NaN while no episode succeeded
@@ -80,6 +84,10 @@ class BudgetedObjective : public Objective {
   // journal entries since the last take, with the call index of the first
   std::vector<ReplayEntry> take_journal(std::int64_t& first_seq) { return journal_.take(first_seq); }
   std::int64_t replayed_episodes() const { return journal_.replayed_episodes(); }
+  // results of the optimizer's own work recalled from the journal, and computed again while it
+  // was served (a journal written without them)
+  std::int64_t recalled_work() const { return journal_.recalled_work(); }
+  std::int64_t recomputed_work() const { return journal_.recomputed_work(); }
   bool interrupted() const { return interrupted_; }
 
   // Watches the run's generator for its first draw (checked at the start of every call): the

@@ -7,6 +7,12 @@
 // entry the recorded answer is served instead of simulating; from the first call past the
 // journal (or one that differs) the run goes on live. A resumed run's evals therefore equal an
 // uninterrupted run's. Entries are deleted when the run ends.
+//
+// The journal also keeps the results of the optimizer's own costly work (a GP's fits and
+// acquisitions: optimizers/core/work_memo.hpp), one `own_work` entry each, in the order the run
+// computed them: the input digest is the optimizer's key of the work, the payload its result. A
+// resumed run recalls them in that order instead of computing them again. A journal without them
+// (written before they were kept) still resumes, computing that work again.
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -20,7 +26,7 @@
 
 namespace dsb {
 
-enum class ReplayKind : int { value = 0, value_and_grad = 1, rl_reset = 2, rl_step = 3 };
+enum class ReplayKind : int { value = 0, value_and_grad = 1, rl_reset = 2, rl_step = 3, own_work = 4 };
 
 // Thrown when a resumed run asks for something other than its journal's next entry (another
 // binary, or a bug), or an entry's payload is not the size its kind has: the runner then restarts
@@ -33,7 +39,8 @@ struct ReplayEntry {
   ReplayKind kind = ReplayKind::value;
   std::uint64_t input_hash = 0;
   // the answer, flattened (the database's BLOB); read and written only through the answer types
-  // below: value and value_and_grad an EpisodeAnswer, rl_reset an observation, rl_step an RlStepAnswer
+  // below: value and value_and_grad an EpisodeAnswer, rl_reset an observation, rl_step an
+  // RlStepAnswer; own_work the optimizer's result as it gave it
   std::vector<double> payload;
 };
 

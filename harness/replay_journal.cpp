@@ -44,6 +44,31 @@ void ReplayJournal::write(ReplayKind kind, std::span<const double> input, std::v
   if (recording_) journal_.push_back({kind, replay_input_hash(input), std::move(payload)});
 }
 
+const ReplayEntry* ReplayJournal::recall(std::uint64_t key, bool rl_open) {
+  if (cursor_ >= replay_.size()) {
+    end_serving(rl_open);
+    return nullptr;  // live: computed, then remembered
+  }
+  const ReplayEntry& e = replay_[cursor_];
+  if (e.kind != ReplayKind::own_work) {
+    ++recomputed_work_;  // a journal without own work: computed again, the journal served on
+    return nullptr;
+  }
+  if (e.input_hash != key)
+    throw ReplayDiverged("resume: the optimizer's work at call " + std::to_string(calls_) + " differs from the journal's");
+  ++calls_;
+  ++cursor_;
+  ++recalled_work_;
+  return &e;
+}
+
+void ReplayJournal::remember(std::uint64_t key, std::vector<double> result, bool rl_open) {
+  if (cursor_ < replay_.size()) return;  // an older journal is still served: its sequence has no room
+  end_serving(rl_open);
+  ++calls_;
+  if (recording_) journal_.push_back({ReplayKind::own_work, key, std::move(result)});
+}
+
 std::vector<ReplayEntry> ReplayJournal::take(std::int64_t& first_seq) {
   first_seq = journal_first_;
   journal_first_ += static_cast<std::int64_t>(journal_.size());

@@ -34,6 +34,17 @@ class ReplayJournal {
 
   // a live call's answer, journaled when recording
   void write(ReplayKind kind, std::span<const double> input, std::vector<double> payload);
+
+  // The optimizer's own work (ReplayKind::own_work, optimizers/core/work_memo.hpp). recall: the
+  // journal's next entry when it is own work under `key` (ReplayDiverged when its key differs),
+  // else null: the work is computed, counted as computed again while entries are left (a journal
+  // written without own work). remember: a computed result, journaled when recording and live;
+  // while an older journal is still served it takes no place in the sequence (not journaled).
+  const ReplayEntry* recall(std::uint64_t key, bool rl_open);
+  void remember(std::uint64_t key, std::vector<double> result, bool rl_open);
+  // own work recalled from the journal, and computed again while it was served
+  std::int64_t recalled_work() const { return recalled_work_; }
+  std::int64_t recomputed_work() const { return recomputed_work_; }
   // an episode ended (one answered from the journal counts as replayed)
   void episode_finished() {
     if (serving_) ++replayed_episodes_;
@@ -54,6 +65,7 @@ class ReplayJournal {
   std::vector<ReplayEntry> replay_;  // served from the front
   std::size_t cursor_ = 0;
   std::int64_t replay_episodes_ = 0, replayed_episodes_ = 0;
+  std::int64_t recalled_work_ = 0, recomputed_work_ = 0;
   bool serving_ = false;
 };
 

@@ -75,8 +75,11 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
                  "optimizer's first draw, replayed: the same bits as simulating them)\n",
                  static_cast<long long>(s.shared_runs), static_cast<long long>(s.shared_episodes));
   if (s.resumed > 0)
-    std::fprintf(stderr, "harness: resumed %lld interrupted runs, %lld of their episodes replayed from the database\n",
-                 static_cast<long long>(s.resumed), static_cast<long long>(s.replayed_episodes));
+    std::fprintf(stderr,
+                 "harness: resumed %lld interrupted runs, %lld of their episodes replayed from the database; their "
+                 "optimizers' own work (GP fits, acquisitions): %lld results recalled, %lld computed again\n",
+                 static_cast<long long>(s.resumed), static_cast<long long>(s.replayed_episodes),
+                 static_cast<long long>(s.recalled_work), static_cast<long long>(s.recomputed_work));
   std::fprintf(stderr, "harness: %lld runs in the grid: %lld already done, %lld done now, %lld failed; database %s\n",
                static_cast<long long>(plan.runs), static_cast<long long>(s.skipped), static_cast<long long>(s.done),
                static_cast<long long>(s.failed), a.db.c_str());

@@ -51,6 +51,9 @@ struct RunResult {
   // stored as runs.diagnostics (JSON); deterministic, no timings
   nlohmann::json diagnostics;
   std::int64_t replayed_episodes = 0;  // episodes answered from a resumed run's journal (not stored)
+  // results of the optimizer's own work (GP fits, acquisitions) recalled from that journal, and
+  // computed again while it was served (a journal written without them); not stored
+  std::int64_t recalled_work = 0, recomputed_work = 0;
   // the episodes before the optimizer's first draw, and the journal entries not committed yet
   // (from journal_tail_first_seq on): a done run keeps its seed-free prefix for other seeds
   SeedFreePrefix seed_free;

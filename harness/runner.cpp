@@ -55,6 +55,8 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
   result.evals = objective.evals();
   result.diagnostics = {{"optimizer", optimizer.diagnostics()}, {"objective", objective.diagnostics()}};
   result.replayed_episodes = objective.replayed_episodes();
+  result.recalled_work = objective.recalled_work();
+  result.recomputed_work = objective.recomputed_work();
   result.seed_free = objective.seed_free_prefix();
   if (control) result.journal_tail = objective.take_journal(result.journal_tail_first_seq);
   return result;
@@ -113,7 +115,7 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
 
   const std::atomic<bool>& stop = stop_requested();
   std::atomic<std::int64_t> n_done{0}, n_failed{0}, n_interrupted{0}, n_resumed{0}, n_replayed{0}, n_shared{0},
-      n_shared_episodes{0};
+      n_shared_episodes{0}, n_recalled{0}, n_recomputed{0};
   std::mutex error_mutex;
   std::exception_ptr store_error;
   std::mutex finished_mutex;
@@ -184,6 +186,8 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
         if (start.committed_episodes > 0) {
           n_resumed.fetch_add(1);
           n_replayed.fetch_add(r.replayed_episodes);
+          n_recalled.fetch_add(r.recalled_work);
+          n_recomputed.fetch_add(r.recomputed_work);
         } else if (shared_episodes > 0 && start.journal_episodes > 0) {
           n_shared.fetch_add(1);
           n_shared_episodes.fetch_add(shared_episodes);
@@ -226,6 +230,8 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
   summary.interrupted = n_interrupted.load();
   summary.resumed = n_resumed.load();
   summary.replayed_episodes = n_replayed.load();
+  summary.recalled_work = n_recalled.load();
+  summary.recomputed_work = n_recomputed.load();
   summary.shared_runs = n_shared.load();
   summary.shared_episodes = n_shared_episodes.load();
   return summary;

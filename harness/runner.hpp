@@ -43,6 +43,8 @@ struct GridSummary {
   std::int64_t interrupted = 0;        // runs stopped by a signal, committed, to resume
   std::int64_t resumed = 0;            // runs that resumed an earlier attempt
   std::int64_t replayed_episodes = 0;  // episodes those served from their journals
+  std::int64_t recalled_work = 0;      // results of their optimizers' own work recalled from them
+  std::int64_t recomputed_work = 0;    // and computed again while they were served
   std::int64_t shared_runs = 0;        // runs that took episodes from another seed's run
   std::int64_t shared_episodes = 0;    // those episodes
 };

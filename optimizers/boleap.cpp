@@ -50,7 +50,7 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
     throw std::invalid_argument("boleap needs gradients, and this env is not differentiable");
   stats_ = {};
   const int d = f.dim();
-  BoSurrogate model(d, cfg_.bo);
+  BoSurrogate model(d, cfg_.bo, &f);
   std::vector<double> grad(d);
 
   // every simulated point goes to the GP (fitted only when BO proposes)

@@ -3,6 +3,7 @@
 // branin median best within 1e-2 of 0.397887 after 60 episodes; hartmann6 below -3.0 after 150.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -177,6 +178,134 @@ TEST(BoCost, ThePlansFitScheduleIsTheOneARunFollowsAndItsWorkIsCounted) {
   const double fits = kBoEvaluationsPerFit * (kBoSecondsPerN3 * (1331.0 + 1728.0 + 2197.0) +
                                               kBoSecondsPerN2D * 10.0 * (121.0 + 144.0 + 169.0));
   EXPECT_NEAR(bo_own_seconds(10, 13), fits + bo_acquisition_seconds(10, 13), 1e-12 * fits);
+}
+
+// A memo that remembers results in order and serves the first `serve` of them back in that order
+// (a resumed run's journal does the same: harness/replay_journal.hpp); it checks every key.
+class ListMemo : public WorkMemo {
+ public:
+  std::vector<std::pair<std::uint64_t, std::vector<double>>> entries;
+  std::size_t serve = 0, next = 0;
+  bool recall(std::uint64_t key, std::span<double> out) override {
+    if (next >= serve) return false;
+    const auto& [k, result] = entries.at(next++);
+    EXPECT_EQ(k, key) << "entry " << next - 1;
+    EXPECT_EQ(result.size(), out.size());
+    std::copy(result.begin(), result.end(), out.begin());
+    return true;
+  }
+  void remember(std::uint64_t key, std::span<const double> result) override {
+    if (next < serve) return;
+    entries.resize(next);  // what follows is computed again
+    entries.emplace_back(key, std::vector<double>(result.begin(), result.end()));
+    ++next;
+    serve = next;
+  }
+};
+
+struct SurrogateRun {
+  std::vector<Eigen::VectorXd> proposals;
+  std::uint64_t next_draw = 0;
+  std::string diagnostics;
+  int fits = 0, fits_recalled = 0, proposals_recalled = 0;
+};
+
+// 8 Sobol-like random points (one fit after the fifth is deferred to the sixth), then 25
+// proposals on a 3-D bowl; refits every point up to 10, then at +30%: fits and extensions both
+SurrogateRun run_surrogate(WorkMemo* memo) {
+  BoConfig cfg;
+  cfg.refit_every_until = 10;
+  cfg.refit_growth = 0.3;
+  BoSurrogate model(3, cfg, memo);
+  Rng rng(11);
+  const auto f = [](const Eigen::VectorXd& x) { return (x.array() - 0.25).square().sum() + 0.1 * x[0]; };
+  SurrogateRun r;
+  for (int i = 0; i < 8; ++i) {
+    Eigen::VectorXd x(3);
+    for (int j = 0; j < 3; ++j) x[j] = rng.uniform(-1.0, 1.0);
+    model.add(x, f(x), rng, /*defer_fit=*/i < 5);
+  }
+  for (int i = 0; i < 25; ++i) {
+    r.proposals.push_back(model.propose(rng));
+    model.add(r.proposals.back(), f(r.proposals.back()), rng);
+  }
+  r.next_draw = rng.next_u64();
+  r.diagnostics = model.diagnostics().dump();
+  r.fits = model.fits();
+  r.fits_recalled = model.fits_recalled();
+  r.proposals_recalled = model.proposals_recalled();
+  return r;
+}
+
+TEST(BoSurrogateMemo, RecalledFitsAndArgminsLeaveTheModelTheGeneratorAndTheCountsAsComputedOnes) {
+  const SurrogateRun plain = run_surrogate(nullptr);
+  ListMemo memo;
+  const SurrogateRun computed = run_surrogate(&memo);
+  // every fit and every argmin went through the memo, none recalled
+  ASSERT_EQ(memo.entries.size(), static_cast<std::size_t>(plain.fits + 25));
+  EXPECT_EQ(computed.fits_recalled + computed.proposals_recalled, 0);
+  // served all, or the first half then computed (a run resumed part-way), or none
+  for (const std::size_t serve : {memo.entries.size(), memo.entries.size() / 2, std::size_t{0}}) {
+    ListMemo again = memo;
+    again.serve = serve;
+    again.next = 0;
+    const SurrogateRun r = run_surrogate(&again);
+    EXPECT_EQ(r.fits_recalled + r.proposals_recalled, static_cast<int>(serve)) << serve;
+    if (serve == memo.entries.size()) EXPECT_EQ(r.fits_recalled, plain.fits);  // no search ran
+    EXPECT_EQ(again.entries, memo.entries) << serve;  // what was computed again is what was remembered
+    ASSERT_EQ(r.proposals.size(), computed.proposals.size());
+    for (std::size_t i = 0; i < r.proposals.size(); ++i)
+      EXPECT_EQ(std::memcmp(r.proposals[i].data(), computed.proposals[i].data(), 3 * sizeof(double)), 0)
+          << serve << ": proposal " << i;
+    EXPECT_EQ(r.next_draw, computed.next_draw) << serve;
+    EXPECT_EQ(r.diagnostics, computed.diagnostics) << serve;
+    EXPECT_EQ(r.fits, computed.fits) << serve;
+  }
+  EXPECT_EQ(computed.diagnostics, plain.diagnostics);
+  EXPECT_EQ(computed.next_draw, plain.next_draw);
+  EXPECT_EQ(plain.fits, 9);  // at n = 6 (the five deferred with the sixth) to 10, then 13, 17, 23, 30
+}
+
+TEST(GpFit, ARecalledResultEqualsTheSearchAndADifferentStateHasAnotherKey) {
+  Rng data(2);
+  Eigen::MatrixXd X(12, 2);
+  Eigen::VectorXd y(12);
+  for (int i = 0; i < 12; ++i) {
+    X(i, 0) = data.uniform();
+    X(i, 1) = data.uniform();
+    y[i] = std::sin(4.0 * X(i, 0)) + X(i, 1);
+  }
+  GaussianProcess a(2, GpConfig{}), b(2, GpConfig{});
+  a.set_data(X, y);
+  b.set_data(X, y);
+  Rng ra(5), rb(5);
+  const GpFitStarts sa = a.begin_fit(ra), sb = b.begin_fit(rb);
+  EXPECT_EQ(a.fit_key(sa), b.fit_key(sb));
+  const GpFitResult result = a.search_fit(sa);
+  a.end_fit(sa, result, /*recalled=*/false);
+  b.end_fit(sb, GpFitResult::from_payload(result.payload(2), 2), /*recalled=*/true);
+  EXPECT_EQ(a.digest(), b.digest());
+  EXPECT_EQ(a.likelihood_evaluations(), b.likelihood_evaluations());
+  EXPECT_GT(a.likelihood_evaluations(), 3);
+  EXPECT_EQ(a.likelihood_n3(), b.likelihood_n3());
+  EXPECT_EQ(ra.next_u64(), rb.next_u64());
+  // the same as fit() in one go
+  GaussianProcess c(2, GpConfig{});
+  c.set_data(X, y);
+  Rng rc(5);
+  c.fit(rc);
+  EXPECT_EQ(c.digest(), a.digest());
+  // one output changed, or another start: another key
+  Eigen::VectorXd y2 = y;
+  y2[3] = std::nextafter(y2[3], 10.0);
+  GaussianProcess d(2, GpConfig{});
+  d.set_data(X, y2);
+  Rng rd(5);
+  EXPECT_NE(d.fit_key(d.begin_fit(rd)), b.fit_key(sb));
+  GaussianProcess e(2, GpConfig{});
+  e.set_data(X, y);
+  Rng re(6);
+  EXPECT_NE(e.fit_key(e.begin_fit(re)), b.fit_key(sb));
 }
 
 TEST(BoConfigTest, ValidationNamesTheField) {

@@ -203,6 +203,86 @@ TEST_F(HarnessCli, SigtermMidRunCommitsAndTheResumedRunEqualsTheUninterruptedOne
   }
 }
 
+// Rewrites a database's journals as a binary from before the optimizers' own work was kept would
+// have left them: without the own_work rows (kind 4), the others numbered without gaps.
+void drop_own_work_from_journals(const std::string& path) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr), SQLITE_OK);
+  char* error = nullptr;
+  const int rc = sqlite3_exec(db,
+                              "BEGIN; DELETE FROM replay WHERE kind=4; "
+                              "CREATE TEMP TABLE renumbered AS SELECT run_id, (SELECT count(*) FROM replay b "
+                              "WHERE b.run_id=a.run_id AND b.seq<a.seq) AS seq, kind, input_hash, payload FROM replay a; "
+                              "DELETE FROM replay; INSERT INTO replay SELECT * FROM renumbered; COMMIT;",
+                              nullptr, nullptr, &error);
+  EXPECT_EQ(rc, SQLITE_OK) << (error ? error : "");
+  sqlite3_free(error);
+  sqlite3_close(db);
+}
+
+// "N results recalled, M computed again" of the resume summary: {N, M}, or {-1, -1}
+std::pair<int, int> own_work_counts(const std::string& err) {
+  int recalled = -1, again = -1;
+  const auto at = err.find("own work (GP fits, acquisitions): ");
+  if (at == std::string::npos ||
+      std::sscanf(err.c_str() + at, "own work (GP fits, acquisitions): %d results recalled, %d computed again",
+                  &recalled, &again) != 2)
+    return {-1, -1};
+  return {recalled, again};
+}
+
+TEST_F(HarnessCli, AGpOptimizerStoppedMidRunResumesWithoutRefittingAndEqualsTheUninterruptedRun) {
+  // bo and boleap (leaps of 20 episodes, so that several GP fits come before the stop) stopped by
+  // SIGTERM after episode 40 of 70: the resume recalls every GP fit and LCB argmin of the
+  // interrupted attempt from the journal and computes none again, and the run's evals, best
+  // point and diagnostics are the uninterrupted run's, bit for bit. The same journal without
+  // those results (an older binary's) still resumes to the same bits, computing them again.
+  for (const std::string opt : {"bo", "boleap"}) {
+    const std::string grid = "--env rosenbrock-10 --optimizer " + opt +
+                             (opt == "boleap" ? " --set boleap.episodes_per_leap=20" : "") +
+                             " --seeds 1 --budget 70 --jobs 1 --quiet --db ";
+    ASSERT_EQ(harness(grid + db(opt + "-full.sqlite")).code, 0) << opt;
+    const auto stopped = harness(grid + db(opt + ".sqlite"),
+                                 "DSB_FAULT_INJECTION=signal-in-run DSB_FAULT_AT_EPISODE=40 DSB_FAULT_SIGNAL=15");
+    EXPECT_EQ(stopped.code, 143) << opt << ": " << stopped.err;
+    const std::string committed = scalar(db(opt + ".sqlite"), "SELECT episodes FROM runs WHERE status='running'");
+    ASSERT_FALSE(committed.empty()) << opt;
+    EXPECT_GE(std::stoi(committed), 40) << opt;  // boleap's batch ends its episode in progress
+    EXPECT_LT(std::stoi(committed), 70) << opt;
+    const int kept = std::stoi(scalar(db(opt + ".sqlite"), "SELECT count(*) FROM replay WHERE kind=4"));
+    // bo: a fit after each of its first points and an argmin before each episode past the initial
+    // design; boleap: a fit and an argmin per leap (episodes 11, 31: leaps of 20 after 11 Sobol points)
+    EXPECT_GE(kept, opt == "bo" ? 40 : 4) << opt;
+    // of which an older binary's resume computes again those before the journal's last episode
+    // (the rest come after it, where the run goes on live)
+    const int before_last = std::stoi(scalar(db(opt + ".sqlite"), "SELECT count(*) FROM replay WHERE kind=4 AND "
+                                                                  "seq < (SELECT max(seq) FROM replay WHERE kind<>4)"));
+    EXPECT_GT(before_last, 0) << opt;
+    fs::copy_file(db(opt + ".sqlite"), db(opt + "-old.sqlite"));
+    drop_own_work_from_journals(db(opt + "-old.sqlite"));
+    EXPECT_EQ(scalar(db(opt + "-old.sqlite"), "SELECT count(*) FROM replay WHERE kind=4"), "0") << opt;
+
+    const auto resumed = harness(grid + db(opt + ".sqlite"));
+    ASSERT_EQ(resumed.code, 0) << opt << ": " << resumed.err;
+    EXPECT_NE(resumed.err.find("resumed 1 interrupted runs, " + committed + " of their episodes replayed"),
+              std::string::npos)
+        << opt << ": " << resumed.err;
+    EXPECT_EQ(own_work_counts(resumed.err), std::make_pair(kept, 0)) << opt << ": " << resumed.err;
+    const auto old = harness(grid + db(opt + "-old.sqlite"));
+    ASSERT_EQ(old.code, 0) << opt << ": " << old.err;
+    EXPECT_EQ(own_work_counts(old.err), std::make_pair(0, before_last)) << opt << ": " << old.err;
+
+    for (const std::string& resumed_db : {opt + ".sqlite", opt + "-old.sqlite"}) {
+      expect_same_evals(read_evals(db(opt + "-full.sqlite")), read_evals(db(resumed_db)));
+      for (const std::string column : {"status", "best_loss", "best_x", "diagnostics"})
+        EXPECT_EQ(scalar(db(resumed_db), "SELECT " + column + " FROM runs"),
+                  scalar(db(opt + "-full.sqlite"), "SELECT " + column + " FROM runs"))
+            << resumed_db << ": " << column;
+      EXPECT_EQ(scalar(db(resumed_db), "SELECT count(*) FROM replay"), "0") << resumed_db;
+    }
+  }
+}
+
 TEST_F(HarnessCli, SigkillMidRunLosesOnlyWhatWasNotCommitted) {
   // committing after every episode, a SIGKILL after episode 30 leaves exactly 30 to replay
   const std::string grid = "--env flip --optimizer gd --seeds 1 --budget 50 --jobs 1 --quiet --db ";

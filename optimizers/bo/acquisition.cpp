@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <nlopt.hpp>
 
 #include "common/error.hpp"
 #include "optimizers/bo/sobol.hpp"
+#include "optimizers/core/work_memo.hpp"
 
 namespace dsb {
 
@@ -56,9 +59,25 @@ double lcb_for_nlopt(const std::vector<double>& x, std::vector<double>& grad, vo
 }  // namespace
 
 Eigen::VectorXd minimize_lcb(const GaussianProcess& gp, const LcbConfig& cfg, Rng& rng) {
+  SobolSequence sobol(gp.dim(), &rng);
+  return minimize_lcb(gp, cfg, sobol);
+}
+
+std::uint64_t lcb_argmin_key(const GaussianProcess& gp, const LcbConfig& cfg, const SobolSequence& raw) {
+  std::uint64_t h = fnv1a64("lcb argmin", gp.digest());
+  const double settings[] = {cfg.beta, static_cast<double>(cfg.raw_samples), static_cast<double>(cfg.restarts),
+                             static_cast<double>(cfg.max_evaluations)};
+  h = work_key(h, settings);
+  for (const std::uint32_t s : raw.shift()) h = work_key(h, std::uint64_t{s});
+  return h;
+}
+
+Eigen::VectorXd minimize_lcb(const GaussianProcess& gp, const LcbConfig& cfg, SobolSequence& sobol) {
   const int d = gp.dim();
+  if (sobol.dim() != d)
+    throw std::invalid_argument("lcb: raw samples of " + std::to_string(sobol.dim()) + " dimensions for a GP of " +
+                                std::to_string(d));
   // score scrambled Sobol raw samples
-  SobolSequence sobol(d, &rng);
   const Eigen::MatrixXd raw = sobol.draw(cfg.raw_samples);  // (raw_samples x d)
   std::vector<double> score(cfg.raw_samples);
   for (int i = 0; i < cfg.raw_samples; ++i) score[i] = lcb(gp, cfg.beta, raw.row(i).transpose(), nullptr);

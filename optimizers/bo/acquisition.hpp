@@ -7,6 +7,7 @@
 
 #include "common/rng.hpp"
 #include "optimizers/bo/gp.hpp"
+#include "optimizers/bo/sobol.hpp"
 
 namespace dsb {
 
@@ -24,5 +25,10 @@ double lcb(const GaussianProcess& gp, double beta, const Eigen::VectorXd& u, Eig
 
 // argmin of LCB over [0, 1]^d; the Sobol scramble is drawn from rng
 Eigen::VectorXd minimize_lcb(const GaussianProcess& gp, const LcbConfig& cfg, Rng& rng);
+// the same with the raw samples from `raw` (a scrambled sequence of gp.dim() dimensions, unused
+// so far): what the rng overload does after drawing the scramble
+Eigen::VectorXd minimize_lcb(const GaussianProcess& gp, const LcbConfig& cfg, SobolSequence& raw);
+// the key of that argmin (optimizers/core/work_memo.hpp): the GP's state, the config, the scramble
+std::uint64_t lcb_argmin_key(const GaussianProcess& gp, const LcbConfig& cfg, const SobolSequence& raw);
 
 }  // namespace dsb

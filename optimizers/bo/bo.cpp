@@ -28,7 +28,7 @@ int BoConfig::initial_points_for(int dim) const {
   return initial_points > 0 ? initial_points : std::clamp(dim + 1, 5, 20);
 }
 
-BoSurrogate::BoSurrogate(int dim, const BoConfig& cfg) : cfg_(cfg), gp_(dim, cfg.gp) {}
+BoSurrogate::BoSurrogate(int dim, const BoConfig& cfg, WorkMemo* memo) : cfg_(cfg), gp_(dim, cfg.gp), memo_(memo) {}
 
 void BoSurrogate::refit(Rng& rng) {
   const int n = size(), d = gp_.dim();
@@ -43,7 +43,18 @@ void BoSurrogate::refit(Rng& rng) {
   const double fill = std::isfinite(worst_) ? worst_ : 0.0;
   for (int i : failed_) y[i] = fill;
   gp_.set_data(X, y);
-  gp_.fit(rng);
+  // the hyperparameter search, or its result recalled from the memo
+  const GpFitStarts starts = gp_.begin_fit(rng);
+  std::vector<double> recalled(GpFitResult::payload_size(d));
+  const std::uint64_t key = memo_ ? gp_.fit_key(starts) : 0;
+  if (memo_ && memo_->recall(key, recalled)) {
+    gp_.end_fit(starts, GpFitResult::from_payload(recalled, d), /*recalled=*/true);
+    ++fits_recalled_;
+  } else {
+    const GpFitResult result = gp_.search_fit(starts);
+    if (memo_) memo_->remember(key, result.payload(d));
+    gp_.end_fit(starts, result, /*recalled=*/false);
+  }
   last_fit_n_ = n;
   factored_n_ = n;
   ++fits_;
@@ -87,7 +98,17 @@ nlohmann::json BoSurrogate::diagnostics() const {
 }
 
 Eigen::VectorXd BoSurrogate::propose(Rng& rng) {
-  const Eigen::VectorXd u = minimize_lcb(gp_, cfg_.lcb, rng);
+  // the LCB argmin, or its result recalled from the memo
+  SobolSequence raw(gp_.dim(), &rng);  // the raw samples' scramble: what minimize_lcb draws
+  Eigen::VectorXd u(gp_.dim());
+  const std::uint64_t key = memo_ ? lcb_argmin_key(gp_, cfg_.lcb, raw) : 0;
+  ++proposals_;
+  if (memo_ && memo_->recall(key, std::span<double>(u.data(), static_cast<std::size_t>(u.size())))) {
+    ++proposals_recalled_;
+  } else {
+    u = minimize_lcb(gp_, cfg_.lcb, raw);
+    if (memo_) memo_->remember(key, std::span<const double>(u.data(), static_cast<std::size_t>(u.size())));
+  }
   return (2.0 * u.array() - 1.0).cwiseMax(-1.0).cwiseMin(1.0);
 }
 
@@ -102,7 +123,7 @@ class BayesOpt : public Optimizer {
 
   void minimize(Objective& f, Rng& rng) override {
     diagnostics_ = nlohmann::json::object();
-    BoSurrogate model(f.dim(), cfg_);
+    BoSurrogate model(f.dim(), cfg_, &f);
     try {
       search(f, rng, model);
     } catch (...) {

@@ -11,6 +11,7 @@
 #include "optimizers/bo/acquisition.hpp"
 #include "optimizers/bo/gp.hpp"
 #include "optimizers/core/optimizer.hpp"
+#include "optimizers/core/work_memo.hpp"
 
 namespace dsb {
 
@@ -27,9 +28,12 @@ struct BoConfig {
 
 // Data of a GP-based optimizer in the normalized box, with the refit schedule. Failed episodes
 // (+infinity) enter with the worst finite loss seen so far, so the model learns to avoid them.
+// With a memo (the run's objective), every hyperparameter search and LCB argmin goes through it
+// (optimizers/core/work_memo.hpp): a resumed run recalls them instead of computing them again,
+// with the same draws from rng and the same counts, so nothing it does or reports changes.
 class BoSurrogate {
  public:
-  BoSurrogate(int dim, const BoConfig& cfg);
+  BoSurrogate(int dim, const BoConfig& cfg, WorkMemo* memo = nullptr);
   // adds (x in [-1,1]^d, loss); refits or extends per the schedule
   void add(const Eigen::VectorXd& x, double loss, Rng& rng, bool defer_fit = false);
   // refit on all data now
@@ -38,6 +42,11 @@ class BoSurrogate {
   Eigen::VectorXd propose(Rng& rng);
   int size() const { return static_cast<int>(y_.size()); }
   int fits() const { return fits_; }
+  // of fits() and of the proposals, those whose result the memo recalled (not in diagnostics():
+  // a run's results are the same whether it was resumed or not)
+  int fits_recalled() const { return fits_recalled_; }
+  int proposals() const { return proposals_; }
+  int proposals_recalled() const { return proposals_recalled_; }
   const GaussianProcess& gp() const { return gp_; }
   // {"points", "failed_points", "gp_fits", "gp_fit_failures", "jitter", "hyperparameters":
   // {"lengthscales" (unit-box inputs; capped), "lengthscales_truncated", "outputscale", "noise",
@@ -50,7 +59,9 @@ class BoSurrogate {
   std::vector<Eigen::VectorXd> u_;  // inputs in the unit box
   std::vector<double> y_;
   std::vector<int> failed_;  // indices whose loss was not finite
+  WorkMemo* memo_;
   int last_fit_n_ = 0, fits_ = 0, factored_n_ = 0;
+  int fits_recalled_ = 0, proposals_ = 0, proposals_recalled_ = 0;
   double worst_ = -std::numeric_limits<double>::infinity();
 };
 

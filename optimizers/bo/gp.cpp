@@ -29,6 +29,7 @@
 #include "common/error.hpp"
 #include "common/number_text.hpp"
 #include "optimizers/bo/gp_pairs.hpp"
+#include "optimizers/core/work_memo.hpp"
 
 namespace dsb {
 
@@ -344,6 +345,11 @@ void GaussianProcess::set_data(const Eigen::MatrixXd& X, const Eigen::VectorXd& 
   X_ = X;
   y_raw_ = y;
   n_ = static_cast<int>(y.size());
+  inputs_digest_ = kWorkKeyStart;
+  for (int i = 0; i < n_; ++i) {
+    const Eigen::VectorXd row = X_.row(i).transpose();
+    inputs_digest_ = work_key(inputs_digest_, std::span<const double>(row.data(), static_cast<std::size_t>(dim_)));
+  }
   standardize();
   rescale_inputs();
   refactor();
@@ -405,6 +411,7 @@ void GaussianProcess::add_point(const Eigen::VectorXd& x, double y) {
   const double d2 = s + hyper_.noise + jitter_ - l.squaredNorm();
 
   // append the data; y standardized with the frozen mean and scale
+  inputs_digest_ = work_key(inputs_digest_, std::span<const double>(x.data(), static_cast<std::size_t>(d)));
   X_.conservativeResize(n + 1, Eigen::NoChange);
   X_.row(n) = x.transpose();
   Xs_.conservativeResize(Eigen::NoChange, n + 1);
@@ -527,28 +534,32 @@ double GaussianProcess::fit_objective(const Eigen::VectorXd& theta, Eigen::Vecto
   return value / n;
 }
 
-void GaussianProcess::fit(Rng& rng) {
-  if (n_ == 0) return;  // nothing to fit; rng untouched
-  standardize();        // points added since the last refit join the standardization
+std::vector<double> GpFitResult::payload(int dim) const {
+  std::vector<double> p(payload_size(dim), 0.0);
+  p[0] = static_cast<double>(likelihood_evaluations);
+  p[1] = theta.size() > 0 ? 1.0 : 0.0;
+  for (Eigen::Index i = 0; i < theta.size(); ++i) p[2 + static_cast<std::size_t>(i)] = theta[i];
+  return p;
+}
+
+GpFitResult GpFitResult::from_payload(const std::vector<double>& payload, int dim) {
+  if (payload.size() != payload_size(dim))
+    throw std::invalid_argument("gp: a fit result of " + std::to_string(payload.size()) + " values, expected " +
+                                std::to_string(payload_size(dim)));
+  GpFitResult r;
+  r.likelihood_evaluations = static_cast<std::int64_t>(payload[0]);
+  if (payload[1] != 0.0) r.theta = Eigen::Map<const Eigen::VectorXd>(payload.data() + 2, dim + 3);
+  return r;
+}
+
+GpFitStarts GaussianProcess::begin_fit(Rng& rng) {
+  GpFitStarts starts;
+  if (n_ == 0) return starts;  // nothing to fit; rng untouched
+  standardize();               // points added since the last refit join the standardization
   const int d = dim_;
   const int p = d + (cfg_.constant_mean ? 3 : 2);  // optimized coordinates (no mean for a zero mean)
-  std::vector<double> lb(p), ub(p);
-  for (int i = 0; i < d; ++i) {
-    lb[i] = kLogLengthscaleMin;
-    ub[i] = kLogLengthscaleMax;
-  }
-  lb[d] = kLogOutputscaleMin;
-  ub[d] = kLogOutputscaleMax;
-  lb[d + 1] = kLogNoiseExcessMin;
-  ub[d + 1] = kLogNoiseExcessMax;
-  if (cfg_.constant_mean) {
-    lb[d + 2] = -kMeanBound;
-    ub[d + 2] = kMeanBound;
-  }
-
-  FitProblem problem{this, d + 3};
-  Eigen::VectorXd best;
-  double best_value = -std::numeric_limits<double>::infinity();
+  std::vector<double> lb, ub;
+  fit_box(lb, ub);
   for (int attempt = 0; attempt < cfg_.fit_attempts; ++attempt) {
     GpHyperparameters start = hyper_;
     if (attempt > 0) {  // draw from the priors; rng order: lengthscales, outputscale, noise
@@ -562,7 +573,23 @@ void GaussianProcess::fit(Rng& rng) {
     const Eigen::VectorXd t0 = theta_of(start);
     std::vector<double> x(p);
     for (int i = 0; i < p; ++i) x[i] = std::clamp(std::isnan(t0[i]) ? 0.0 : t0[i], lb[i], ub[i]);
+    starts.x.push_back(std::move(x));
+    starts.seeds.push_back(rng.next_u64());  // the start's nlopt::srand seed
+  }
+  return starts;
+}
 
+GpFitResult GaussianProcess::search_fit(const GpFitStarts& starts) {
+  GpFitResult result;
+  const int d = dim_;
+  std::vector<double> lb, ub;
+  fit_box(lb, ub);
+  const std::int64_t evaluations_before = likelihood_evaluations_;
+  FitProblem problem{this, d + 3};
+  double best_value = -std::numeric_limits<double>::infinity();
+  for (std::size_t attempt = 0; attempt < starts.x.size(); ++attempt) {
+    std::vector<double> x = starts.x[attempt];
+    const int p = static_cast<int>(x.size());
     nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(p));
     opt.set_lower_bounds(lb);
     opt.set_upper_bounds(ub);
@@ -570,7 +597,7 @@ void GaussianProcess::fit(Rng& rng) {
     opt.set_maxeval(cfg_.fit_max_evaluations);
     opt.set_ftol_rel(1e-9);
     opt.set_xtol_rel(1e-9);
-    nlopt::srand(rng.next_u64());
+    nlopt::srand(starts.seeds[attempt]);
     double f = 0.0;
     try {
       opt.optimize(x, f);
@@ -582,15 +609,75 @@ void GaussianProcess::fit(Rng& rng) {
     const double v = fit_objective(theta, nullptr);
     if (std::isfinite(v) && v > kFailedObjective && v > best_value) {
       best_value = v;
-      best = theta;
+      result.theta = theta;
     }
   }
-  if (best.size() > 0)
-    hyper_ = hyper_of(best);
-  else
+  result.likelihood_evaluations = likelihood_evaluations_ - evaluations_before;
+  return result;
+}
+
+void GaussianProcess::end_fit(const GpFitStarts& starts, const GpFitResult& result, bool recalled) {
+  if (starts.x.empty()) return;  // there was nothing to fit
+  if (recalled) {
+    // what search_fit leaves behind: NLopt seeded by each start in turn, the evaluations counted
+    for (const std::uint64_t seed : starts.seeds) nlopt::srand(seed);
+    const double n3 = static_cast<double>(n_) * n_ * n_;
+    for (std::int64_t k = 0; k < result.likelihood_evaluations; ++k) likelihood_n3_ += n3;
+    likelihood_evaluations_ += result.likelihood_evaluations;
+  }
+  if (result.theta.size() > 0) {
+    if (result.theta.size() != dim_ + 3) throw std::invalid_argument("gp: a fit result of the wrong dimension");
+    hyper_ = hyper_of(result.theta);
+  } else {
     ++fit_failures_;
+  }
   rescale_inputs();
   refactor();
+}
+
+void GaussianProcess::fit(Rng& rng) {
+  const GpFitStarts starts = begin_fit(rng);
+  if (starts.x.empty()) return;
+  end_fit(starts, search_fit(starts), /*recalled=*/false);
+}
+
+void GaussianProcess::fit_box(std::vector<double>& lb, std::vector<double>& ub) const {
+  const int d = dim_;
+  const int p = d + (cfg_.constant_mean ? 3 : 2);
+  lb.assign(p, 0.0);
+  ub.assign(p, 0.0);
+  for (int i = 0; i < d; ++i) {
+    lb[i] = kLogLengthscaleMin;
+    ub[i] = kLogLengthscaleMax;
+  }
+  lb[d] = kLogOutputscaleMin;
+  ub[d] = kLogOutputscaleMax;
+  lb[d + 1] = kLogNoiseExcessMin;
+  ub[d + 1] = kLogNoiseExcessMax;
+  if (cfg_.constant_mean) {
+    lb[d + 2] = -kMeanBound;
+    ub[d + 2] = kMeanBound;
+  }
+}
+
+std::uint64_t GaussianProcess::digest() const {
+  const auto doubles = [](const Eigen::VectorXd& v) {
+    return std::span<const double>(v.data(), static_cast<std::size_t>(v.size()));
+  };
+  std::uint64_t h = work_key(kWorkKeyStart, inputs_digest_);
+  h = work_key(h, static_cast<std::uint64_t>(n_));
+  h = work_key(h, doubles(y_raw_));
+  h = work_key(h, doubles(y_std_));
+  h = work_key(h, doubles(hyper_.lengthscales));
+  const double scalars[] = {hyper_.outputscale, hyper_.noise, hyper_.mean, y_mean_, y_scale_, jitter_};
+  return work_key(h, scalars);
+}
+
+std::uint64_t GaussianProcess::fit_key(const GpFitStarts& starts) const {
+  std::uint64_t h = fnv1a64("gp fit", digest());
+  for (const auto& x : starts.x) h = work_key(h, x);
+  for (const std::uint64_t seed : starts.seeds) h = work_key(h, seed);
+  return h;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -28,6 +28,25 @@ struct GpConfig {
   nlohmann::json to_json() const;
 };
 
+// What a hyperparameter fit starts from (GaussianProcess::begin_fit): per L-BFGS start, the
+// optimized coordinates (clamped into the fit box) and the nlopt::srand seed drawn for it.
+struct GpFitStarts {
+  std::vector<std::vector<double>> x;
+  std::vector<std::uint64_t> seeds;
+};
+
+// What a fit found (GaussianProcess::search_fit): the best theta (d + 3), empty when no start
+// reached a finite objective, and the likelihood evaluations (fit_objective calls) it made. As
+// a result of the optimizer's own work (optimizers/core/work_memo.hpp): {evaluations, found (1
+// or 0), theta (d + 3, zeros when not found)}.
+struct GpFitResult {
+  Eigen::VectorXd theta;
+  std::int64_t likelihood_evaluations = 0;
+  static std::size_t payload_size(int dim) { return static_cast<std::size_t>(dim) + 5; }
+  std::vector<double> payload(int dim) const;
+  static GpFitResult from_payload(const std::vector<double>& payload, int dim);
+};
+
 struct GpHyperparameters {
   Eigen::VectorXd lengthscales;  // (d)
   double outputscale = 0.0;      // signal variance
@@ -60,6 +79,19 @@ class GaussianProcess {
   // Cholesky factorization fails. rng draws: per start, the prior sample (not for the first),
   // then one nlopt::srand seed. Without data it does nothing.
   void fit(Rng& rng);
+  // fit() in its three steps, so that the costly middle one can be skipped with a result
+  // computed before (optimizers/core/work_memo.hpp): begin_fit standardizes and makes every draw
+  // fit() makes; search_fit runs the L-BFGS starts (the cost: O(n^3) per evaluation); end_fit
+  // takes the result, counts what the search counted (for a recalled one: its evaluations, as
+  // search_fit would have; failures), re-seeds NLopt as the search did and refactors.
+  GpFitStarts begin_fit(Rng& rng);
+  GpFitResult search_fit(const GpFitStarts& starts);
+  void end_fit(const GpFitStarts& starts, const GpFitResult& result, bool recalled);
+  // a digest of the GP's whole state: its data (inputs, outputs), standardization,
+  // hyperparameters and jitter; what fit() and the acquisition compute is a function of it
+  std::uint64_t digest() const;
+  // the key of a fit from `starts` in this state (digest() and the starts)
+  std::uint64_t fit_key(const GpFitStarts& starts) const;
   // fit() calls so far in which no start reached a finite objective (the hyperparameters were kept)
   int fit_failures() const { return fit_failures_; }
   // what the fits cost: their likelihood evaluations (fit_objective calls), and the sum of n^3
@@ -107,10 +139,12 @@ class GaussianProcess {
   Eigen::VectorXd alpha_;  // (K + noise I)^-1 (y_std - mean) = L^-T z (n)
   double jitter_ = 0.0;    // diagonal jitter of the current factor (0 when the plain one worked)
   int n_ = 0;
+  std::uint64_t inputs_digest_ = 0;  // FNV-1a over X_'s rows in order (set_data, add_point)
   int fit_failures_ = 0;
   mutable std::int64_t likelihood_evaluations_ = 0;
   mutable double likelihood_n3_ = 0.0;
   void standardize();   // y_mean_, y_scale_, y_std_ from y_raw_
+  void fit_box(std::vector<double>& lb, std::vector<double>& ub) const;  // the fit's box on theta
   void rescale_inputs();  // Xs_ from X_ and the lengthscales
   void refactor();      // factor, jitter_, z_, alpha_ from Xs_, y_std_ and hyper_ (jitter ladder)
   void reserve_factor(int n, int keep);  // capacity of Lbuf_ >= n, keeping the top-left keep x keep

@@ -22,6 +22,8 @@ class SobolSequence {
   Eigen::VectorXd next();
   // n points as rows (n x dim)
   Eigen::MatrixXd draw(int n);
+  // the digital shift (dim; zeros unscrambled)
+  const std::vector<std::uint32_t>& shift() const { return shift_; }
 
  private:
   int dim_;

@@ -5,6 +5,8 @@
 #include <span>
 #include <stdexcept>
 
+#include "optimizers/core/work_memo.hpp"
+
 namespace dsb {
 
 // Thrown by an Objective when an optimizer asks for an episode after the budget is spent. The
@@ -31,7 +33,9 @@ struct RlStep {
   double loss = 0.0;
 };
 
-class Objective {
+// An Objective is also the run's memo of the optimizer's own work (optimizers/core/work_memo.hpp):
+// the harness keeps it in the run's journal, so that a resumed run skips it.
+class Objective : public WorkMemo {
  public:
   virtual ~Objective() = default;
   virtual int dim() const = 0;
