@@ -259,6 +259,22 @@ class TestReport(ReportCase):
                 self.assertGreaterEqual(float(r["p_holm"]), float(r["p_raw"]))
         # the test grid has 3 seeds: the smallest one-sided exact p is 1/C(6,3) = 0.05
         self.assertIn("smallest exact one-sided p-value is 1/C(6,3) = 0.05", self.html)
+        # gd's seeds are one run on each env, as the database records (runs.seed_free_episodes =
+        # episodes, every seed the same final loss); random's and cmaes's are not
+        con = sqlite3.connect(self.db)
+        recorded = {(e, o): (free, n, losses) for e, o, free, n, losses in con.execute(
+            "SELECT env, optimizer, MIN(seed_free_episodes = episodes), COUNT(*), COUNT(DISTINCT best_loss) "
+            "FROM runs WHERE status = 'done' GROUP BY env, optimizer")}
+        con.close()
+        for r in rows:
+            free, n, losses = recorded[(r["env"], r["optimizer"])]
+            self.assertEqual(r["seed_free"], "True" if r["optimizer"] == "gd" else "False", r)
+            self.assertEqual(r["seed_free"] == "True", free == 1 and losses == 1 and n > 1, r)
+        for env in envs:
+            final = {x["optimizer"]: x for x in read_csv(self.file(f"final_{slug(env)}.csv"))}
+            self.assertEqual((final["gd"]["ci95_low"], final["gd"]["std"]), ("", ""))   # one run: no CI
+            self.assertNotEqual(final["random"]["ci95_low"], "")
+        self.assertIn("Here: gd on branin, gd on sphere-2.", self.html)
 
     def test_missing_matches_grid(self):
         con = sqlite3.connect(self.db)
@@ -558,10 +574,17 @@ class TestPaperClaims(ReportCase):
                         r["reason"].endswith("before Holm; 1 comparison(s) short of seeds cannot change that"),
                         r["reason"])
         self.assertEqual(r["settle"], "")
-        # the same short comparison beside a significant one leaves the claim open
+        # the same short comparison beside a significant one: Holm multiplies cmaes's 1/C(10, 5) =
+        # 0.004 by 2 and random's exact 1/C(7, 2) = 0.048 by 1, so both are significant and the
+        # claim holds, though the bound 2 x 1/21 = 0.095 called random's 2 seeds short (the tests
+        # settle a claim before any count of seeds does)
         r = self.claim("early-open", "sphere-2")
-        self.assertEqual(r["verdict"], "runs missing: 12 of 15 done", r["reason"])
-        self.assertEqual(r["settle"], "harness --claims --env sphere-2 --seeds 5")
+        self.assertEqual((r["verdict"], r["reason"]), ("holds", "all 2 Holm-corrected p < 0.05"))
+        comps = {c["b"]: c for c in read_csv(self.file("claims_comparisons.csv")) if c["id"] == "early-open"}
+        self.assertAlmostEqual(float(comps["random"]["p_raw"]), 1 / 21, places=12)
+        self.assertAlmostEqual(float(comps["random"]["p_holm"]), 1 / 21, places=12)
+        self.assertAlmostEqual(float(comps["cmaes"]["p_holm"]), 2 / 252, places=12)
+        self.assertEqual(r["settle"], "")
 
     def test_env_or_optimizer_missing(self):
         need_harness()        # runs missing vs env missing: `harness list` says plb-triplemove exists
@@ -700,12 +723,20 @@ class TestClaimStates(ReportCase):
         self.assertEqual(r["settle"], "harness --claims --env branin --seeds 5")
 
     def test_a_best_needs_every_optimizer_of_all(self):
-        # sphere-2 is not an RL env: the 10 optimizers of --all there, 3 of them with 3 seeds done
+        # sphere-2 is not an RL env: the 10 optimizers of --all there, 3 of them with 3 seeds done.
+        # gd's seeds are one run (recorded seed-free), so its 2 comparisons are sign tests of the
+        # others' seeds against its one value: Holm's smallest p 2 x 2^-n reaches 0.05 from n = 6
+        # (2/64), not 4 as two Mann-Whitney samples would (2/70): the claim asks for 6 seeds
         self.assertEqual(plan_runs_per_env(need_harness())["sphere-10"], 10)
         r = self.claim("best")
-        self.assertEqual(r["verdict"], "runs missing: 9 of 50 done")
-        self.assertIn("Absent: gd, random, cmaes seeds 3-4; rand-descents, bo, boleap, nlopt-lbfgs, "
-                      "nlopt-bobyqa, nlopt-direct-l, nlopt-crs2 seeds 0-4.", r["reason"])
+        self.assertEqual(r["verdict"], "runs missing: 9 of 60 done")
+        self.assertEqual(r["min_n"], "6")
+        self.assertIn("gd 3 seeds = 1 run; cmaes 3; random 3", r["n"])
+        self.assertIn("Absent: gd, random, cmaes seeds 3-5; rand-descents, bo, boleap, nlopt-lbfgs, "
+                      "nlopt-bobyqa, nlopt-direct-l, nlopt-crs2 seeds 0-5.", r["reason"])
+        comps = [c for c in read_csv(self.file("claims_comparisons.csv")) if c["id"] == "best"]
+        self.assertEqual(sorted((c["b"], c["test"], c["n_a"], c["n_b"]) for c in comps),
+                         [("cmaes", "sign", "1", "3"), ("random", "sign", "1", "3")])
 
     def test_page_and_summary_name_the_commands(self):
         top = {c[0]: c for c in map(row_cells, html_rows(section(self.html, "claims"))) if c}
@@ -1198,6 +1229,46 @@ class TestWinnerComparison(unittest.TestCase):
         self.assertAlmostEqual(stats.mwu_p(best, worse, "greater"), 1.0, places=12)
         adj = stats.holm([stats.mwu_p(worse, best, "greater")] * 9)
         self.assertLess(max(adj), 0.05)
+
+
+class TestOneRunAgainstSeeds(unittest.TestCase):
+    """An optimizer whose seeds are one run is one value: the other side's seeds are tested against
+    it by the exact sign test, whose p-values are binomial tails worked out by hand."""
+
+    def test_sign_test_exact_p(self):
+        sys.path.insert(0, HERE)
+        from dsb_report import stats
+        import numpy as np
+        c = 0.2024   # fluid's gd: its five seeds are one run
+        five_below = np.array([0.003, 0.0031, 0.0029, 0.0035, 0.2])
+        # all 5 of 5 below: P(Bin(5, 1/2) >= 5) = 1/32, where five copies of c as a Mann-Whitney
+        # sample would give 0.0037 (U = 0; the five copies tie, so scipy's normal approximation
+        # with the tie-corrected variance 25/12 (11 - 120/90) and continuity correction)
+        self.assertEqual(stats.sign_test_p(five_below, c, "less"), 1 / 32)
+        z = (0.5 - 12.5) / math.sqrt(25 / 12 * (11 - 120 / 90))
+        self.assertAlmostEqual(stats.mwu_p(five_below, np.full(5, c), "less"),
+                               0.5 * math.erfc(-z / math.sqrt(2)), places=12)
+        # 4 of 5 below: P(Bin(5, 1/2) >= 4) = (5 + 1) / 32 = 0.1875; the other direction 31/32
+        four_below = np.array([0.003, 0.0031, 0.0029, 0.0035, 0.216])
+        self.assertEqual(stats.sign_test_p(four_below, c, "less"), 6 / 32)
+        self.assertEqual(stats.sign_test_p(four_below, c, "greater"), 31 / 32)
+        # two-sided: twice the smaller tail, 12/32
+        self.assertEqual(stats.sign_test_p(four_below, c, "two-sided"), 12 / 32)
+        # a value equal to c drops out: 4 below of 4 left, 1/16
+        self.assertEqual(stats.sign_test_p(np.array([0.1, 0.1, 0.1, 0.1, c]), c, "less"), 1 / 16)
+        self.assertEqual(stats.sign_test_p(np.full(3, c), c, "less"), 1.0)
+        # compare_p: the constant on either side, the alternative mirrored; two constants by order
+        self.assertEqual(stats.compare_p(np.array([c]), True, five_below, False, "greater"), 1 / 32)
+        self.assertEqual(stats.compare_p(five_below, False, np.array([c]), True, "less"), 1 / 32)
+        self.assertEqual(stats.compare_p(np.array([0.1]), True, np.array([c]), True, "less"), 0.0)
+        self.assertEqual(stats.compare_p(np.array([0.1]), True, np.array([c]), True, "greater"), 1.0)
+        # the seeds a claim needs against one run: 5 for one one-sided comparison (1/32 < 0.05 <
+        # 1/16), 6 for two after Holm (2/64), 8 for eleven (11/256); 4 for two samples (1/70)
+        self.assertEqual([stats.min_seeds(m, 1, against_one_run=True) for m in (1, 2, 11)], [5, 6, 8])
+        self.assertEqual(stats.min_seeds(1, 1), 4)
+        self.assertTrue(stats.too_few_seeds(1, 4, 1, sides=1, constant2=True))    # 1/16
+        self.assertFalse(stats.too_few_seeds(1, 5, 1, sides=1, constant2=True))   # 1/32
+        self.assertEqual(stats.holm([1 / 32, 6 / 32]), [2 / 32, 6 / 32])
 
 
 class TestBadInput(unittest.TestCase):

@@ -166,10 +166,13 @@ for env, opt in pairs:
         with open(f, newline="") as fh:
             r = csv.reader(fh)
             h = next(r)
-            header = header or h
-            if h != header:
+            # a piece from before a column was added (seed_free_episodes) has a prefix of the columns
+            short, long_ = sorted([h, header or h], key=len)
+            if long_[:len(short)] != short:
                 sys.exit(f"grid-in-pieces: {f} has other columns than the other pieces")
+            header = long_
             rows.extend(r)
+rows = [r + [""] * (len(header) - len(r)) for r in rows] if header else rows
 key = {c: i for i, c in enumerate(header or [])}
 rows.sort(key=lambda r: (r[key["env"]], r[key["optimizer"]], int(r[key["budget"]]), int(r[key["seed"]])))
 with open(out + ".tmp", "w", newline="") as fh:

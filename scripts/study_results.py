@@ -6,14 +6,22 @@ reads the env's second metric, how many seeds of each optimizer reach its thresh
     /usr/bin/python3 scripts/study_results.py export DB RUNS.csv
     /usr/bin/python3 scripts/study_results.py tables RUNS.csv [MORE.csv ...] [--claims FILE]
                                                      [--harness BIN] [--update FILE]
+    /usr/bin/python3 scripts/study_results.py record-seed-free RUNS.csv DB OUT.csv
 
-`export` writes a database's runs (reports/dsb_report/runs_csv.py; a new file only). `tables`
+`export` writes a database's runs (reports/dsb_report/runs_csv.py; a new file only).
+`record-seed-free` copies RUNS.csv to OUT.csv (a new file) with the column seed_free_episodes
+taken from DB's runs of the same run key (env, optimizer, seed, budget, config hashes), for a
+runs CSV published before the column existed: DB holds the same runs rerun, and a row whose final
+best loss is not the same bits in DB is refused (exit 2, nothing written); rows DB lacks keep what
+they had (empty: not recorded). `tables`
 prints the three tables as Markdown, from one runs CSV or several (a study's grids published apart,
 such as data/study/runs.csv and the fluid grid's pieces data/study/fluid/*.csv; a run found in two
 of them is refused); with --update it also replaces the text between the lines
 `<!-- study_results.py: begin -->` and `<!-- study_results.py: end -->` of FILE (the README) with
 them. The verdicts are the report's (reports/dsb_report/claims.py) on the same runs: from the CSV
-or from the database they are the same. --harness BIN lets the claims table tell an env the
+or from the database they are the same; an (env, optimizer) whose seeds are one run (the runs
+CSV's seed_free_episodes covers every run's episodes: reports/dsb_report/stats.py seed_free) counts
+as one sample, and the medians table lists such cells. --harness BIN lets the claims table tell an env the
 harness lacks from runs the file lacks (`harness list`). Needs pandas and scipy (Debian's
 /usr/bin/python3). Exit codes: 0, 2 bad input (one line naming it).
 """
@@ -58,6 +66,12 @@ def medians_table(data) -> str:
             v = stats.final_values(p, o) if o in p.optimizers else np.zeros(0)
             cells.append(fmt(float(np.median(v))) if v.size else "—")
         lines.append(f"| {p.env} ({p.budget}, {seeds}) | " + " | ".join(cells) + " |")
+    one = [f"{p.env}: " + ", ".join(o for o in p.optimizers if stats.seed_free(p, o)) for p in panels
+           if any(stats.seed_free(p, o) for o in p.optimizers)]
+    if one:
+        lines += ["", "Seeds that are one run (every run recorded seed-free over all its episodes, so each "
+                  "counts once in the tests: the other side's seeds against its value by the exact sign "
+                  "test): " + "; ".join(one) + "."]
     return "\n".join(lines) + "\n"
 
 
@@ -130,6 +144,52 @@ def export(args) -> int:
     return 0
 
 
+def record_seed_free(args) -> int:
+    import csv
+    import sqlite3
+    from dsb_report import data as data_mod, runs_csv
+    if os.path.exists(args.out):
+        return fail(f"'{args.out}' exists: remove it or name another file")
+    try:
+        runs = runs_csv.load(args.runs).runs   # checks the file, every column
+        con = data_mod.connect_ro(args.db)
+    except (runs_csv.RunsCsvError, data_mod.DataError) as e:
+        return fail(str(e))
+    try:
+        rows = con.execute("SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, best_loss, "
+                           "seed_free_episodes FROM runs WHERE status = 'done'").fetchall()
+    except sqlite3.Error as e:
+        return fail(f"cannot read runs of '{args.db}': {e}")
+    finally:
+        con.close()
+    rerun = {tuple(map(str, r[:6])): (r[6], r[7]) for r in rows}
+    with open(args.runs, newline="", encoding="utf-8") as f:
+        table = list(csv.reader(f))
+    header, body = table[0], table[1:]
+    if "seed_free_episodes" not in header:
+        header = header + ["seed_free_episodes"]
+        body = [r + [""] for r in body]
+    col = {c: i for i, c in enumerate(header)}
+    filled = 0
+    for r, (_, run) in zip(body, runs.iterrows()):
+        key = tuple(str(run[c]) for c in runs_csv.RUN_KEY)
+        if key not in rerun or rerun[key][1] is None:
+            continue
+        mine = float(r[col["best_loss"]]) if r[col["best_loss"]] else None
+        theirs = rerun[key][0]
+        if (mine is None) != (theirs is None) or (mine is not None and mine.hex() != float(theirs).hex()):
+            return fail(f"run {'/'.join(key[:4])}: best loss {r[col['best_loss']] or 'none'} in '{args.runs}' "
+                        f"but {theirs!r} in '{args.db}': not the same run")
+        r[col["seed_free_episodes"]] = str(int(rerun[key][1]))
+        filled += 1
+    tmp = args.out + ".tmp"
+    with open(tmp, "w", newline="", encoding="utf-8") as f:
+        csv.writer(f, lineterminator="\n").writerows([header] + body)
+    os.replace(tmp, args.out)
+    print(f"study_results: {filled} of {len(body)} runs recorded from {args.db} -> {args.out}")
+    return 0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="command", required=True)
@@ -141,13 +201,17 @@ def main(argv=None) -> int:
     t.add_argument("--claims", default=os.path.join(os.path.dirname(HERE), "reports", "paper_claims.csv"))
     t.add_argument("--harness", help="the harness, to tell a missing env from missing runs")
     t.add_argument("--update", help="a file whose study_results.py block gets the tables")
+    r = sub.add_parser("record-seed-free", help="a runs CSV with seed_free_episodes from a rerun's database")
+    r.add_argument("runs")
+    r.add_argument("db")
+    r.add_argument("out")
     a = ap.parse_args(argv)
     try:
         import pandas  # noqa: F401
         import scipy.stats  # noqa: F401
     except ImportError as err:
         return fail(f"{sys.executable} cannot import {err.name}; use /usr/bin/python3")
-    return export(a) if a.command == "export" else tables(a)
+    return {"export": export, "tables": tables, "record-seed-free": record_seed_free}[a.command](a)
 
 
 if __name__ == "__main__":

@@ -6,6 +6,7 @@ those made from the database.
     /usr/bin/python3 tests/test_study_results.py BUILD_DIR SOURCE_DIR
 """
 import csv
+import math
 import os
 import shutil
 import sqlite3
@@ -189,6 +190,146 @@ class StudyResults(unittest.TestCase):
         r = study("tables", os.path.join(self.tmp, "absent.csv"))
         self.assertEqual(r.returncode, 2)
         self.assertIn("absent.csv", r.stderr)
+
+
+# One-sided Mann-Whitney p of 5 tied copies of one value against 5 higher values, as scipy gives
+# it with ties (normal approximation, tie-corrected variance, continuity correction 0.5): U = 0,
+# mean 12.5, variance 25/12 x (11 - (5^3 - 5) / (10 x 9)), z = (0.5 - 12.5) / sd; p = Phi(z)
+_SD = math.sqrt(25 / 12 * (11 - (5 ** 3 - 5) / (10 * 9)))
+MANY_TIES_P = 0.5 * math.erfc(-((0.5 - 12.5) / _SD) / math.sqrt(2))   # 0.00375
+
+
+class SeedsThatAreOneRun(unittest.TestCase):
+    """An (env, optimizer) whose seeds are one run counts as one sample: on a real database of
+    sphere-2 x gd, nlopt-direct-l (never draw in 200 episodes: one run), nlopt-lbfgs, nlopt-bobyqa
+    (every seed ends at 0.0, reached before their first draw, but their runs differ after it: a tie,
+    not one run) and random, 5 seeds x 200 episodes."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp()
+        cls.db = os.path.join(cls.tmp, "one-run.sqlite")
+        subprocess.run([HARNESS, "--env", "sphere-2", "--optimizer", "gd,nlopt-direct-l,nlopt-lbfgs,nlopt-bobyqa,random",
+                        "--seeds", "5", "--budget", "200", "--quiet", "--db", cls.db], check=True)
+        cls.claims = os.path.join(cls.tmp, "claims.csv")
+        with open(cls.claims, "w", newline="", encoding="utf-8") as f:
+            w = csv.writer(f, lineterminator="\n")
+            w.writerow(["id", "env", "kind", "a", "b", "threshold", "statement", "source", "note"])
+            w.writerow(["gd-first", "sphere-2", "a_below_b", "gd", "random", "", "s", "t", ""])
+            w.writerow(["both-first", "sphere-2", "a_below_b", "gd nlopt-direct-l", "random", "", "s", "t", ""])
+            w.writerow(["order", "sphere-2", "a_below_b", "gd", "nlopt-direct-l", "", "s", "t", ""])
+            w.writerow(["tie", "sphere-2", "not_significant", "nlopt-lbfgs", "nlopt-bobyqa", "", "s", "t", ""])
+        cls.csv = os.path.join(cls.tmp, "runs.csv")
+        r = study("export", cls.db, cls.csv)
+        assert r.returncode == 0, r.stderr
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp)
+
+    def one_run(self, data):
+        from dsb_report import stats
+        p, = data_mod.main_panels(data)
+        return {o for o in p.optimizers if stats.seed_free(p, o)}
+
+    def test_detected_from_the_recorded_prefix_not_from_ties(self):
+        con = sqlite3.connect(self.db)
+        rows = con.execute("SELECT optimizer, seed_free_episodes, episodes, best_loss FROM runs").fetchall()
+        free = {o: set() for o, *_ in rows}
+        for o, f, n, _ in rows:
+            free[o].add(f == n)
+        self.assertEqual({o for o, v in free.items() if v == {True}}, {"gd", "nlopt-direct-l"})
+        # lbfgs and bobyqa: every seed at 0.0, their prefixes 3 and 35 of 200 episodes
+        for o, f, n, b in rows:
+            if o in ("nlopt-lbfgs", "nlopt-bobyqa"):
+                self.assertEqual(b, 0.0)
+                self.assertLess(f, n)
+        self.assertEqual(self.one_run(data_mod.load(self.db)), {"gd", "nlopt-direct-l"})
+        self.assertEqual(self.one_run(runs_csv.load(self.csv)), {"gd", "nlopt-direct-l"})
+        with open(self.csv, newline="") as f:
+            got = {(r["optimizer"], r["seed"]): r["seed_free_episodes"] for r in csv.DictReader(f)}
+        con_rows = con.execute("SELECT optimizer, seed, seed_free_episodes FROM runs").fetchall()
+        self.assertEqual(got, {(o, str(s)): str(f) for o, s, f in con_rows})
+
+    def test_a_sample_against_one_run_is_a_sign_test(self):
+        from dsb_report import stats
+        for data in (data_mod.load(self.db), runs_csv.load(self.csv)):
+            verdicts, comps = claims_mod.evaluate(claims_mod.load(self.claims), data_mod.main_panels(data), data.runs)
+            v = verdicts.set_index("id")
+            c = {(r["id"], r["a"], r["b"]): r for _, r in comps.iterrows()}
+            # gd's one run (9.3e-11) below random's 5 seeds (0.019-0.44): all 5 of 5 on the tested
+            # side, P(Bin(5, 1/2) >= 5) = 1/32 exactly; five copies of gd as a Mann-Whitney sample
+            # would have claimed 0.0037 (U = 0 with gd's five tied: MANY_TIES_P)
+            g = c[("gd-first", "gd", "random")]
+            self.assertEqual((g["test"], g["n_a"], g["n_b"], g["p_raw"], g["p_holm"]), ("sign", 1, 5, 1 / 32, 1 / 32))
+            self.assertEqual(v.loc["gd-first", "verdict"], "holds")
+            p, = data_mod.main_panels(data)
+            self.assertAlmostEqual(stats.mwu_p(stats.final_values(p, "gd"), stats.final_values(p, "random"), "less"),
+                                   MANY_TIES_P, places=12)
+            # two sign tests, Holm: 2 x 1/32 = 0.0625 >= 0.05 whatever the data: needs 6 seeds (2/64),
+            # so the claim asks for a sixth seed of each of its three optimizers (gd's and DIRECT-L's
+            # replay their first seed's run)
+            for a in ("gd", "nlopt-direct-l"):
+                self.assertEqual(c[("both-first", a, "random")]["p_raw"], 1 / 32)
+                self.assertEqual(c[("both-first", a, "random")]["p_holm"], 2 / 32)
+            self.assertEqual((v.loc["both-first", "verdict"], v.loc["both-first", "min_n"]),
+                             ("runs missing: 15 of 18 done", 6))
+            self.assertIn("Gd 5 seeds = 1 run vs random 5: with 2 comparison(s) the smallest reachable Holm p is "
+                          "0.0625 >= 0.05; needs >= 6 seeds per optimizer.", v.loc["both-first", "reason"])
+            self.assertIn("exact sign test for gd vs random, nlopt-direct-l vs random", v.loc["both-first", "test"])
+            # two single runs: gd's 9.3e-11 below DIRECT-L's 4.1e-8 is certain, p 0
+            o = c[("order", "gd", "nlopt-direct-l")]
+            self.assertEqual((o["test"], o["p_raw"]), ("order", 0.0))
+            self.assertEqual(v.loc["order", "verdict"], "holds")
+            # a tie is not one run: lbfgs's and bobyqa's five 0.0 stay five samples each
+            t = c[("tie", "nlopt-lbfgs", "nlopt-bobyqa")]
+            self.assertEqual((t["test"], t["n_a"], t["n_b"], t["p_raw"]), ("mann-whitney", 5, 5, 1.0))
+
+    def test_tables_name_the_cells_and_a_csv_without_the_record_counts_seeds(self):
+        r = study("tables", self.csv, "--claims", self.claims)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("Seeds that are one run (every run recorded seed-free over all its episodes, so each counts "
+                      "once in the tests: the other side's seeds against its value by the exact sign test): "
+                      "sphere-2: gd, nlopt-direct-l.", r.stdout)
+        self.assertIn("| gd-first | sphere-2 | holds |", r.stdout)
+        # a runs CSV written before the column: nothing recorded, so no seeds are one run (equal
+        # losses alone never make them so) and gd's five seeds are five samples again
+        old = os.path.join(self.tmp, "old.csv")
+        with open(self.csv, newline="") as f, open(old, "w", newline="") as g:
+            w = csv.writer(g, lineterminator="\n")
+            for row in csv.reader(f):
+                w.writerow(row[:-1])
+        with open(old) as f:
+            self.assertNotIn("seed_free_episodes", f.readline())
+        data = runs_csv.load(old)
+        self.assertEqual(self.one_run(data), set())
+        _, comps = claims_mod.evaluate(claims_mod.load(self.claims), data_mod.main_panels(data), data.runs)
+        g = comps[(comps["id"] == "gd-first")].iloc[0]
+        self.assertEqual((g["test"], g["n_a"]), ("mann-whitney", 5))
+        self.assertAlmostEqual(g["p_raw"], MANY_TIES_P, places=12)
+        # record-seed-free fills the column back from a rerun's database: the export, byte for byte
+        back = os.path.join(self.tmp, "back.csv")
+        r = study("record-seed-free", old, self.db, back)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("25 of 25 runs recorded", r.stdout)
+        with open(back, "rb") as f, open(self.csv, "rb") as g:
+            self.assertEqual(f.read(), g.read())
+        # a run whose loss is not the database's is not the same run: refused, nothing written
+        with open(old, newline="") as f:
+            rows = list(csv.reader(f))
+        rows[1][6] = repr(float(rows[1][6]) * (1 + 2 ** -50))
+        changed = os.path.join(self.tmp, "changed.csv")
+        with open(changed, "w", newline="") as f:
+            csv.writer(f, lineterminator="\n").writerows(rows)
+        bad = os.path.join(self.tmp, "bad.csv")
+        r = study("record-seed-free", changed, self.db, bad)
+        self.assertEqual(r.returncode, 2)
+        self.assertEqual(r.stderr.count("\n"), 1)
+        self.assertIn(f"run sphere-2/{rows[1][1]}/{rows[1][2]}/200: best loss", r.stderr)
+        self.assertFalse(os.path.exists(bad))
+        r = study("record-seed-free", old, self.db, back)   # never over a file
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("exists", r.stderr)
 
 
 if __name__ == "__main__":

@@ -50,6 +50,10 @@ def _minp_text(tables: list) -> str:
             else "."
     text += (" With tied values scipy uses the normal approximation, whose p can be slightly "
              "smaller.")
+    one_run = sorted({f"{r['optimizer']} on {r['env']}" for t in tables for _, r in t.iterrows()
+                      if bool(r.get("seed_free", False))})
+    if one_run:
+        text += (" " + captions.ONE_RUN + " Here: " + ", ".join(one_run) + ".")
     return text
 
 
@@ -142,7 +146,7 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
     best_of = {(r["env"], r["budget"]): r["optimizer"] for _, r in sig.iterrows() if r["is_best"]}
     sig["best_optimizer"] = [best_of.get((r["env"], r["budget"]), "") for _, r in sig.iterrows()]
     write_csv(sig, path("significance.csv"),
-              SIGNIFICANCE_COLUMNS + ["budget", "is_best", "best_optimizer", "n_seeds", "mark"])
+              SIGNIFICANCE_COLUMNS + ["budget", "is_best", "best_optimizer", "n_seeds", "seed_free", "mark"])
 
     if gradient_quality is not None:  # the survey's file as it is
         shutil.copyfile(gradient_quality_path, path("gradient_quality.csv"))

@@ -54,6 +54,15 @@ ECDF = ("COCO-style data profile. For each env, f* is the best loss any optimize
         "optimizer's triples solved after e episodes (over the envs it ran on): higher and further "
         "left is better; the right end is the fraction solved within the budget.")
 
+ONE_RUN = ("An optimizer whose seeds are one run on an env (each of its runs recorded seed-free "
+           "over all its episodes: it never drew from its random generator, so every seed gives the "
+           "same run, as gd from the box centre does) is one sample there, not one per seed: the "
+           "other side of a comparison is tested against its single value by the exact one-sided "
+           "sign test (scipy.stats.binomtest: k of the n seeds that differ from it on the tested "
+           "side, P(Bin(n, 1/2) >= k); valid without assuming a symmetric distribution, which the "
+           "one-sample Wilcoxon signed-rank test would need; with 5 seeds its smallest p is 1/32), "
+           "and two such optimizers by their order, which is certain (p 0 or 1); Holm as for the rest.")
+
 CLAIMS = ("Each row is a qualitative claim of Antonova et al. (CoRL 2022) tested on the final best "
           "losses over seeds (the env's largest budget; no finite loss = +inf): one-sided "
           "Mann-Whitney U tests (two-sided for 'no difference' claims), Holm-corrected over the "
@@ -62,8 +71,9 @@ CLAIMS = ("Each row is a qualitative claim of Antonova et al. (CoRL 2022) tested
           "first optimizer ends lower than one of the other (0.5 = no effect). 'not enough data': "
           "every run the claim needs is done, but even perfectly separated samples could not "
           "reach α after Holm (comparisons × 1/C(nA+nB, nA), doubled if two-sided, ≥ α: one "
-          "comparison needs 4 seeds a side); 'not testable': the database does not record what "
-          "the paper judged.")
+          "comparison needs 4 seeds a side; against an optimizer whose seeds are one run the sign "
+          "test's 2^−n: 5 seeds); 'not testable': the database does not record what "
+          "the paper judged. " + ONE_RUN)
 
 CLAIMS_SETTLE = ("A claim the database cannot settle yet says what it lacks: 'env missing' (the "
                  "harness has no such env, per `harness list`), 'runs missing: k of n done' (the "

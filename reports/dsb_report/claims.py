@@ -16,6 +16,10 @@ the env's largest budget; NULL = +inf, stats.final_values):
 - metric_most / metric_few: each optimizer of a reaches the env's second metric (evals.metric at
                    each run's best episode) >= threshold in more / fewer than half of its seeds.
 - not_testable:    what the paper says cannot be read from the database (the note says why).
+An optimizer whose seeds are one run on the env (stats.seed_free: every run recorded seed-free over
+all its episodes, as gd's from the box centre) is one sample, not one per seed: a pair with it is
+tested by the exact sign test of the other side's seeds against its one value, and a pair of two
+such optimizers by their order, which is certain (stats.compare_p); its metric share is exact.
 Holm runs over the comparisons of one claim on one env. Verdicts: 'holds', 'does not hold', 'not
 testable from the database', and for a claim the data cannot settle yet (no done run of the env
 or of an optimizer of the claim, or 'not enough data': some comparison could not reach alpha even
@@ -51,7 +55,7 @@ REQUIRED_COLUMNS = ("id", "env", "kind", "a", "b", "statement", "source")
 CLAIM_COLUMNS = ["id", "env", "budget", "kind", "statement", "source", "test", "a", "b", "n", "comparisons",
                  "min_n", "p_holm", "p_claim", "a12", "a12_claim", "verdict", "reason", "runs_done",
                  "runs_needed", "settle"]
-COMPARISON_COLUMNS = ["id", "env", "a", "b", "alternative", "n_a", "n_b", "p_raw", "p_holm", "a12"]
+COMPARISON_COLUMNS = ["id", "env", "a", "b", "alternative", "test", "n_a", "n_b", "p_raw", "p_holm", "a12"]
 
 
 class ClaimsError(Exception):
@@ -182,31 +186,60 @@ def _judge(c: Claim, env: str, panel, comps: list) -> dict:
     return _judge_tests(c, b, panel, comps)
 
 
+def _seeds_text(o: str, vals: dict, one: dict) -> str:
+    """'cmaes 5', or 'gd 5 seeds = 1 run' for an optimizer whose seeds are one run."""
+    return f"{o} {len(vals[o])} seeds = 1 run" if one[o] else f"{o} {len(vals[o])}"
+
+
 def _judge_tests(c: Claim, b: list, panel, comps: list) -> dict:
-    """Mann-Whitney U per pair (a_i, b_j), Holm over the claim's pairs, and the verdict."""
+    """One test per pair (a_i, b_j): Mann-Whitney U, or the exact sign test against an optimizer
+    whose seeds are one run (stats.compare_p); Holm over the claim's pairs, and the verdict."""
     sides, want_significant = TEST_KINDS[c.kind]
     alternative = "two-sided" if sides == 2 else "less"
     pairs = [(x, y) for x in c.a for y in b if x != y]
-    vals = {o: stats.final_values(panel, o) for o in set(c.a) | set(b)}
+    names = list(dict.fromkeys(c.a + b))
+    vals = {o: stats.final_values(panel, o) for o in names}   # one value per seed (A12, n)
+    tested = {o: stats.sample(panel, o) for o in names}        # what the tests see
+    one = {o: tested[o][1] for o in names}
     m = len(pairs)
-    raw = [stats.mwu_p(vals[x], vals[y], alternative) for x, y in pairs]
+    raw = [stats.compare_p(tested[x][0], one[x], tested[y][0], one[y], alternative) for x, y in pairs]
     adj = stats.holm(raw)
     a12 = [stats.a12_lower(vals[x], vals[y]) for x, y in pairs]
     for (x, y), p, q, e in zip(pairs, raw, adj, a12):
         comps.append(dict(id=c.id, env=panel.env, a=x, b=y, alternative=alternative,
-                          n_a=len(vals[x]), n_b=len(vals[y]), p_raw=p, p_holm=q, a12=e))
-    out = dict(n="; ".join(f"{o} {len(vals[o])}" for o in dict.fromkeys(c.a + b)),
-               comparisons=m, min_n=stats.min_seeds(m, sides),
+                          test=stats.test_name(one[x], one[y]), n_a=len(tested[x][0]),
+                          n_b=len(tested[y][0]), p_raw=p, p_holm=q, a12=e))
+    against_one = any(one[x] != one[y] for x, y in pairs)
+    out = dict(n="; ".join(_seeds_text(o, vals, one) for o in names),
+               comparisons=m,
+               min_n=max(stats.min_seeds(m, sides), stats.min_seeds(m, sides, against_one_run=True)
+                         if against_one else 0),
                p_holm="; ".join(f"{x} vs {y} {q:.3g}" for (x, y), q in zip(pairs, adj)),
                a12="; ".join(f"{x} vs {y} {e:.2f}" for (x, y), e in zip(pairs, a12)))
+    signs = [f"{x} vs {y}" for x, y in pairs if stats.test_name(one[x], one[y]) == "sign"]
+    orders = [f"{x} vs {y}" for x, y in pairs if stats.test_name(one[x], one[y]) == "order"]
+    if signs or orders:
+        runs_text = ", ".join(o for o in names if one[o])
+        out["test"] = test_text(c) + (
+            f"; {runs_text}: seeds that are one run, so "
+            + "; ".join(([f"exact sign test for {', '.join(signs)}"] if signs else [])
+                        + ([f"the certain order of two single runs for {', '.join(orders)}"] if orders else [])))
     significant = [q < stats.ALPHA for q in adj]
     if want_significant:
         out.update(p_claim=max(adj), a12_claim=min(a12))
     else:
         out.update(p_claim=min(adj), a12_claim=max(a12) if sides == 1 else
                    max(a12, key=lambda e: abs(e - 0.5)))
-    short = [(x, y) for x, y in pairs
-             if m * stats.min_exact_p(len(vals[x]), len(vals[y]), sides) >= stats.ALPHA]
+    def reachable(x, y):   # a bound on the Holm p this pair could give (Holm's largest factor)
+        return m * stats.min_p(len(tested[x][0]), one[x], len(tested[y][0]), one[y], sides)
+
+    # what the tests already settle, short of seeds or not: every pair significant (a claim of
+    # differences holds), or one pair significant (a claim of none fails). Holm multiplies only the
+    # smallest p by m, so a pair whose bound m x min_p is >= alpha can still come out significant
+    # when its test's smallest p is larger than the others' (a sign test's 1/32 beside
+    # Mann-Whitney's 1/252 in one claim)
+    settled = all(significant) if want_significant else any(significant)
+    short = [] if settled else [(x, y) for x, y in pairs if reachable(x, y) >= stats.ALPHA]
     # a claim that needs every comparison significant fails on a testable one whose p is >= alpha
     # before Holm (Holm's p is never below the raw p): the comparisons still short of seeds cannot
     # make it hold, so they do not hold the verdict back
@@ -222,8 +255,9 @@ def _judge_tests(c: Claim, b: list, panel, comps: list) -> dict:
     if short:
         x, y = short[0]
         out.update(verdict=NO_DATA, reason=(
-            f"{x} {len(vals[x])} vs {y} {len(vals[y])} seeds: with {m} comparison(s) the smallest "
-            f"reachable Holm p is {m * stats.min_exact_p(len(vals[x]), len(vals[y]), sides):.3g} "
+            f"{_seeds_text(x, vals, one)} vs {_seeds_text(y, vals, one)}"
+            f"{'' if one[x] or one[y] else ' seeds'}: with {m} comparison(s) the smallest "
+            f"reachable Holm p is {reachable(x, y):.3g} "
             f">= {stats.ALPHA}; needs >= {out['min_n']} seeds per optimizer"))
         return out
     if want_significant:
@@ -250,16 +284,18 @@ def _judge_rate(c: Claim, panel) -> dict:
                     reason=f"{panel.env} stores no per-episode metric in this database (evals.metric is NULL)")
     if math.isnan(c.threshold):
         return dict(verdict=UNTESTABLE, reason="the claim gives no metric threshold")
-    shares, ns = {}, {}
+    shares, ns, one = {}, {}, {}
     for o in c.a:
         m = panel.metric_at_best[panel.rows(o)]
         ns[o] = m.size
+        one[o] = stats.seed_free(panel, o)   # its seeds are one run: its share is exact (0 or 1)
         shares[o] = float(np.mean(m >= c.threshold)) if m.size else float("nan")
-    out = dict(n="; ".join(f"{o} {ns[o]}" for o in c.a), min_n=RATE_MIN_SEEDS,
-               p_holm="", a12="")
-    if min(ns.values()) < RATE_MIN_SEEDS:
+    out = dict(n="; ".join(f"{o} {ns[o]}" + (" seeds = 1 run" if one[o] else "") for o in c.a),
+               min_n=RATE_MIN_SEEDS, p_holm="", a12="")
+    sampled = [ns[o] for o in c.a if not one[o]]
+    if sampled and min(sampled) < RATE_MIN_SEEDS:
         return dict(out, verdict=NO_DATA, reason=f"fewer than {RATE_MIN_SEEDS} seeds")
     ok = [(s > 0.5) if c.kind == "metric_most" else (s < 0.5) for s in shares.values()]
-    text = "; ".join(f"{o} {shares[o]:.0%} of {ns[o]} seeds" for o in c.a)
+    text = "; ".join(f"{o} {shares[o]:.0%} of {ns[o]} seeds" + (" (one run)" if one[o] else "") for o in c.a)
     return dict(out, verdict=HOLDS if all(ok) else FAILS,
                 reason=f"metric >= {c.threshold:g}: {text}")

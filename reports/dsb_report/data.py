@@ -19,6 +19,9 @@ RUN_COLUMNS = ["run_id", "env", "optimizer", "seed", "budget", "env_config_hash"
                "opt_config_hash", "status", "episodes", "failed_episodes", "best_loss",
                "wall_s", "error", "started_at", "finished_at", "harness_version", "git_sha",
                "host"]
+# read when the database has it (schema version 4 on; NULL or absent: not recorded): the episodes
+# of a run before its optimizer's first draw from its RNG (stats.seed_free)
+OPTIONAL_RUN_COLUMNS = ["seed_free_episodes"]
 
 
 class DataError(Exception):
@@ -168,7 +171,11 @@ def load(path: str) -> Data:
         absent = [c for c in RUN_COLUMNS if c not in cols]
         if absent:
             raise DataError(f"'{path}': table runs lacks column(s) {', '.join(absent)}")
-        runs = pd.read_sql_query(f"SELECT {', '.join(RUN_COLUMNS)} FROM runs", con)
+        optional = [c for c in OPTIONAL_RUN_COLUMNS if c in cols]
+        runs = pd.read_sql_query(f"SELECT {', '.join(RUN_COLUMNS + optional)} FROM runs", con)
+        for c in OPTIONAL_RUN_COLUMNS:
+            if c not in runs.columns:
+                runs[c] = np.nan
         ev_cols = [r[1] for r in con.execute("PRAGMA table_info(evals)")]
         metric = ", e.metric" if "metric" in ev_cols else ""  # schema version 2 on
         ev = pd.read_sql_query(
@@ -179,7 +186,7 @@ def load(path: str) -> Data:
         raise DataError(f"cannot read database '{path}': {e}") from None
     finally:
         con.close()
-    for c in ("best_loss", "wall_s"):
+    for c in ("best_loss", "wall_s", "seed_free_episodes"):
         runs[c] = pd.to_numeric(runs[c], errors="coerce").astype(float)
     ev["loss"] = pd.to_numeric(ev["loss"], errors="coerce").astype(float)
     ev["best_loss"] = pd.to_numeric(ev["best_loss"], errors="coerce").astype(float)

@@ -13,7 +13,7 @@ import pandas as pd
 
 from .claims import METRIC_KINDS
 
-COLUMNS = ["env", "threshold", "optimizer", "reached", "runs", "with_metric"]
+COLUMNS = ["env", "threshold", "optimizer", "reached", "runs", "with_metric", "seed_free"]
 
 
 def thresholds(claims) -> list:
@@ -30,7 +30,9 @@ def thresholds(claims) -> list:
 
 def table(claims, panels) -> pd.DataFrame:
     """One row per (env, threshold, optimizer with a done run): reached (runs whose metric at the
-    best episode >= threshold), runs, with_metric (runs with a finite metric there)."""
+    best episode >= threshold), runs, with_metric (runs with a finite metric there), seed_free
+    (its seeds are one run: stats.seed_free)."""
+    from . import stats
     by_env = {p.env: p for p in panels}
     rows = []
     for env, threshold in thresholds(claims):
@@ -41,13 +43,16 @@ def table(claims, panels) -> pd.DataFrame:
             idx = p.rows(o)
             m = p.metric_at_best[idx] if p.metric_at_best.size else np.full(idx.size, np.nan)
             rows.append([env, threshold, o, int(np.sum(m >= threshold)), int(idx.size),
-                         int(np.sum(np.isfinite(m)))])
+                         int(np.sum(np.isfinite(m))), stats.seed_free(p, o)])
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
 def cell(r) -> str:
-    """'3 of 5', or 'no metric' where none of the optimizer's runs has one."""
-    return f"{r['reached']} of {r['runs']}" if r["with_metric"] else "no metric"
+    """'3 of 5', '0 of 5 (one run)' where its seeds are one run, or 'no metric' where none of the
+    optimizer's runs has one."""
+    if not r["with_metric"]:
+        return "no metric"
+    return f"{r['reached']} of {r['runs']}" + (" (one run)" if r.get("seed_free", False) else "")
 
 
 def wide(t: pd.DataFrame):

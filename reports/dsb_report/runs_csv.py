@@ -4,11 +4,16 @@
 Columns (RUNS_CSV_COLUMNS): env, optimizer, seed, budget, status, episodes, best_loss (the run's
 final best loss; empty when it has none), best_episode (the first episode that reached it),
 metric_at_best (the env's second metric, evals.metric, at that episode; empty where the env has
-none), wall_s, env_config_hash, opt_config_hash, harness_version, git_sha. Floats are written as
+none), wall_s, env_config_hash, opt_config_hash, harness_version, git_sha, seed_free_episodes (the
+episodes before the optimizer's first draw from its RNG, runs.seed_free_episodes: equal to episodes
+when no seed changes the run; empty where not recorded). Floats are written as
 Python's repr, which reads back to the same bits, so verdicts and medians from the file are those
 from the database. Every run is written, whatever its status (the claims table says which runs are
 missing or incomplete); best_episode and metric_at_best only for the runs a report analyses
 (data.load: one config variant per env, optimizer and budget).
+
+A file without the last column (written before it existed) is read with seed_free_episodes empty:
+not recorded, so stats.seed_free counts none of its runs as one run.
 
 A Data read back from the file holds final values only: each panel's `best` is its runs' final
 best loss as one column, so what needs whole curves (convergence plots, targets) is not for it.
@@ -26,7 +31,8 @@ from .data import Data, Panel, _choose_variants, slugify
 
 RUNS_CSV_COLUMNS = ["env", "optimizer", "seed", "budget", "status", "episodes", "best_loss", "best_episode",
                     "metric_at_best", "wall_s", "env_config_hash", "opt_config_hash", "harness_version",
-                    "git_sha"]
+                    "git_sha", "seed_free_episodes"]
+OPTIONAL_COLUMNS = ["seed_free_episodes"]   # absent from files written before it existed
 
 
 class RunsCsvError(Exception):
@@ -38,6 +44,14 @@ def _number(v) -> str:
         return ""
     v = float(v)
     return "" if math.isnan(v) else repr(v)
+
+
+def _count(v) -> str:
+    """An integer count as text ('' when NULL)."""
+    if v is None:
+        return ""
+    v = float(v)
+    return "" if math.isnan(v) else str(int(v))
 
 
 def write(data: Data, path: str) -> int:
@@ -61,7 +75,7 @@ def write(data: Data, path: str) -> int:
             episode, metric = at_best.get(int(r.run_id), ("", ""))
             w.writerow([r.env, r.optimizer, int(r.seed), int(r.budget), r.status, int(r.episodes),
                         _number(r.best_loss), episode, metric, _number(r.wall_s), r.env_config_hash,
-                        r.opt_config_hash, r.harness_version, r.git_sha])
+                        r.opt_config_hash, r.harness_version, r.git_sha, _count(r.seed_free_episodes)])
     os.replace(tmp, path)
     return len(data.runs)
 
@@ -76,6 +90,9 @@ def _read(path: str) -> pd.DataFrame:
                            keep_default_na=False, na_values=[""])
     except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as e:
         raise RunsCsvError(f"cannot read '{path}': {e}") from None
+    for c in OPTIONAL_COLUMNS:
+        if c not in runs.columns:
+            runs[c] = np.nan
     absent = [c for c in RUNS_CSV_COLUMNS if c not in runs.columns]
     if absent:
         raise RunsCsvError(f"'{path}' lacks column(s) {', '.join(absent)}")
@@ -100,7 +117,7 @@ def load(*paths: str) -> Data:
     runs = pd.concat(frames, ignore_index=True) if len(frames) > 1 else frames[0]
     runs = runs.copy()
     runs.insert(0, "run_id", np.arange(1, len(runs) + 1))
-    for c in ("best_loss", "wall_s", "metric_at_best"):
+    for c in ("best_loss", "wall_s", "metric_at_best", "seed_free_episodes"):
         runs[c] = pd.to_numeric(runs[c], errors="coerce").astype(float)
     selected, ignored = _choose_variants(runs[runs["status"] == "done"])
     panels = []

@@ -1,8 +1,12 @@
 """Statistics: per-cell summaries, Student-t CIs, Mann-Whitney U with Holm (one- or two-sided),
-the smallest reachable p and seed count, Vargha-Delaney A12, ranks, target ECDF.
+the exact sign test against an optimizer whose seeds are one run, the smallest reachable p and
+seed count, Vargha-Delaney A12, ranks, target ECDF.
 
 Conventions (also stated in the report):
 - final best loss of a run = runs.best_loss of a 'done' run; NULL (no finite episode) counts as +inf;
+- an optimizer whose seeds are one run on an env (seed_free: each of its runs there was recorded
+  seed-free over all its episodes, so no seed changed anything) is ONE sample, a constant: the
+  other side is tested against it by the exact sign test (compare_p), not by Mann-Whitney;
 - quantiles: linear interpolation (numpy default); CI: mean +- t(0.975, n-1) * s / sqrt(n);
 - best optimizer of an env = lowest median final loss (ties: lower mean, then name);
 - ranks: rank of the median best-so-far over seeds among the optimizers of an env, ties averaged.
@@ -40,6 +44,99 @@ def checkpoints(max_budget: int) -> list:
 def final_values(panel, optimizer: str) -> np.ndarray:
     v = panel.runs.loc[panel.runs["optimizer"] == optimizer, "best_loss"].to_numpy(dtype=float)
     return np.where(np.isnan(v), np.inf, v)
+
+
+def seed_free(panel, optimizer: str) -> bool:
+    """True when the optimizer's runs in the panel are one run, whatever their seeds: every run
+    has its seed-free prefix recorded (runs.seed_free_episodes, counted by the harness's budget
+    wrapper: the episodes before the optimizer's first draw from its RNG) and covering all its
+    episodes, and their final best losses are equal (a check: one run key, one result). A run
+    without the record (NULL, or a runs CSV from before the column) is not: equal final losses alone
+    never make seeds one run, since two seeds can tie (nlopt-lbfgs on sphere-2 reaches 0.0 in the
+    3 episodes before its first draw and every seed ties there, though its runs differ after)."""
+    r = panel.runs[panel.runs["optimizer"] == optimizer]
+    if r.empty or "seed_free_episodes" not in r.columns:
+        return False
+    free = pd.to_numeric(r["seed_free_episodes"], errors="coerce").to_numpy(dtype=float)
+    episodes = pd.to_numeric(r["episodes"], errors="coerce").to_numpy(dtype=float)
+    if not (np.all(np.isfinite(free)) and np.all(np.isfinite(episodes)) and np.all(free >= episodes)):
+        return False
+    v = final_values(panel, optimizer)
+    return bool(np.all(v == v[0]))
+
+
+def sample(panel, optimizer: str):
+    """(values, constant): the final best losses the tests see. An optimizer whose seeds are one
+    run (seed_free) is one value and constant=True; any other, one value per seed."""
+    v = final_values(panel, optimizer)
+    if v.size and seed_free(panel, optimizer):
+        return v[:1], True
+    return v, False
+
+
+def sign_test_p(x: np.ndarray, c: float, alternative: str = "two-sided") -> float:
+    """Exact sign test of a sample x against a constant c (a seed-free optimizer's one run).
+    alternative 'less': whether x tends to be lower than c (H0: P(x < c) = P(x > c)); k = #(x < c)
+    of the n values that differ from c, p = P(Bin(n, 1/2) >= k); 'greater' the mirror; 'two-sided'
+    twice the smaller tail, at most 1 (scipy.stats.binomtest). Values equal to c drop out; 1.0 when
+    none is left, NaN when x is empty. Valid for any continuous distribution of x (no symmetry
+    assumed, unlike the one-sample Wilcoxon signed-rank test); with n values the smallest one-sided
+    p is 2^-n (1/32 at 5 seeds)."""
+    x = np.asarray(x, dtype=float)
+    if x.size == 0 or (isinstance(c, float) and math.isnan(c)):
+        return float("nan")
+    below, above = int(np.sum(x < c)), int(np.sum(x > c))
+    n = below + above
+    if n == 0:
+        return 1.0
+    if alternative == "less":
+        return float(sps.binomtest(below, n, 0.5, alternative="greater").pvalue)
+    if alternative == "greater":
+        return float(sps.binomtest(above, n, 0.5, alternative="greater").pvalue)
+    return float(sps.binomtest(below, n, 0.5, alternative="two-sided").pvalue)
+
+
+_MIRROR = {"less": "greater", "greater": "less", "two-sided": "two-sided"}
+
+
+def test_name(a_constant: bool, b_constant: bool) -> str:
+    """The test compare_p runs for these sides: 'mann-whitney' (two samples), 'sign' (a sample
+    against one run), 'order' (two single runs)."""
+    return "order" if a_constant and b_constant else "sign" if a_constant or b_constant else "mann-whitney"
+
+
+def compare_p(a: np.ndarray, a_constant: bool, b: np.ndarray, b_constant: bool,
+              alternative: str = "two-sided") -> float:
+    """p-value of 'a tends lower than b' ('less'), 'higher' ('greater') or 'differs' ('two-sided'),
+    each side a sample (one value per seed) or a constant (sample(): one value, the seed-free
+    optimizer's run). Two samples: Mann-Whitney U (mwu_p). A sample against a constant: the exact
+    sign test (sign_test_p). Two constants: nothing varies, so the order is certain: 0.0 when it is
+    the alternative's (a < b for 'less', a > b for 'greater', a != b two-sided), else 1.0. NaN when a
+    side is empty."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if a.size == 0 or b.size == 0:
+        return float("nan")
+    if a_constant and b_constant:
+        ca, cb = float(a[0]), float(b[0])
+        certain = {"less": ca < cb, "greater": ca > cb, "two-sided": ca != cb}[alternative]
+        return 0.0 if certain else 1.0
+    if b_constant:
+        return sign_test_p(a, float(b[0]), alternative)
+    if a_constant:
+        return sign_test_p(b, float(a[0]), _MIRROR[alternative])
+    return mwu_p(a, b, alternative)
+
+
+def min_p(n_a: int, a_constant: bool, n_b: int, b_constant: bool, sides: int = 2) -> float:
+    """The smallest p compare_p can give for these sides: min_exact_p for two samples, sides x
+    2^-n for n seeds against one run (the sign test), 0 for two single runs (their order is
+    certain)."""
+    if a_constant and b_constant:
+        return 0.0 if n_a >= 1 and n_b >= 1 else float("nan")
+    if a_constant or b_constant:
+        n = n_b if a_constant else n_a
+        return min(1.0, sides * 0.5 ** n) if n >= 1 and (n_a >= 1 and n_b >= 1) else float("nan")
+    return min_exact_p(n_a, n_b, sides)
 
 
 def t_ci(values: np.ndarray, level: float = 0.95):
@@ -84,24 +181,29 @@ def min_exact_p(n1: int, n2: int, sides: int = 2) -> float:
     return min(1.0, sides / math.comb(n1 + n2, n1))
 
 
-def min_seeds(comparisons: int, sides: int, alpha: float = ALPHA, limit: int = 100) -> int:
+def min_seeds(comparisons: int, sides: int, alpha: float = ALPHA, limit: int = 100,
+              against_one_run: bool = False) -> int:
     """Smallest n such that, with n seeds on each side, a claim of `comparisons` Holm-corrected
     Mann-Whitney tests can reach alpha at all: comparisons * min_exact_p(n, n, sides) < alpha
     (Holm multiplies the smallest p by the number of comparisons). One comparison: 4 seeds
-    (one-sided 1/70, two-sided 2/70); with 3 the best possible one-sided p is 1/20 = alpha."""
+    (one-sided 1/70, two-sided 2/70); with 3 the best possible one-sided p is 1/20 = alpha.
+    against_one_run: n seeds tested by the sign test against a seed-free optimizer's one run,
+    comparisons * sides * 2^-n < alpha: one one-sided comparison needs 5 (1/32; 4 give 1/16)."""
     for n in range(1, limit + 1):
-        if comparisons * min_exact_p(n, n, sides) < alpha:
+        if comparisons * min_p(n, False, n, against_one_run, sides) < alpha:
             return n
     return limit
 
 
-def too_few_seeds(comparisons: int, n1: int, n2: int, sides: int = 2, alpha: float = ALPHA) -> bool:
+def too_few_seeds(comparisons: int, n1: int, n2: int, sides: int = 2, alpha: float = ALPHA,
+                  constant1: bool = False, constant2: bool = False) -> bool:
     """True when a Holm-corrected test among `comparisons` cannot reach alpha even with perfectly
-    separated samples of sizes n1 and n2: comparisons * min_exact_p(n1, n2, sides) >= alpha (the
-    rule of the claims' 'not enough data'). 'Cannot tell from the best' then says nothing."""
+    separated samples of sizes n1 and n2: comparisons * min_p(...) >= alpha (the rule of the
+    claims' 'not enough data'; a constant side is a seed-free optimizer's one run, min_p).
+    'Cannot tell from the best' then says nothing."""
     if comparisons < 1 or n1 < 1 or n2 < 1:
         return False
-    return comparisons * min_exact_p(n1, n2, sides) >= alpha
+    return comparisons * min_p(n1, constant1, n2, constant2, sides) >= alpha
 
 
 def a12_lower(a: np.ndarray, b: np.ndarray) -> float:
@@ -125,10 +227,11 @@ def final_table(panel, all_runs: pd.DataFrame) -> pd.DataFrame:
         v = final_values(panel, opt)
         c = cell[cell["optimizer"] == opt]
         sel = panel.runs[panel.runs["optimizer"] == opt]
-        lo, hi = t_ci(v)
+        distinct, one_run = sample(panel, opt)
+        lo, hi = t_ci(distinct)    # one run: no interval
         fin = v.size > 0
         rows.append(dict(
-            env=panel.env, budget=panel.budget, optimizer=opt, n_seeds=int(v.size),
+            env=panel.env, budget=panel.budget, optimizer=opt, n_seeds=int(v.size), seed_free=bool(one_run),
             failed_runs=int((c["status"] == "failed").sum()),
             running_runs=int((c["status"] == "running").sum()),
             failed_episodes=int(sel["failed_episodes"].sum()),
@@ -136,7 +239,7 @@ def final_table(panel, all_runs: pd.DataFrame) -> pd.DataFrame:
             q25=float(pct(v, 25)) if fin else np.nan,
             q75=float(pct(v, 75)) if fin else np.nan,
             mean=float(np.mean(v)) if fin else np.nan,
-            std=float(np.std(v, ddof=1)) if v.size > 1 and np.all(np.isfinite(v)) else np.nan,
+            std=float(np.std(distinct, ddof=1)) if distinct.size > 1 and np.all(np.isfinite(distinct)) else np.nan,
             ci95_low=lo, ci95_high=hi,
             min=float(np.min(v)) if fin else np.nan,
             max=float(np.max(v)) if fin else np.nan,
@@ -163,18 +266,24 @@ def _add_significance(panel, df: pd.DataFrame) -> pd.DataFrame:
     if have.empty:
         return df
     best = have.sort_values(["median", "mean", "optimizer"]).iloc[0]["optimizer"]
-    ref = final_values(panel, best)
+    ref, ref_one = sample(panel, best)
     others = [o for o in have["optimizer"] if o != best]
     # one-sided: the question is whether an optimizer ends worse than the winner (the winner is the
     # lowest median by construction); two-sided tests could never separate 10 optimizers at the
-    # default 5 seeds (9 x 2/C(10,5) = 0.071 > alpha after Holm; one-sided 9 x 1/252 = 0.036)
-    raw = [mwu_p(final_values(panel, o), ref, "greater") for o in others]
+    # default 5 seeds (9 x 2/C(10,5) = 0.071 > alpha after Holm; one-sided 9 x 1/252 = 0.036).
+    # A side whose seeds are one run is one value: the sign test against it (compare_p)
+    sides = {o: sample(panel, o) for o in others}
+    raw = [compare_p(sides[o][0], sides[o][1], ref, ref_one, "greater") for o in others]
     adj = holm(raw)
     for o, p, q in zip(others, raw, adj):
         i = df.index[df["optimizer"] == o][0]
         df.loc[i, ["p_raw", "p_holm"]] = [p, q]
-        df.loc[i, "indistinguishable_from_best"] = bool(not math.isnan(q) and q >= ALPHA)
-        df.loc[i, "too_few_seeds"] = too_few_seeds(len(others), int(df.loc[i, "n_seeds"]), ref.size, sides=1)
+        tie = bool(not math.isnan(q) and q >= ALPHA)
+        df.loc[i, "indistinguishable_from_best"] = tie
+        # 'too few seeds' replaces a tie only: Holm multiplies the smallest p alone by the number
+        # of comparisons, so a pair can come out significant though that bound says it could not
+        df.loc[i, "too_few_seeds"] = tie and too_few_seeds(len(others), sides[o][0].size, ref.size, sides=1,
+                                                          constant1=sides[o][1], constant2=ref_one)
     i = df.index[df["optimizer"] == best][0]
     df.loc[i, "is_best"] = True
     df.loc[i, "indistinguishable_from_best"] = True

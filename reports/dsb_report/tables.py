@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pandas as pd
 
-FINAL_COLUMNS = ["env", "budget", "optimizer", "n_seeds", "failed_runs", "running_runs",
+FINAL_COLUMNS = ["env", "budget", "optimizer", "n_seeds", "seed_free", "failed_runs", "running_runs",
                  "failed_episodes", "median", "q25", "q75", "mean", "std", "ci95_low", "ci95_high",
                  "min", "max", "median_wall_s", "is_best", "p_raw", "p_holm",
                  "indistinguishable_from_best", "too_few_seeds", "metric_median", "f_star",
@@ -57,7 +57,8 @@ def md_table(headers: list, rows: list) -> str:
 
 def final_md_rows(table: pd.DataFrame) -> tuple:
     """Rows of a final table; a last column with the env's second metric (median over seeds at
-    each run's best episode, e.g. PlasticineLab's soft IoU) when any run recorded one."""
+    each run's best episode, e.g. PlasticineLab's soft IoU) when any run recorded one. n reads
+    '5 (one run)' for an optimizer whose seeds are one run (stats.seed_free: one sample, no CI)."""
     headers = ["optimizer", "n", "failed runs", "median", "q25", "q75", "mean", "std",
                "95% CI (t)", "p (Holm)", "vs best"]
     metric = "metric_median" in table.columns and bool(table["metric_median"].notna().any())
@@ -66,7 +67,8 @@ def final_md_rows(table: pd.DataFrame) -> tuple:
     rows = []
     for _, r in table.iterrows():
         ci = "—" if math.isnan(r["ci95_low"]) else f"[{fmt(r['ci95_low'])}, {fmt(r['ci95_high'])}]"
-        rows.append([r["optimizer"], str(r["n_seeds"]), str(r["failed_runs"]), fmt(r["median"]),
+        n = f"{r['n_seeds']} (one run)" if bool(r.get("seed_free", False)) else str(r["n_seeds"])
+        rows.append([r["optimizer"], n, str(r["failed_runs"]), fmt(r["median"]),
                      fmt(r["q25"]), fmt(r["q75"]), fmt(r["mean"]), fmt(r["std"]), ci,
                      fmt(r["p_holm"], 3), mark(r)] + ([fmt(r["metric_median"], 4)] if metric else []))
     return headers, rows
