@@ -28,6 +28,10 @@ const EnvFamily& env_family_of(const std::string& name);
 // thread that uses the env shares it, and so shares its lazily built model. Thread-safe.
 std::shared_ptr<const Env> shared_env(const std::string& name, const EnvOptions& options = {});
 
+// The results version of the env's family (EnvFamily::results_version), 0 for a name no family
+// knows. Looks at names only: no env is made.
+int env_results_version(const std::string& name);
+
 // Every env of the `--all` grid, in registration order.
 std::vector<std::string> grid_env_names();
 

@@ -17,6 +17,7 @@
 #include "harness/output_path.hpp"
 #include "harness/report_command.hpp"
 #include "harness/result_table.hpp"
+#include "harness/slurm_command.hpp"
 #include "harness/sqlite_db.hpp"
 
 namespace dsb {
@@ -30,15 +31,23 @@ int command_check(const std::string& db_path, const std::string& baseline_path) 
   } catch (const BaselineError& e) {
     throw UsageError(std::string("--baseline: ") + e.what());
   }
-  const auto current = result_table_of_file(db_path);
-  const TableDiff diff = compare_tables(baseline, current);
+  const ResultTable current = result_table_of_file(db_path);
+  if (const std::string note = stale_note(current, false); !note.empty()) std::cout << "check: " << note << "\n";
+  const TableDiff diff = compare_tables(baseline, current.rows);
   print_diff(diff, std::cout);
   if (diff.empty()) {
     std::cout << "check: database '" << db_path << "' equals baseline '" << baseline_path << "'\n";
     return 0;
   }
+  // the command that regenerates this baseline: CI's own script for its baseline, else an export
+  const bool ci_baseline = std::filesystem::path(baseline_path).filename() == "small-grid.csv";
+  const std::string regenerate = ci_baseline ? std::string("scripts/regression-grid.sh regenerate")
+                                             : "harness export --db " + shell_word(db_path) + " --out " +
+                                                   shell_word(baseline_path) + " --force";
+  print_verdicts(diff, std::cout, regenerate);
   std::cout << "check: database '" << db_path << "' differs from baseline '" << baseline_path
-            << "'. If the change is intended, regenerate the baseline (docs/reports.md, \"Regression CI on result tables\") and say why in the commit.\n";
+            << "'. A change of results bumps the results version of what changed and regenerates the baseline in "
+               "the same commit, saying why (docs/reports.md, \"Regression CI on result tables\").\n";
   return 1;
 }
 

@@ -49,6 +49,7 @@
 #include <nlohmann/json.hpp>
 
 #include "envs/registry.hpp"
+#include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
 
 namespace dsb {
@@ -84,17 +85,28 @@ std::string ioh_file_safe(const std::string& name) {
   return s;
 }
 
-std::vector<IohRun> read_ioh_runs(Database& db) {
+std::vector<IohRun> read_ioh_runs(Database& db, bool include_stale, std::int64_t* stale_left_out) {
   std::vector<IohRun> runs;
   std::map<std::int64_t, std::size_t> index;
+  if (stale_left_out) *stale_left_out = 0;
   {
-    Statement q(db.handle(), R"sql(
+    const int schema = check_schema(db);
+    Statement q(db.handle(), std::string(R"sql(
       SELECT run_id, env, optimizer, seed, budget, env_config_hash, opt_config_hash, episodes, best_x,
-             COALESCE(harness_version, '')
+             COALESCE(harness_version, ''), )sql") + (schema >= 5 ? "results_versions" : "''") + R"sql(
       FROM runs WHERE status = 'done'
       ORDER BY env, optimizer, budget, opt_config_hash, env_config_hash, seed, run_id)sql");
     while (q.step()) {
+      // a stale run (other results versions: harness/results_versions.hpp) only when asked for
+      const ResultsVersions versions = stored_results_versions(q.column_text(10));
+      const bool stale = !stale_reason(q.column_text(1), q.column_text(2), versions).empty();
+      if (stale && !include_stale) {
+        if (stale_left_out) ++*stale_left_out;
+        continue;
+      }
       IohRun r;
+      r.stale = stale;
+      r.results_versions = versions.text();
       r.run_id = q.column_int(0);
       r.env = q.column_text(1);
       r.optimizer = q.column_text(2);
@@ -125,8 +137,10 @@ std::vector<IohRun> read_ioh_runs(Database& db) {
     const std::int64_t id = q.column_int(0);
     if (id != current) {
       current = id;
-      run = &runs[index.at(id)];
+      const auto at = index.find(id);
+      run = at == index.end() ? nullptr : &runs[at->second];  // nullptr: a stale run left out
     }
+    if (!run) continue;
     const std::int64_t episode = q.column_int(1);
     run->episodes = std::max(run->episodes, episode + 1);
     if (q.column_is_null(2)) continue;  // failed episode: no row
@@ -180,6 +194,13 @@ IohExportSummary write_ioh_export(const std::vector<IohRun>& all, const fs::path
     std::string name = r.optimizer;
     if (by_budget.count(r.optimizer)) name += fmt::format("-b{}", r.budget);
     if (by_config.count(r.optimizer)) name += fmt::format("-{}", short_hash(r.opt_hash));
+    // a stale run (--include-stale) is its own algorithm, named by its versions: never mixed with
+    // the current runs or another version's
+    if (r.stale) {
+      const ResultsVersions v = stored_results_versions(r.results_versions);
+      name += r.results_versions.empty() ? std::string("-stale-unversioned")
+                                         : fmt::format("-stale-e{}o{}r{}", v.env, v.optimizer, v.run);
+    }
     return name;
   };
 

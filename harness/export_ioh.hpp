@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "harness/results_versions.hpp"
+
 namespace dsb {
 
 class Database;
@@ -32,13 +34,17 @@ struct IohRun {
   std::int64_t episodes = 0;
   bool has_best_x = false;
   nlohmann::json best_x;  // array, normalized units ([] when none)
+  std::string results_versions;  // "env E, optimizer O, run R" ("" before versions)
+  bool stale = false;            // versions not this binary's
   std::string version;    // harness_version
   std::vector<std::pair<std::int64_t, double>> rows;  // improvements: (episode + 1, loss)
 };
 
 // Every 'done' run of `db`, ordered by (env, optimizer, budget, configs, seed). Reads only;
 // throws StoreError on a database error.
-std::vector<IohRun> read_ioh_runs(Database& db);
+// the done runs whose results versions are this binary's (all of them with include_stale: the
+// stale ones marked); stale_left_out (may be null) counts those left out
+std::vector<IohRun> read_ioh_runs(Database& db, bool include_stale = false, std::int64_t* stale_left_out = nullptr);
 
 // Writes the IOH folder tree of `runs` under `out_dir` (created if missing; the caller checks it
 // is new or empty). Throws std::runtime_error naming a file or folder that cannot be written.

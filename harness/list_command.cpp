@@ -20,31 +20,35 @@
 #include "harness/command.hpp"
 #include "harness/output_path.hpp"
 #include "harness/point_text.hpp"
+#include "harness/results_versions.hpp"
 #include "optimizers/registry.hpp"
 
 namespace dsb {
 namespace {
 
 int command_list() {
-  std::cout << fmt::format("{:<22} {:>5} {:>14} {:>3}  {}\n", "env", "dim", "differentiable", "rl",
+  // version: the results version (harness/results_versions.hpp), part of every run key
+  std::cout << fmt::format("{:<22} {:>7} {:>5} {:>14} {:>3}  {}\n", "env", "version", "dim", "differentiable", "rl",
                            "description");
   for (const auto& family : env_families()) {
     for (const auto& name : family.grid_names) {
       const EnvInfo& info = shared_env(name)->info();  // metadata only: no model is built
-      std::cout << fmt::format("{:<22} {:>5} {:>14} {:>3}  {}\n", name, info.dim,
+      std::cout << fmt::format("{:<22} {:>7} {:>5} {:>14} {:>3}  {}\n", name, family.results_version, info.dim,
                                info.differentiable ? "yes" : "no", info.rl ? "yes" : "no",
                                family.pattern == name ? family.description
                                                       : family.pattern + ": " + family.description);
     }
   }
   std::cout << "\n"
-            << fmt::format("{:<22} {:>14} {:>8} {:>9}  {}\n", "optimizer", "needs gradient", "needs rl", "seed use",
-                           "description");
+            << fmt::format("{:<22} {:>7} {:>14} {:>8} {:>9}  {}\n", "optimizer", "version", "needs gradient", "needs rl",
+                           "seed use", "description");
   const auto seed_use = [](SeedUse u) { return u == SeedUse::never ? "never" : u == SeedUse::late ? "late" : "at start"; };
   for (const auto& e : optimizer_entries())
-    std::cout << fmt::format("{:<22} {:>14} {:>8} {:>9}  {}\n", e.name, e.needs_gradient ? "yes" : "no",
-                             e.needs_rl ? "yes" : "no", seed_use(e.seed_use), e.description);
-  std::cout << fmt::format("{:<22} {:>14} {:>8} {:>9}  {}\n", "ext:NAME", "either", "no", "its own",
+    std::cout << fmt::format("{:<22} {:>7} {:>14} {:>8} {:>9}  {}\n", e.name, e.results_version,
+                             e.needs_gradient ? "yes" : "no", e.needs_rl ? "yes" : "no", seed_use(e.seed_use),
+                             e.description);
+  std::cout << fmt::format("{:<22} {:>7} {:>14} {:>8} {:>9}  {}\n", "ext:NAME", kExtResultsVersion, "either", "no",
+                           "its own",
                            "your own optimizer, a program on the process protocol: --ext NAME='COMMAND' "
                            "(docs/ext-protocol.md)");
   std::cout << "\nenv options (--set ENV.KEY=VALUE with ENV a name of the family, e.g. plb-pinch-h5.target=F.npy; "
@@ -55,6 +59,9 @@ int command_list() {
   std::cout << "\nknobs (--set OPTIMIZER.KNOB=VALUE; a variant is its own run)\n";
   for (const auto& e : optimizer_entries())
     if (!e.knobs.empty()) std::cout << fmt::format("{:<22} {}\n", e.name, fmt::join(e.knobs, ", "));
+  std::cout << "\nresults versions: each env's and optimizer's above, and the run code's (budget wrapper, replay, "
+               "seeding); a stored run of other versions is stale (docs/database.md)\n";
+  std::cout << fmt::format("run code version {}\n", kRunCodeResultsVersion);
   return 0;
 }
 

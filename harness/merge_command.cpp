@@ -26,15 +26,17 @@ namespace {
 
 // every column of a run row but run_id, in schema order; `harness_version` is read as '' when
 // NULL (files before schema version 3), the sharing columns as what a run without sharing has
-// (files before version 4)
+// (files before version 4), the results versions as '' (files before version 5: made before
+// versions, stale for every binary that has them; kept apart from the runs of any version)
 std::string run_columns(int version) {
   return std::string("env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, "
                      "failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
                      "COALESCE(harness_version, ''), git_sha, host, diagnostics, ") +
          (version >= 4 ? "seed_free_episodes, seed_free_calls, shared_episodes, shared_from_seed"
-                       : "NULL, NULL, 0, NULL");
+                       : "NULL, NULL, 0, NULL") +
+         (version >= 5 ? ", results_versions" : ", ''");
 }
-constexpr int kRunColumnCount = 24;
+constexpr int kRunColumnCount = 25;
 const char* kEvalColumns = "episode, loss, best_loss, used_grad, wall_s, failed, metric";
 constexpr int kEvalColumnCount = 7;
 
@@ -87,7 +89,8 @@ struct RunRecord {
   RunStatus status() const { return stored_status(run[7].s).value_or(RunStatus::running); }
   std::int64_t committed() const { return static_cast<std::int64_t>(evals.size()); }
   RunKey key() const {
-    return {run[0].s, run[1].s, static_cast<int>(run[2].i), run[3].i, run[4].s, run[5].s, run[16].s};
+    return {run[0].s, run[1].s, static_cast<int>(run[2].i), run[3].i, run[4].s, run[5].s, run[16].s,
+            stored_results_versions(run[24].s)};
   }
 };
 
@@ -129,9 +132,9 @@ bool same_result(const RunRecord& a, const RunRecord& b) {
 std::optional<std::int64_t> find_run(Database& db, const RunKey& k) {
   Statement q(db.handle(),
               "SELECT run_id FROM runs WHERE env=? AND optimizer=? AND seed=? AND budget=? AND env_config_hash=? AND "
-              "opt_config_hash=? AND harness_version=?");
+              "opt_config_hash=? AND harness_version=? AND results_versions=?");
   q.bind(1, k.env).bind(2, k.optimizer).bind(3, static_cast<std::int64_t>(k.seed)).bind(4, k.budget)
-      .bind(5, k.env_config_hash).bind(6, k.opt_config_hash).bind(7, k.harness_version);
+      .bind(5, k.env_config_hash).bind(6, k.opt_config_hash).bind(7, k.harness_version).bind(8, k.versions.text());
   if (!q.step()) return std::nullopt;
   return q.column_int(0);
 }
@@ -149,8 +152,8 @@ void insert_run(Database& db, const RunRecord& r) {
                                  "env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, "
                                  "episodes, failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
                                  "harness_version, git_sha, host, diagnostics, seed_free_episodes, seed_free_calls, "
-                                 "shared_episodes, shared_from_seed) VALUES (" +
-                                 "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING run_id");
+                                 "shared_episodes, shared_from_seed, results_versions) VALUES (" +
+                                 "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING run_id");
   bind_row(run, r.run, 1);
   if (!run.step()) throw StoreError("merge: no run_id returned");
   const std::int64_t id = run.column_int(0);

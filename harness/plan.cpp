@@ -43,6 +43,13 @@ int shard_of(const RunKey& key, int count, bool group_seeds) {
   return static_cast<int>(splitmix64(h) % static_cast<std::uint64_t>(count));
 }
 
+namespace {
+
+// the runs' results_versions column as SQL: '' in a file from before versions (schema 4 or older)
+std::string versions_sql(int schema_version) { return schema_version >= 5 ? "results_versions" : "''"; }
+
+}  // namespace
+
 GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done,
                    const std::string& harness_version, Shard shard) {
   GridPlan plan;
@@ -52,7 +59,8 @@ GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& don
                 [&](const std::string& n) { return shared_env(n, spec.env_options)->config(); });
     const ResolvedConfig& opt =
         resolve(plan.opt_configs, spec.optimizer, [&](const std::string&) { return make_run_optimizer(spec)->config(); });
-    RunKey key{spec.env, spec.optimizer, spec.seed, spec.budget, env.hash, opt.hash, harness_version};
+    RunKey key{spec.env,  spec.optimizer, spec.seed,      spec.budget,
+               env.hash,  opt.hash,       harness_version, current_results_versions(spec.env, spec.optimizer)};
     if (shard.count > 1 && shard_of(key, shard.count, shard.group_seeds) != shard.index) continue;
     ++plan.runs;
     if (done.count(key)) {
@@ -72,7 +80,7 @@ bool may_share_seeds(const RunSpec& spec) {
 std::string seed_group_of(const RunKey& key) {
   std::string g;
   for (const std::string& part : {key.env, key.optimizer, std::to_string(key.budget), key.env_config_hash,
-                                  key.opt_config_hash, key.harness_version}) {
+                                  key.opt_config_hash, key.harness_version, key.versions.text()}) {
     g += part;
     g.push_back('\0');
   }
@@ -123,11 +131,12 @@ std::map<std::string, double> measured_walls_of_file(const std::string& path) {
   const int version = check_schema(db);
   if (version == 0) return {};
   Statement q(db.handle(), std::string("SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, "
-                                       "harness_version, wall_s FROM runs WHERE status='done' AND wall_s > 0") +
+                                       "harness_version, wall_s, ") +
+                               versions_sql(version) + " FROM runs WHERE status='done' AND wall_s > 0" +
                                (version >= 4 ? " AND shared_episodes = 0" : ""));
   while (q.step()) {
     const RunKey key{q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
-                     q.column_text(4), q.column_text(5), q.column_text(6)};
+                     q.column_text(4), q.column_text(5), q.column_text(6), stored_results_versions(q.column_text(8))};
     by_group[seed_group_of(key)].push_back(q.column_double(7));
   }
   std::map<std::string, double> walls;
@@ -143,14 +152,16 @@ std::map<std::string, std::int64_t> kept_prefixes_of_file(const std::string& pat
   std::map<std::string, std::int64_t> kept;
   if (!std::filesystem::exists(path)) return kept;
   Database db(path, Database::Mode::read_only);
-  if (check_schema(db) < 4) return kept;
+  const int version = check_schema(db);
+  if (version < 4) return kept;
   Statement q(db.handle(),
               "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, "
-              "seed_free_episodes FROM runs r WHERE status='done' AND seed_free_episodes > 0 AND EXISTS (SELECT 1 "
-              "FROM prefix p WHERE p.run_id=r.run_id)");
+              "seed_free_episodes, " + versions_sql(version) +
+                  " FROM runs r WHERE status='done' AND seed_free_episodes > 0 AND EXISTS (SELECT 1 "
+                  "FROM prefix p WHERE p.run_id=r.run_id)");
   while (q.step()) {
     const RunKey key{q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
-                     q.column_text(4), q.column_text(5), q.column_text(6)};
+                     q.column_text(4), q.column_text(5), q.column_text(6), stored_results_versions(q.column_text(8))};
     std::int64_t& e = kept[seed_group_of(key)];
     e = std::max(e, q.column_int(7));
   }
@@ -161,14 +172,15 @@ std::map<RunKey, std::string> runs_of_file(const std::string& path, const std::s
   std::map<RunKey, std::string> runs;
   if (!std::filesystem::exists(path)) return runs;
   Database db(path, Database::Mode::read_only);
-  if (check_schema(db) == 0) return runs;  // refuses a file that is not a harness database
+  const int version = check_schema(db);  // refuses a file that is not a harness database
+  if (version == 0) return runs;
   Statement q(db.handle(),
               "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, "
-              "COALESCE(error, '') FROM runs WHERE status=?");
+              "COALESCE(error, ''), " + versions_sql(version) + " FROM runs WHERE status=?");
   q.bind(1, status);
   while (q.step())
     runs.emplace(RunKey{q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
-                        q.column_text(4), q.column_text(5), q.column_text(6)},
+                        q.column_text(4), q.column_text(5), q.column_text(6), stored_results_versions(q.column_text(8))},
                  q.column_text(7));
   return runs;
 }
@@ -177,6 +189,32 @@ std::set<RunKey> done_keys_of_file(const std::string& path) {
   std::set<RunKey> keys;
   for (auto& [key, error] : runs_of_file(path, "done")) keys.insert(key);
   return keys;
+}
+
+
+std::vector<StaleRuns> stale_runs_of_file(const std::string& path,
+                                          const std::set<std::pair<std::string, std::string>>& pairs) {
+  std::map<std::string, StaleRuns> by_reason;
+  if (!std::filesystem::exists(path)) return {};
+  Database db(path, Database::Mode::read_only);
+  const int version = check_schema(db);
+  if (version == 0) return {};
+  Statement q(db.handle(), "SELECT env, optimizer, " + versions_sql(version) +
+                               ", status, count(*) FROM runs GROUP BY 1, 2, 3, 4 ORDER BY 1, 2, 3, 4");
+  while (q.step()) {
+    const std::string env = q.column_text(0), optimizer = q.column_text(1);
+    if (!pairs.empty() && !pairs.count({env, optimizer})) continue;
+    const std::string why = stale_reason(env, optimizer, stored_results_versions(q.column_text(2)));
+    if (why.empty()) continue;
+    StaleRuns& s = by_reason[env + "\n" + optimizer + "\n" + why];
+    s.env = env;
+    s.optimizer = optimizer;
+    s.reason = why;
+    (q.column_text(3) == "done" ? s.done : s.unfinished) += q.column_int(4);
+  }
+  std::vector<StaleRuns> out;
+  for (auto& [k, s] : by_reason) out.push_back(std::move(s));
+  return out;
 }
 
 }  // namespace dsb

@@ -93,4 +93,14 @@ std::map<RunKey, std::string> runs_of_file(const std::string& path, const std::s
 // the keys of its 'done' runs
 std::set<RunKey> done_keys_of_file(const std::string& path);
 
+// Stored runs whose results versions are not this binary's (harness/results_versions.hpp), by env,
+// optimizer and reason, of the (env, optimizer) pairs given (all when empty): never resumed or
+// counted as done, left in the file as they are. Read-only; nothing when the file does not exist.
+struct StaleRuns {
+  std::string env, optimizer, reason;
+  std::int64_t done = 0, unfinished = 0;  // 'done' runs; 'running' or 'failed' ones
+};
+std::vector<StaleRuns> stale_runs_of_file(const std::string& path,
+                                          const std::set<std::pair<std::string, std::string>>& pairs = {});
+
 }  // namespace dsb

@@ -43,6 +43,11 @@ int command_plan(const RunArgs& a, const std::string& runs_csv) {
   const CostModel costs;
   print_plan(std::cout, plan, costs, plan_context(a, run));
   print_failed_runs(std::cout, plan, failed);
+  try {
+    print_stale_runs(std::cout, stale_runs_of_file(a.db, grid_pairs(run.grid)));
+  } catch (const StoreError& e) {
+    throw UsageError(std::string("--db: ") + e.what());
+  }
   if (!runs_csv.empty()) write_plan_runs_csv(runs_csv, plan, costs, !a.no_sharing, run.jobs);
   const double planning_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cout << fmt::format("  planned in {:.3f} s; env models built: {} (nothing was written)\n", planning_s,

@@ -161,4 +161,24 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
                        ctx.grid_flags, shards, shards, human_duration(std::max(total / shards, longest)));
 }
 
+void print_stale_runs(std::ostream& out, const std::vector<StaleRuns>& stale) {
+  if (stale.empty()) return;
+  std::int64_t done = 0, unfinished = 0;
+  for (const auto& s : stale) {
+    done += s.done;
+    unfinished += s.unfinished;
+  }
+  out << fmt::format("  stale: {} stored runs of this grid's envs and optimizers ({} done, {} unfinished) were made by "
+                     "other results versions: never resumed or counted as done, left in the database as they are\n",
+                     done + unfinished, done, unfinished);
+  for (const auto& s : stale)
+    out << fmt::format("    {} / {}: {} done, {} unfinished: {}\n", s.env, s.optimizer, s.done, s.unfinished, s.reason);
+}
+
+std::set<std::pair<std::string, std::string>> grid_pairs(const std::vector<RunSpec>& grid) {
+  std::set<std::pair<std::string, std::string>> pairs;
+  for (const auto& spec : grid) pairs.emplace(spec.env, spec.optimizer);
+  return pairs;
+}
+
 }  // namespace dsb

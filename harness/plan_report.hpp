@@ -4,6 +4,7 @@
 // for the given jobs, and the Slurm route for grids bigger than one machine.
 #include <map>
 #include <ostream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -34,5 +35,12 @@ void write_plan_runs_csv(const std::string& path, const GridPlan& plan, const Co
 // each with its error, at most kFailedRunsShown of them; nothing when there are none
 void print_failed_runs(std::ostream& out, const GridPlan& plan, const std::map<RunKey, std::string>& failed);
 inline constexpr std::size_t kFailedRunsShown = 50;
+
+// the database's stale runs of the grid's envs and optimizers (stale_runs_of_file), one line per
+// env, optimizer and reason; nothing when there are none
+void print_stale_runs(std::ostream& out, const std::vector<StaleRuns>& stale);
+
+// the (env, optimizer) pairs of a grid, for stale_runs_of_file
+std::set<std::pair<std::string, std::string>> grid_pairs(const std::vector<RunSpec>& grid);
 
 }  // namespace dsb

@@ -16,6 +16,7 @@
 #include "harness/command.hpp"
 #include "harness/point_text.hpp"
 #include "harness/output_path.hpp"
+#include "harness/results_versions.hpp"
 #include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
 #include "render/encode.hpp"
@@ -26,12 +27,21 @@ BestRun best_run_of(const std::string& db_path, const std::string& env) {
   check_database_path("--best-of", db_path, true);
   try {
     Database db(db_path, Database::Mode::read_only);
-    check_schema(db);
-    Statement q(db.handle(),
-                "SELECT optimizer, seed, best_loss, best_x FROM runs WHERE env=? AND status='done' AND "
-                "best_loss IS NOT NULL AND best_x IS NOT NULL ORDER BY best_loss ASC, run_id ASC LIMIT 1");
+    const int schema = check_schema(db);
+    // the best done run whose results versions are this binary's (a stale one is another code's)
+    Statement q(db.handle(), std::string("SELECT optimizer, seed, best_loss, best_x, ") +
+                                 (schema >= 5 ? "results_versions" : "''") +
+                                 " FROM runs WHERE env=? AND status='done' AND best_loss IS NOT NULL AND best_x IS NOT "
+                                 "NULL ORDER BY best_loss ASC, run_id ASC");
     q.bind(1, env);
-    if (!q.step()) throw UsageError(fmt::format("--best-of: '{}' holds no done run of env '{}'", db_path, env));
+    bool found = false, stale_only = false;
+    while (!found && q.step()) {
+      found = stale_reason(env, q.column_text(0), stored_results_versions(q.column_text(4))).empty();
+      stale_only = stale_only || !found;
+    }
+    if (!found)
+      throw UsageError(fmt::format("--best-of: '{}' holds no done run of env '{}'{}", db_path, env,
+                                   stale_only ? " made by this binary's results versions (only stale ones)" : ""));
     BestRun r{q.column_text(0), q.column_int(1), q.column_double(2), ""};
     // best_x is a JSON array of numbers
     const auto x = nlohmann::json::parse(q.column_text(3));

@@ -8,6 +8,7 @@
 #include <map>
 #include <ostream>
 #include <sstream>
+#include <tuple>
 
 #include <filesystem>
 
@@ -20,9 +21,15 @@ namespace dsb {
 
 std::string ResultRow::csv() const {
   std::ostringstream s;
-  s << env << ',' << optimizer << ',' << seed << ',' << budget << ',' << env_config_hash << ','
-    << opt_config_hash << ',' << episode << ',' << loss;
+  s << env << ',' << optimizer << ',' << seed << ',' << budget << ',' << env_config_hash << ',' << opt_config_hash
+    << ',' << versions.env << ',' << versions.optimizer << ',' << versions.run << ',' << episode << ',' << loss;
   return s.str();
+}
+
+std::int64_t ResultTable::stale_runs() const {
+  std::int64_t n = 0;
+  for (const auto& s : stale) n += s.runs;
+  return n;
 }
 
 namespace {
@@ -55,18 +62,51 @@ bool parse_int(const std::string& s, T& v) {
 
 }  // namespace
 
-std::vector<ResultRow> read_result_table(Database& db) {
-  Statement q(db.handle(), R"sql(
-    SELECT r.env, r.optimizer, r.seed, r.budget, r.env_config_hash, r.opt_config_hash, e.episode, e.loss
-    FROM runs r JOIN evals e USING(run_id) WHERE r.status = 'done'
-    ORDER BY r.env, r.optimizer, r.seed, r.budget, e.episode)sql");
-  std::vector<ResultRow> rows;
-  while (q.step())
-    rows.push_back({q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)),
-                    q.column_int(3), q.column_text(4), q.column_text(5), q.column_int(6),
-                    format_loss(q.column_double(7))});
-  std::stable_sort(rows.begin(), rows.end(), row_less);
-  return rows;
+ResultTable read_result_table(Database& db, bool include_stale) {
+  const int version = check_schema(db);
+  const std::string versions = version >= 5 ? "r.results_versions" : "''";
+  ResultTable table;
+  std::map<std::tuple<std::string, std::string, std::string>, std::int64_t> stale_runs;  // (env, optimizer, reason)
+  {
+    // the stale done runs, counted once each
+    Statement q(db.handle(), std::string("SELECT env, optimizer, ") + (version >= 5 ? "results_versions" : "''") +
+                                 ", count(*) FROM runs r WHERE status = 'done' GROUP BY 1, 2, 3");
+    while (q.step()) {
+      const std::string why = stale_reason(q.column_text(0), q.column_text(1), stored_results_versions(q.column_text(2)));
+      if (!why.empty()) stale_runs[{q.column_text(0), q.column_text(1), why}] += q.column_int(3);
+    }
+  }
+  for (const auto& [k, n] : stale_runs) table.stale.push_back({std::get<0>(k), std::get<1>(k), std::get<2>(k), n});
+  Statement q(db.handle(), "SELECT r.env, r.optimizer, r.seed, r.budget, r.env_config_hash, r.opt_config_hash, " +
+                               versions + ", e.episode, e.loss FROM runs r JOIN evals e USING(run_id) "
+                               "WHERE r.status = 'done' ORDER BY r.env, r.optimizer, r.seed, r.budget, e.episode");
+  std::map<std::pair<std::string, std::string>, bool> stale_of;  // (env, optimizer + versions) -> stale
+  while (q.step()) {
+    ResultRow row{q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)),
+                  q.column_int(3), q.column_text(4), q.column_text(5), stored_results_versions(q.column_text(6)),
+                  q.column_int(7), format_loss(q.column_double(8))};
+    const auto at = std::make_pair(row.env, row.optimizer + "\n" + q.column_text(6));
+    auto it = stale_of.find(at);
+    if (it == stale_of.end())
+      it = stale_of.emplace(at, !stale_reason(row.env, row.optimizer, row.versions).empty()).first;
+    row.stale = it->second;
+    if (row.stale && !include_stale) continue;
+    table.rows.push_back(std::move(row));
+  }
+  std::stable_sort(table.rows.begin(), table.rows.end(), row_less);
+  return table;
+}
+
+std::string stale_note(const ResultTable& table, bool included) {
+  if (table.stale.empty()) return {};
+  std::string text = (included ? "included " : "left out ") + std::to_string(table.stale_runs()) +
+                     " stale done runs (made by other results versions" +
+                     (included ? ", marked stale = 1" : "; --include-stale shows them") + "):";
+  for (std::size_t i = 0; i < table.stale.size(); ++i) {
+    const auto& s = table.stale[i];
+    text += (i ? "; " : " ") + s.env + " / " + s.optimizer + ": " + std::to_string(s.runs) + " (" + s.reason + ")";
+  }
+  return text;
 }
 
 std::vector<ResultRow> read_result_csv(const std::string& path) {
@@ -78,7 +118,10 @@ std::vector<ResultRow> read_result_csv(const std::string& path) {
   }
   std::string line;
   if (!std::getline(in, line) || line != kResultTableHeader)
-    throw BaselineError("baseline '" + path + "' line 1: header must be '" + kResultTableHeader + "'");
+    throw BaselineError("baseline '" + path + "' line 1: header must be '" + kResultTableHeader + "'" +
+                        (line == "env,optimizer,seed,budget,env_config_hash,opt_config_hash,episode,loss"
+                             ? " (this is a table from before results versions: regenerate it)"
+                             : ""));
   std::vector<ResultRow> rows;
   for (int number = 2; std::getline(in, line); ++number) {
     if (line.empty()) continue;
@@ -86,16 +129,22 @@ std::vector<ResultRow> read_result_csv(const std::string& path) {
     auto bad = [&](const std::string& why) {
       return BaselineError("baseline '" + path + "' line " + std::to_string(number) + ": " + why);
     };
-    if (f.size() != 8) throw bad("expected 8 fields, got " + std::to_string(f.size()));
+    if (f.size() != 11) throw bad("expected 11 fields, got " + std::to_string(f.size()));
     ResultRow r;
     r.env = f[0];
     r.optimizer = f[1];
     r.env_config_hash = f[4];
     r.opt_config_hash = f[5];
-    r.loss = f[7];
+    r.loss = f[10];
     if (!parse_int(f[2], r.seed)) throw bad("seed '" + f[2] + "' is not an integer");
     if (!parse_int(f[3], r.budget)) throw bad("budget '" + f[3] + "' is not an integer");
-    if (!parse_int(f[6], r.episode)) throw bad("episode '" + f[6] + "' is not an integer");
+    if (!parse_int(f[6], r.versions.env) || r.versions.env < 0)
+      throw bad("env_version '" + f[6] + "' is not a whole number");
+    if (!parse_int(f[7], r.versions.optimizer) || r.versions.optimizer < 0)
+      throw bad("optimizer_version '" + f[7] + "' is not a whole number");
+    if (!parse_int(f[8], r.versions.run) || r.versions.run < 0)
+      throw bad("run_version '" + f[8] + "' is not a whole number");
+    if (!parse_int(f[9], r.episode)) throw bad("episode '" + f[9] + "' is not an integer");
     double v = 0.0;
     const auto [p, ec] = std::from_chars(r.loss.data(), r.loss.data() + r.loss.size(), v);
     if (r.loss != "nan" && (ec != std::errc() || p != r.loss.data() + r.loss.size()))
@@ -109,9 +158,9 @@ std::vector<ResultRow> read_result_csv(const std::string& path) {
   return rows;
 }
 
-void write_result_csv(const std::vector<ResultRow>& rows, std::ostream& out) {
-  out << kResultTableHeader << '\n';
-  for (const auto& r : rows) out << r.csv() << '\n';
+void write_result_csv(const std::vector<ResultRow>& rows, std::ostream& out, bool with_stale) {
+  out << kResultTableHeader << (with_stale ? std::string(",") + kResultTableStaleColumn : std::string()) << '\n';
+  for (const auto& r : rows) out << r.csv() << (with_stale ? (r.stale ? ",1" : ",0") : "") << '\n';
 }
 
 TableDiff compare_tables(const std::vector<ResultRow>& baseline, const std::vector<ResultRow>& current) {
@@ -126,7 +175,8 @@ TableDiff compare_tables(const std::vector<ResultRow>& baseline, const std::vect
     } else {
       const auto& b = baseline[i++];
       const auto& c = current[j++];
-      if (b.loss == c.loss && b.env_config_hash == c.env_config_hash && b.opt_config_hash == c.opt_config_hash)
+      if (b.loss == c.loss && b.env_config_hash == c.env_config_hash && b.opt_config_hash == c.opt_config_hash &&
+          b.versions == c.versions)
         ++d.equal;
       else
         d.changed.emplace_back(b, c);
@@ -146,6 +196,7 @@ void print_diff(const TableDiff& d, std::ostream& out, std::size_t limit) {
           << " episode " << b.episode << ": loss " << b.loss << " -> " << c.loss;
       if (b.env_config_hash != c.env_config_hash) out << ", env config " << b.env_config_hash << " -> " << c.env_config_hash;
       if (b.opt_config_hash != c.opt_config_hash) out << ", optimizer config " << b.opt_config_hash << " -> " << c.opt_config_hash;
+      if (b.versions != c.versions) out << ", results versions " << b.versions.text() << " -> " << c.versions.text();
       out << "\n";
     }
     if (d.changed.size() > limit) out << "  ... and " << d.changed.size() - limit << " more\n";
@@ -160,15 +211,53 @@ void print_diff(const TableDiff& d, std::ostream& out, std::size_t limit) {
   list("added in the database (not in the baseline):", d.added);
 }
 
-std::vector<ResultRow> result_table_of_file(const std::string& db_path) {
+ResultTable result_table_of_file(const std::string& db_path, bool include_stale) {
   check_database_path("--db", db_path, true);
   try {
     Database db(db_path, Database::Mode::read_only);
     require_harness_tables(db);  // a newer or foreign file: the message every command gives
-    return read_result_table(db);
+    return read_result_table(db, include_stale);
   } catch (const StoreError& e) {
     throw UsageError(std::string("--db: ") + e.what());
   }
+}
+
+std::size_t print_verdicts(const TableDiff& d, std::ostream& out, const std::string& regenerate) {
+  // per (env, optimizer): rows changed with equal versions (silent), and the versions seen changing
+  struct Pair {
+    std::int64_t silent = 0, bumped = 0;
+    ResultsVersions was, now;
+  };
+  std::map<std::pair<std::string, std::string>, Pair> pairs;
+  for (const auto& [b, c] : d.changed) {
+    Pair& p = pairs[{b.env, b.optimizer}];
+    if (b.versions == c.versions) {
+      ++p.silent;
+      p.now = c.versions;
+    } else {
+      ++p.bumped;
+      p.was = b.versions;
+      p.now = c.versions;
+    }
+  }
+  std::size_t lines = 0;
+  for (const auto& [k, p] : pairs) {
+    const auto& [env, optimizer] = k;
+    if (p.silent > 0) {
+      out << "check: " << env << " / " << optimizer << ": " << p.silent
+          << " results changed while its results versions did not (" << p.now.text()
+          << "): bump its results version (the env family's in envs/registry.cpp, the optimizer's in "
+             "optimizers/registry.cpp, or kRunCodeResultsVersion in harness/results_versions.hpp for the run code) "
+             "in the commit that changes them, then regenerate the baseline: "
+          << regenerate << "\n";
+      ++lines;
+    } else {
+      out << "check: " << env << " / " << optimizer << ": results versions " << p.was.text() << " -> " << p.now.text()
+          << " (" << p.bumped << " rows): regenerate the baseline: " << regenerate << "\n";
+      ++lines;
+    }
+  }
+  return lines;
 }
 
 }  // namespace dsb

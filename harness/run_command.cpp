@@ -49,6 +49,7 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
   if (!a.quiet) {
     std::ostringstream text;
     print_plan(text, plan, costs, plan_context(a, run));
+    print_stale_runs(text, stale_runs_of_file(a.db, grid_pairs(run.grid)));
     std::fputs(text.str().c_str(), stderr);
   }
   // cheapest runs first, so partial reports come early, each sharing group's lead pulled ahead of

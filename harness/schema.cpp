@@ -21,6 +21,10 @@ const std::string kSharingColumns = R"sql(  seed_free_episodes INTEGER,   -- epi
 // the old one). Columns added by migrations come last, so a migrated file and a new one have the
 // same column order.
 std::string runs_table_sql(const std::string& name, int version) {
+  const std::string versions_column =
+      version >= 5 ? "  results_versions TEXT NOT NULL DEFAULT '',  -- part of the run key (version 5): 'env E, optimizer O, run R'\n"
+                   : "";
+  const std::string key = version >= 5 ? ", results_versions" : "";
   return "CREATE TABLE " + name + R"sql((
   run_id INTEGER PRIMARY KEY,
   env TEXT NOT NULL,
@@ -43,9 +47,8 @@ std::string runs_table_sql(const std::string& name, int version) {
   git_sha TEXT,
   host TEXT,
   diagnostics TEXT,             -- JSON {"optimizer": {...}, "objective": {...}} (version 2)
-)sql" + (version >= 4 ? kSharingColumns : std::string()) +
-         R"sql(  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version));
-)sql";
+)sql" + (version >= 4 ? kSharingColumns : std::string()) + versions_column +
+         "  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version" + key + "));\n";
 }
 
 // The journal of a done run's seed-free episodes (version 4): what a run of another seed replays
@@ -116,6 +119,7 @@ std::vector<Migration> migrations() {
     std::string c = columns;
     return c.replace(c.find("{version}"), 9, version);
   };
+  const std::string v4_columns = ", seed_free_episodes, seed_free_calls, shared_episodes, shared_from_seed";
   return {
       {1, "ALTER TABLE runs ADD COLUMN diagnostics TEXT;"
           "ALTER TABLE evals ADD COLUMN metric REAL;"},
@@ -127,6 +131,12 @@ std::vector<Migration> migrations() {
           "ALTER TABLE runs ADD COLUMN seed_free_calls INTEGER;"
           "ALTER TABLE runs ADD COLUMN shared_episodes INTEGER NOT NULL DEFAULT 0;"
           "ALTER TABLE runs ADD COLUMN shared_from_seed INTEGER;" + std::string(kPrefixTable)},
+      // 4 -> 5: the run key gains results_versions ('' in every old row: made before versions, so
+      // stale for every binary that has them); the table is rebuilt as for 3, run_ids kept
+      {4, runs_table_sql("runs_v5", 5) + "INSERT INTO runs_v5(" + with("harness_version") + v4_columns +
+              ") SELECT " + with("harness_version") + v4_columns + " FROM runs;"
+              "DROP TABLE runs;"
+              "ALTER TABLE runs_v5 RENAME TO runs;"},
   };
 }
 
@@ -150,6 +160,7 @@ std::map<std::string, std::vector<std::string>> required_columns(int version) {
       cols["runs"].push_back(c);
     cols["prefix"] = {"run_id", "seq", "kind", "input_hash", "payload"};
   }
+  if (version >= 5) cols["runs"].push_back("results_versions");
   return cols;
 }
 

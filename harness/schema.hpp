@@ -12,6 +12,8 @@
 //      optimizer's first draw and their journal entries; NULL where unknown), runs.shared_episodes
 //      and shared_from_seed (episodes taken by replay from another seed's run), and the table
 //      `prefix`: the journal of a done run's seed-free episodes, which other seeds replay
+//   5  results versions (harness/results_versions.hpp): runs.results_versions, part of the run key
+//      (UNIQUE; '' for the rows of older files, which are therefore stale for this binary)
 // A later version adds one migration step (from = kSchemaVersion - 1) and bumps kSchemaVersion.
 #include <string>
 
@@ -19,7 +21,7 @@
 
 namespace dsb {
 
-inline constexpr int kSchemaVersion = 4;
+inline constexpr int kSchemaVersion = 5;
 
 // The schema_version of an opened file: 0 for an empty database (no tables at all). Throws
 // StoreError naming the file when it is not a harness database (tables but no meta table, no

@@ -24,7 +24,8 @@ std::string utc_now() {
 
 std::string RunKey::text() const {
   return env + "/" + optimizer + "/seed " + std::to_string(seed) + "/budget " + std::to_string(budget) +
-         "/config " + env_config_hash + "," + opt_config_hash + "/version " + harness_version;
+         "/config " + env_config_hash + "," + opt_config_hash + "/version " + harness_version + "/results " +
+         (versions.text().empty() ? std::string("unversioned") : versions.text());
 }
 
 Store::Store(const std::string& path, Provenance provenance)
@@ -72,11 +73,11 @@ std::set<RunKey> Store::done_keys() {
   std::lock_guard lock(mutex_);
   std::set<RunKey> keys;
   Statement q(db_.handle(),
-              "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version FROM runs "
-              "WHERE status='done'");
+              "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, results_versions "
+              "FROM runs WHERE status='done'");
   while (q.step())
-    keys.insert({q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)),
-                 q.column_int(3), q.column_text(4), q.column_text(5), q.column_text(6)});
+    keys.insert({q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
+                 q.column_text(4), q.column_text(5), q.column_text(6), stored_results_versions(q.column_text(7))});
   return keys;
 }
 
@@ -84,11 +85,13 @@ namespace {
 
 // the group of a run: its key but the seed, as SQL over runs (7 parameters from `first`)
 const char* kGroupSql =
-    "env=? AND optimizer=? AND budget=? AND env_config_hash=? AND opt_config_hash=? AND harness_version=?";
+    "env=? AND optimizer=? AND budget=? AND env_config_hash=? AND opt_config_hash=? AND harness_version=? AND "
+    "results_versions=?";
 
 void bind_group(Statement& st, int first, const RunKey& key) {
   st.bind(first, key.env).bind(first + 1, key.optimizer).bind(first + 2, key.budget)
-      .bind(first + 3, key.env_config_hash).bind(first + 4, key.opt_config_hash).bind(first + 5, key.harness_version);
+      .bind(first + 3, key.env_config_hash).bind(first + 4, key.opt_config_hash).bind(first + 5, key.harness_version)
+      .bind(first + 6, key.versions.text());
 }
 
 std::vector<ReplayEntry> read_journal(Database& db, const std::string& table, std::int64_t run_id, std::int64_t calls) {
@@ -122,7 +125,7 @@ Donor find_donor(Database& db, const RunKey& key) {
                                        "FROM runs r WHERE ") +
                                kGroupSql + " AND seed<>? AND status IN ('done', 'running') ORDER BY seed");
   bind_group(q, 1, key);
-  q.bind(7, static_cast<std::int64_t>(key.seed));
+  q.bind(8, static_cast<std::int64_t>(key.seed));
   while (q.step()) {
     Donor d{q.column_int(0), 0, 0, static_cast<int>(q.column_int(1)), ""};
     const bool known = !q.column_is_null(3);
@@ -157,9 +160,10 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
   // an earlier attempt of this run left 'running': keep what it committed (resume by replay)
   Statement find(db_.handle(),
                  "SELECT run_id, status FROM runs WHERE env=? AND optimizer=? AND seed=? AND budget=? AND "
-                 "env_config_hash=? AND opt_config_hash=? AND harness_version=?");
+                 "env_config_hash=? AND opt_config_hash=? AND harness_version=? AND results_versions=?");
   find.bind(1, key.env).bind(2, key.optimizer).bind(3, static_cast<std::int64_t>(key.seed)).bind(4, key.budget)
-      .bind(5, key.env_config_hash).bind(6, key.opt_config_hash).bind(7, key.harness_version);
+      .bind(5, key.env_config_hash).bind(6, key.opt_config_hash).bind(7, key.harness_version)
+      .bind(8, key.versions.text());
   const bool resumable = find.step() && find.column_text(1) == "running";
   if (resumable) {
     start.run_id = find.column_int(0);
@@ -192,9 +196,10 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
   std::snprintf(seed_hex, sizeof seed_hex, "%016llx", static_cast<unsigned long long>(rng_seed));
   Statement up(db_.handle(), R"sql(
     INSERT INTO runs(env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed,
-                     status, started_at, harness_version, git_sha, host)
-    VALUES (?, ?, ?, ?, ?, ?, ?, 'running', ?, ?, ?, ?)
-    ON CONFLICT(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version) DO UPDATE SET
+                     status, started_at, harness_version, git_sha, host, results_versions)
+    VALUES (?, ?, ?, ?, ?, ?, ?, 'running', ?, ?, ?, ?, ?)
+    ON CONFLICT(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, results_versions)
+    DO UPDATE SET
       status='running', episodes=0, failed_episodes=0, best_loss=NULL, best_x=NULL, wall_s=NULL,
       error=NULL, diagnostics=NULL, started_at=excluded.started_at, finished_at=NULL,
       git_sha=excluded.git_sha, host=excluded.host, seed_free_episodes=NULL, seed_free_calls=NULL,
@@ -203,7 +208,7 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
   up.bind(1, key.env).bind(2, key.optimizer).bind(3, static_cast<std::int64_t>(key.seed))
       .bind(4, key.budget).bind(5, key.env_config_hash).bind(6, key.opt_config_hash)
       .bind(7, std::string(seed_hex)).bind(8, utc_now()).bind(9, key.harness_version)
-      .bind(10, provenance_.git_sha).bind(11, provenance_.host);
+      .bind(10, provenance_.git_sha).bind(11, provenance_.host).bind(12, key.versions.text());
   if (!up.step()) throw StoreError("sqlite: no run_id returned");
   start.run_id = up.column_int(0);
   up.reset();
@@ -296,7 +301,8 @@ void Store::keep_seed_free_prefix(std::int64_t run_id, const RunResult& r) {
   const std::string others =
       "SELECT o.run_id FROM runs o JOIN runs me ON me.run_id=? AND o.run_id<>me.run_id AND o.env=me.env AND "
       "o.optimizer=me.optimizer AND o.budget=me.budget AND o.env_config_hash=me.env_config_hash AND "
-      "o.opt_config_hash=me.opt_config_hash AND o.harness_version=me.harness_version AND o.status='done' "
+      "o.opt_config_hash=me.opt_config_hash AND o.harness_version=me.harness_version AND "
+      "o.results_versions=me.results_versions AND o.status='done' "
       "WHERE EXISTS (SELECT 1 FROM prefix p WHERE p.run_id=o.run_id)";
   Statement longest(db_.handle(), "SELECT COALESCE(max(seed_free_calls), 0) FROM runs WHERE run_id IN (" + others + ")");
   longest.bind(1, run_id);

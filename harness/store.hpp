@@ -21,25 +21,28 @@
 
 #include "harness/file_lock.hpp"
 #include "harness/replay.hpp"
+#include "harness/results_versions.hpp"
 #include "harness/run_spec.hpp"
 #include "harness/schema.hpp"
 #include "harness/sqlite_db.hpp"
 
 namespace dsb {
 
-// the UNIQUE key of a run: runs of another harness version or config are other runs
+// the UNIQUE key of a run: runs of another harness version, config or results versions are other
+// runs (a stored run whose results versions are not this binary's is stale: harness/results_versions.hpp)
 struct RunKey {
   std::string env, optimizer;
   int seed;
   std::int64_t budget;
   std::string env_config_hash, opt_config_hash;
   std::string harness_version;
+  ResultsVersions versions = {};
   auto tie() const {
-    return std::tie(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version);
+    return std::tie(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, versions);
   }
   bool operator<(const RunKey& o) const { return tie() < o.tie(); }
   bool operator==(const RunKey& o) const { return tie() == o.tie(); }
-  // "env/optimizer/seed S/budget B/config E,O/version V", for messages
+  // "env/optimizer/seed S/budget B/config E,O/version V/results env E, optimizer O, run R", for messages
   std::string text() const;
 };
 

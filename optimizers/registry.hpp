@@ -22,6 +22,10 @@ enum class SeedUse {
 struct OptimizerEntry {
   std::string name;
   std::string description;
+  // The results version (docs/database.md "Results versions"): starts at 1, and the commit that
+  // changes what this optimizer does on any env (its proposals, its stopping, its defaults) bumps
+  // it. Part of every run key, so runs of an older version are never resumed or counted as done.
+  int results_version = 1;
   bool needs_gradient = false;
   std::function<std::unique_ptr<Optimizer>()> make;
   bool needs_rl = false;  // drives the env's per-step view (Objective::rl_*): paired only with RL envs

@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 #include <sqlite3.h>
 
+#include "harness/result_table.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
 
@@ -184,7 +185,7 @@ TEST_F(ExportIoh, CsvIsTheDefaultAndUnchanged) {
   ASSERT_EQ(harness("export --db " + db + " --out " + path("b.csv") + " --format csv").code, 0);
   const std::string a = testing::read_file(path("a.csv"));
   EXPECT_EQ(a, testing::read_file(path("b.csv")));
-  EXPECT_EQ(a.rfind("env,optimizer,seed,budget,env_config_hash,opt_config_hash,episode,loss\n", 0), 0u);
+  EXPECT_EQ(a.rfind(std::string(kResultTableHeader) + "\n", 0), 0u);
   EXPECT_EQ(std::count(a.begin(), a.end(), '\n'), 1 + 8 * 20);
 }
 

@@ -1,6 +1,7 @@
 // Regression gate on result tables: `harness export` writes the baseline format, `harness check`
 // passes on equal tables and fails with a readable diff when one loss differs in its last digit,
-// a row is missing or a row is added; a malformed baseline exits 2.
+// a row is missing or a row is added; a malformed baseline exits 2; a result that changed while
+// its results versions did not is named as a silent change.
 #include <sys/wait.h>
 
 #include <filesystem>
@@ -90,22 +91,64 @@ TEST_F(ResultTable, MissingAndAddedRowsFail) {
   EXPECT_NE(out_.find(removed), std::string::npos) << out_;
 
   v = lines();
-  v.push_back("branin,random,9,7,aaaa,bbbb,0,1.5");
+  v.push_back("branin,random,9,7,aaaa,bbbb,1,1,1,0,1.5");
   write(v);
   EXPECT_EQ(check(), 1);
   EXPECT_NE(out_.find("1 missing"), std::string::npos) << out_;  // in the baseline, not the database
 }
 
 TEST_F(ResultTable, MalformedBaselineExitsTwoWithOneLine) {
-  for (const std::string& bad : std::vector<std::string>{"not,a,header\n", std::string(kResultTableHeader) + "\nbranin,random,x,7,a,b,0,1.5\n",
-                                std::string(kResultTableHeader) + "\nbranin,random,0,7,a,b,0\n",
-                                std::string(kResultTableHeader) + "\nbranin,random,0,7,a,b,0,1.5zz\n"}) {
+  const std::string h = std::string(kResultTableHeader) + "\n";
+  for (const std::string& bad : std::vector<std::string>{"not,a,header\n", h + "branin,random,x,7,a,b,1,1,1,0,1.5\n",
+                                h + "branin,random,0,7,a,b,1,1,1,0\n", h + "branin,random,0,7,a,b,1,1,1,0,1.5zz\n",
+                                h + "branin,random,0,7,a,b,1,x,1,0,1.5\n",
+                                // a table from before results versions
+                                "env,optimizer,seed,budget,env_config_hash,opt_config_hash,episode,loss\n"}) {
     { std::ofstream(csv_) << bad; }
     EXPECT_EQ(check(), 2) << bad;
     EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << err_;
     EXPECT_NE(err_.find("base.csv"), std::string::npos) << err_;
   }
   EXPECT_EQ(run("check --db " + (dir_ / "none.sqlite").string() + " --baseline " + csv_), 2);
+}
+
+// The gate catches a silent change: one stored loss changed in a copy of the baseline, its
+// versions unchanged, is a result that changed without a version bump; the message names the env
+// and the optimizer, says "bump its results version" and gives the command that regenerates the
+// baseline. A row whose versions differ asks only for the baseline to be regenerated.
+TEST_F(ResultTable, ASilentChangeNamesTheEnvAndOptimizerAndAsksForABump) {
+  auto v = lines();
+  const auto rows = read_result_csv(csv_);
+  std::size_t at = 0;
+  for (std::size_t k = 1; k < v.size(); ++k)
+    if (v[k].rfind("sphere-2,cmaes,", 0) == 0) at = k;
+  ASSERT_GT(at, 0u);
+  v[at] = v[at].substr(0, v[at].rfind(',') + 1) + "0.125";  // one loss of sphere-2 / cmaes
+  write(v);
+  EXPECT_EQ(check(), 1);
+  EXPECT_NE(out_.find("check: sphere-2 / cmaes: 1 results changed while its results versions did not (env 1, "
+                      "optimizer 1, run 1): bump its results version"),
+            std::string::npos)
+      << out_;
+  EXPECT_NE(out_.find("then regenerate the baseline: harness export --db " + db_ + " --out " + csv_ + " --force"),
+            std::string::npos)
+      << out_;
+  EXPECT_EQ(out_.find("branin /"), std::string::npos) << out_;  // only the pair that changed
+
+  // the same row with another optimizer version in the baseline: a bump, so a regeneration
+  v = lines();
+  auto f = v[at];
+  // fields: env,optimizer,seed,budget,env hash,opt hash,env_version,optimizer_version,...
+  std::size_t comma = 0;
+  for (int k = 0; k < 7; ++k) comma = f.find(',', comma) + 1;
+  v[at] = f.substr(0, comma) + "7" + f.substr(f.find(',', comma));
+  write(v);
+  EXPECT_EQ(check(), 1);
+  EXPECT_NE(out_.find("check: sphere-2 / cmaes: results versions env 1, optimizer 7, run 1 -> env 1, optimizer 1, "
+                      "run 1 (1 rows): regenerate the baseline"),
+            std::string::npos)
+      << out_;
+  EXPECT_EQ(out_.find("bump its results version"), std::string::npos) << out_;
 }
 
 }  // namespace

@@ -73,7 +73,7 @@ TEST(ConfigHash, CanonicalJsonSortsKeysAndPrintsRoundTripDoubles) {
 TEST_F(StoreTest, CreatesTheSchemaInWalModeWithItsVersion) {
   Store store(path_, {"0.1.0", "abc", "host"});
   EXPECT_EQ(query("PRAGMA journal_mode"), "wal;");
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "4;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "5;");
   EXPECT_EQ(query("SELECT name FROM sqlite_master WHERE type='table' ORDER BY name"),
             "configs;evals;meta;prefix;replay;runs;");
 }
@@ -122,14 +122,14 @@ TEST_F(StoreTest, AnUnfinishedRunIsNotDoneAfterReopening) {
 TEST_F(StoreTest, RefusesANewerSchemaVersionWithoutTouchingTheFile) {
   {
     Store store(path_, {"0.1.0", "abc", "host"});
-    store.db().exec("UPDATE meta SET value='5' WHERE key='schema_version'");
+    store.db().exec("UPDATE meta SET value='6' WHERE key='schema_version'");
   }
   const std::string before = testing::read_file(path_);
   try {
     Store again(path_, {"0.1.0", "abc", "host"});
-    FAIL() << "a schema_version 5 file was opened";
+    FAIL() << "a schema_version 6 file was opened";
   } catch (const StoreError& e) {
-    EXPECT_NE(std::string(e.what()).find("schema_version 5, newer than this harness (4)"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("schema_version 6, newer than this harness (5)"), std::string::npos)
         << e.what();
   }
   EXPECT_EQ(testing::read_file(path_), before);
@@ -270,16 +270,20 @@ TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
 
   {
     Store store(path_, {"0.2.0", "def", "host"});
-    // what was done stays done: the migrated file resumes like any other
-    EXPECT_EQ(store.done_keys().size(), 1u);
+    // what was done stays in the file, under a key without results versions: made before them, so
+    // stale for this binary, whose keys carry its versions (docs/database.md "Results versions")
+    const auto done = store.done_keys();
+    ASSERT_EQ(done.size(), 1u);
+    EXPECT_EQ(done.begin()->versions, ResultsVersions{});
   }
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "4;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "5;");
   EXPECT_EQ(exact_rows(path_, runs_sql), runs_before);
   EXPECT_EQ(exact_rows(path_, evals_sql), evals_before);
   EXPECT_EQ(exact_rows(path_, configs_sql), configs_before);
   // the new columns, after the old ones, NULL in old rows (shared_episodes 0: nothing was shared)
   EXPECT_EQ(query("SELECT name FROM pragma_table_info('runs') WHERE cid >= 20"),
-            "diagnostics;seed_free_episodes;seed_free_calls;shared_episodes;shared_from_seed;");
+            "diagnostics;seed_free_episodes;seed_free_calls;shared_episodes;shared_from_seed;results_versions;");
+  EXPECT_EQ(query("SELECT count(*) FROM runs WHERE results_versions = ''"), "3;");
   EXPECT_EQ(query("SELECT count(*) FROM runs WHERE seed_free_episodes IS NULL AND seed_free_calls IS NULL AND "
                   "shared_episodes = 0 AND shared_from_seed IS NULL"),
             "3;");
@@ -485,7 +489,7 @@ TEST_F(StoreTest, ASqliteFileWithoutTablesIsNotStamped) {
 TEST_F(StoreTest, AnEmptyFileBecomesANewDatabase) {
   { std::ofstream touch(path_); }
   Store store(path_, {});
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "4;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "5;");
 }
 
 TEST_F(StoreTest, UnwritablePathThrowsNamingIt) {

@@ -22,6 +22,10 @@ struct EnvFamily {
   // the options its envs take (--set ENV.KEY=VALUE; empty: none), and the factory that applies
   // them to a member name (called with keys of `options` only, at least one)
   std::vector<EnvOptionInfo> options = {};
+  // The results version of every member (docs/database.md "Results versions"), set beside the
+  // family's registration line in envs/registry.cpp: the commit that changes any member's losses,
+  // gradients, RL view or config bumps it. Part of every run key.
+  int results_version = 1;
   std::function<std::unique_ptr<Env>(const std::string& name, const EnvOptions& options)> make_with_options = {};
 };
 

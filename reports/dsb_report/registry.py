@@ -22,6 +22,21 @@ class Registry:
     source: str      # the harness binary asked
     envs: dict       # name -> (differentiable, rl)
     optimizers: dict  # name -> (needs gradient, needs rl), in `harness list` order
+    # results versions: {"env": name -> version, "optimizer": name -> version, "run": version}
+    versions: dict = None
+
+    def current_versions(self, env: str, optimizer: str):
+        """The results versions (env, optimizer, run) this harness gives a run of env and
+        optimizer (an env variant has its listed env's, ext:NAME the ext: adapter's), or None
+        when it does not know the env or the optimizer or lists no versions."""
+        if not self.versions or self.versions.get("run") is None:
+            return None
+        entry = self.env_entry(env)
+        opt = "ext:NAME" if optimizer.startswith("ext:") else optimizer
+        e, o = self.versions["env"].get(entry), self.versions["optimizer"].get(opt)
+        if e is None or o is None:
+            return None
+        return (e, o, self.versions["run"])
 
     def env_entry(self, name: str):
         """The listed env `name` is, or is a variant of: fluid-hN and plb-NAME-hN (the first N env
@@ -78,16 +93,31 @@ def _table(lines: list, header: str) -> list:
     return rows
 
 
+def _version(word: str, where: str) -> int:
+    if not word.isdigit():
+        raise RegistryError(f"`harness list`: expected a results version in '{where}', got '{word}'")
+    return int(word)
+
+
 def parse(text: str, source: str = "harness list") -> Registry:
-    """Registry from the text of `harness list`: the env table (name, dim, differentiable, rl,
-    description) and the optimizer table (name, needs gradient, needs rl, seed use, description)."""
+    """Registry from the text of `harness list`: the env table (name, results version, dim,
+    differentiable, rl, description), the optimizer table (name, results version, needs gradient,
+    needs rl, seed use, description) and the line 'run code version N'."""
     lines = text.splitlines()
-    envs = {r[0]: (_yes(r[2], r[0]), _yes(r[3], r[0])) for r in _table(lines, "env") if len(r) >= 4}
-    opts = {r[0]: (_yes(r[1], r[0]), _yes(r[2], r[0])) for r in _table(lines, "optimizer")
-            if len(r) >= 3 and ":" not in r[0]}     # ext:NAME is a placeholder, not an optimizer
+    env_rows = [r for r in _table(lines, "env") if len(r) >= 5]
+    opt_rows = [r for r in _table(lines, "optimizer") if len(r) >= 4]
+    envs = {r[0]: (_yes(r[3], r[0]), _yes(r[4], r[0])) for r in env_rows}
+    opts = {r[0]: (_yes(r[2], r[0]), _yes(r[3], r[0])) for r in opt_rows
+            if ":" not in r[0]}     # ext:NAME is a placeholder, not an optimizer
     if not envs or not opts:
         raise RegistryError("`harness list` lists no env or no optimizer")
-    return Registry(source, envs, opts)
+    run = next((line.split()[-1] for line in lines if line.startswith("run code version ")), None)
+    versions = {
+        "env": {r[0]: _version(r[1], r[0]) for r in env_rows},
+        "optimizer": {r[0]: _version(r[1], r[0]) for r in opt_rows},
+        "run": _version(run, "run code version") if run is not None else None,
+    }
+    return Registry(source, envs, opts, versions)
 
 
 def load(harness: str) -> Registry:

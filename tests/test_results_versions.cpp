@@ -1,0 +1,142 @@
+// Results versions (harness/results_versions.hpp, docs/database.md "Results versions"): every stored
+// run names the versions of the code that made it, and a binary never resumes, counts as done,
+// exports or checks as its own a run of other versions. The database is rewritten the way an
+// older binary would have left it (its runs' versions set to other numbers, or to none as a
+// schema-4 file has), through the real program on real files.
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "harness/result_table.hpp"
+#include "harness/results_versions.hpp"
+#include "support/harness_process.hpp"
+#include "support/sqlite_rows.hpp"
+#include "support/temp_dir_test.hpp"
+
+namespace dsb {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::read_file;
+using testing::scalar;
+
+const std::string kGrid = "--env sphere-2,branin --optimizer random,cmaes --seeds 2 --jobs 1 --quiet";
+
+class ResultsVersionsTest : public testing::TempDirTest {
+ protected:
+  testing::HarnessResult harness(const std::string& args, const std::string& env_prefix = "") {
+    return testing::run_harness(dir_, args, env_prefix);
+  }
+  // a database with the 8 runs of kGrid at budget 12 done, and one run of budget 30 stopped by
+  // SIGTERM after 5 episodes (left 'running' with its journal: resumable by this binary)
+  std::string mixed_db() {
+    const std::string db = path("v.sqlite");
+    EXPECT_EQ(harness(kGrid + " --budget 12 --db " + db).code, 0);
+    const auto stopped = harness("--env sphere-2 --optimizer cmaes --seeds 1 --budget 30 --quiet --db " + db,
+                                 "DSB_FAULT_INJECTION=signal-in-run DSB_FAULT_AT_EPISODE=5 DSB_FAULT_SIGNAL=15");
+    EXPECT_EQ(stopped.code, 143) << stopped.err;
+    EXPECT_EQ(scalar(db, "SELECT status || ' ' || (episodes >= 5) FROM runs WHERE budget = 30"), "running 1");
+    return db;
+  }
+};
+
+TEST(ResultsVersions, TextRoundTripsAndTheCurrentOnesAreThoseOfTheRegistrations) {
+  const ResultsVersions v{2, 1, 3};
+  EXPECT_EQ(v.text(), "env 2, optimizer 1, run 3");
+  EXPECT_EQ(parse_results_versions(v.text()), v);
+  EXPECT_EQ(parse_results_versions(""), ResultsVersions{});
+  EXPECT_THROW(parse_results_versions("env 2, optimizer 1"), std::invalid_argument);
+  EXPECT_THROW(parse_results_versions("env 02, optimizer 1, run 3"), std::invalid_argument);
+  EXPECT_EQ(stored_results_versions("garbage"), ResultsVersions{});
+  const ResultsVersions now = current_results_versions("plb-pinch-h5", "boleap");
+  EXPECT_GE(now.env, 1);
+  EXPECT_GE(now.optimizer, 1);
+  EXPECT_EQ(now.run, kRunCodeResultsVersion);
+  // a variant has its env's version, an external optimizer the adapter's
+  EXPECT_EQ(current_results_versions("plb-pinch", "boleap"), now);
+  EXPECT_EQ(current_results_versions("sphere-2", "ext:mine").optimizer, kExtResultsVersion);
+  EXPECT_EQ(current_results_versions("no-such-env", "random").env, 0);
+  EXPECT_EQ(stale_reason("sphere-2", "random", current_results_versions("sphere-2", "random")), "");
+  EXPECT_EQ(stale_reason("sphere-2", "random", {}), "made before results versions (a database of schema 4 or older)");
+  const ResultsVersions older{now.env, now.optimizer - 1, now.run};
+  EXPECT_EQ(stale_reason("plb-pinch", "boleap", older),
+            "optimizer boleap version " + std::to_string(now.optimizer - 1) + ", this binary's " +
+                std::to_string(now.optimizer));
+}
+
+TEST_F(ResultsVersionsTest, ADatabaseOfOtherVersionsResumesNothingAndEveryCommandSaysSo) {
+  const std::string db = mixed_db();
+  ASSERT_EQ(harness("export --db " + db + " --out " + path("before.csv")).code, 0);
+  // an older binary: another optimizer version for cmaes, no versions at all for random
+  const ResultsVersions now = current_results_versions("sphere-2", "cmaes");
+  const ResultsVersions older{now.env, now.optimizer + 1, now.run};
+  testing::execute(db, "UPDATE runs SET results_versions='" + older.text() + "' WHERE optimizer='cmaes'");
+  testing::execute(db, "UPDATE runs SET results_versions='' WHERE optimizer='random'");
+  const auto stale_rows = testing::rows(db, "SELECT * FROM runs ORDER BY run_id");
+  const auto stale_evals = testing::rows(db, "SELECT * FROM evals ORDER BY run_id, episode");
+
+  // plan: nothing done, every stored run stale, by env, optimizer and reason
+  const auto plan = harness("plan " + kGrid + " --budget 12 --db " + db);
+  EXPECT_EQ(plan.code, 0) << plan.err;
+  EXPECT_NE(plan.out.find("8 runs in the grid; 0 already done"), std::string::npos) << plan.out;
+  EXPECT_NE(plan.out.find("stale: 9 stored runs of this grid's envs and optimizers (8 done, 1 unfinished)"),
+            std::string::npos)
+      << plan.out;
+  EXPECT_NE(plan.out.find("sphere-2 / cmaes: 2 done, 1 unfinished: optimizer cmaes version " +
+                          std::to_string(older.optimizer) + ", this binary's " + std::to_string(now.optimizer)),
+            std::string::npos)
+      << plan.out;
+  EXPECT_NE(plan.out.find("branin / random: 2 done, 0 unfinished: made before results versions"), std::string::npos)
+      << plan.out;
+
+  // export and check leave them out and say so; --include-stale shows them, marked
+  const auto ex = harness("export --db " + db + " --out " + path("now.csv"));
+  EXPECT_EQ(ex.code, 0) << ex.err;
+  EXPECT_EQ(read_file(path("now.csv")), std::string(kResultTableHeader) + "\n");
+  EXPECT_NE(ex.err.find("left out 8 stale done runs"), std::string::npos) << ex.err;
+  const auto all = harness("export --db " + db + " --include-stale --out " + path("all.csv"));
+  EXPECT_EQ(all.code, 0) << all.err;
+  EXPECT_NE(read_file(path("all.csv")).find(std::string(kResultTableHeader) + ",stale\n"), std::string::npos);
+  EXPECT_NE(read_file(path("all.csv")).find(",1\n"), std::string::npos);
+  const auto ioh = harness("export --db " + db + " --format ioh --out " + path("ioh"));
+  EXPECT_NE(ioh.err.find("left out 8 stale runs"), std::string::npos) << ioh.err;
+  const auto check = harness("check --db " + db + " --baseline " + path("before.csv"));
+  EXPECT_EQ(check.code, 1);
+  EXPECT_NE(check.out.find("left out 8 stale done runs"), std::string::npos) << check.out;
+  EXPECT_NE(check.out.find("0 rows equal"), std::string::npos) << check.out;
+
+  // the grid resumes nothing of them: all 8 run again beside them, the stopped one starts over
+  const auto again = harness(kGrid + " --budget 12 --db " + db);
+  EXPECT_EQ(again.code, 0) << again.err;
+  EXPECT_NE(again.err.find("8 runs in the grid: 0 already done, 8 done now"), std::string::npos) << again.err;
+  const auto resumed = harness("--env sphere-2 --optimizer cmaes --seeds 1 --budget 30 --quiet --db " + db);
+  EXPECT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_EQ(resumed.err.find("resumed"), std::string::npos) << resumed.err;
+  const std::string current = now.text();
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status='done' AND budget=30 AND results_versions='" +
+                           current + "'"),
+            "1");
+  // the stale runs are byte for byte as they were
+  EXPECT_EQ(testing::rows(db, "SELECT * FROM runs WHERE run_id <= 9 ORDER BY run_id"), stale_rows);
+  EXPECT_EQ(testing::rows(db, "SELECT * FROM evals WHERE run_id <= 9 ORDER BY run_id, episode"), stale_evals);
+  // and the current runs' table equals the first grid's, versions and all
+  ASSERT_EQ(harness("export --db " + db + " --out " + path("after.csv")).code, 0);
+  const auto recheck = harness("check --db " + db + " --baseline " + path("before.csv"));
+  EXPECT_EQ(recheck.code, 1);  // the budget-30 run is new: added rows, nothing changed
+  EXPECT_NE(recheck.out.find(" 0 changed, 0 missing"), std::string::npos) << recheck.out;
+}
+
+TEST_F(ResultsVersionsTest, MergeKeepsTheVersionsApart) {
+  const std::string a = path("a.sqlite"), b = path("b.sqlite");
+  ASSERT_EQ(harness(kGrid + " --budget 12 --db " + a).code, 0);
+  ASSERT_EQ(harness(kGrid + " --budget 12 --db " + b).code, 0);
+  testing::execute(b, "UPDATE runs SET results_versions=''");  // the same runs, from before versions
+  const auto m = harness("merge --into " + path("m.sqlite") + " " + a + " " + b);
+  ASSERT_EQ(m.code, 0) << m.err;
+  EXPECT_EQ(scalar(path("m.sqlite"), "SELECT count(*) FROM runs"), "16");
+  EXPECT_EQ(scalar(path("m.sqlite"), "SELECT count(*) FROM runs WHERE results_versions=''"), "8");
+}
+
+}  // namespace
+}  // namespace dsb
