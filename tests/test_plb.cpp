@@ -179,6 +179,17 @@ TEST(Plb, RlViewReplaysTheEpisodeAndTheMetricIsTheFinalSoftIou) {
   EXPECT_GT(iou, 0.0);
   EXPECT_LT(iou, 1.0);
   EXPECT_EQ(env.info().metric, "soft_iou");
+  // PlasticineLab's subsampling, x[::N // 200]: TripleMove's 9,999 particles give a stride of 49 and
+  // 205 particles (0, 49, ..., 9996), then 6 spheres' poses
+  const auto& triple = plb("plb-triplemove-h5");
+  auto rl3 = triple.make_rl();
+  EXPECT_EQ(rl3->observation_dim(), 205 * 6 + 6 * 7);
+  rl3->reset();
+  const auto o = rl3->observe();
+  ASSERT_EQ(o.size(), 205u * 6 + 6 * 7);
+  const auto& initial = triple.model().mpm.initial;
+  for (int i : {0, 1, 204})
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(o[6 * i + a], initial[49 * i].x[a]) << "observed particle " << i;
 }
 
 TEST(Plb, BadNamesAreRefused) {
