@@ -50,7 +50,12 @@ namespace {
 // the generated target (its file and the motion that made it), or a target file by its values'
 // hash (never its path: the same values from anywhere are the same target)
 nlohmann::json target_json(const PlbConfig& c, const nlohmann::json& reference) {
-  if (!c.target_file) return {{"file", "data/targets/plb-" + c.task + ".txt.gz"}, {"reference_motion", reference}};
+  if (!c.target_file) {
+    nlohmann::json j = {{"file", "data/targets/plb-" + c.task + ".txt.gz"}, {"reference_motion", reference}};
+    // a constructed target (rope's ring) in place of the reference motion's final state
+    if (const auto& how = find_plb_task(c.task)->construction; !how.empty()) j["construction"] = how;
+    return j;
+  }
   return {{"source", "a PlasticineLab-format .npy file (env option target)"},
           {"shape", c.mpm.grid},
           {"values_fnv1a64", c.target_file->hash}};
