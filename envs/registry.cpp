@@ -32,7 +32,7 @@ const std::vector<EnvFamily>& env_families() {
     add(cloth::swing_family(), 1);
     add(cloth::flip_family(), 1);
     add(mpm::fluid_family(), 1);
-    add(mpm::plb_family(), 1);
+    add(mpm::plb_family(), 2);  // 2: targets shaped like PlasticineLab's, TripleMove observes 205 particles
     for (auto& s : synthetic_families()) add(std::move(s), 1);  // sphere-D, ..., branin, hartmann6
     return f;
   }();

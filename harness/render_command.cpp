@@ -54,6 +54,26 @@ BestRun best_run_of(const std::string& db_path, const std::string& env) {
   }
 }
 
+namespace {
+
+// `render --target`: the env's target shape alone (Env::target_frames), one panel
+int render_target(const RenderArgs& a, const render::RenderOptions& options) {
+  if (!a.x.empty() || !a.best_of.empty()) throw UsageError("--target draws the env's target: it takes no --x or --best-of");
+  if (a.frames_given) throw UsageError("--target draws one picture: it takes no --frames");
+  const auto env = make_env(a.env);
+  if (!env->renderable()) throw UsageError(fmt::format("env '{}' is not simulated: nothing to render", a.env));
+  std::vector<Frame> frames = env->target_frames();
+  if (frames.empty()) throw UsageError(fmt::format("--target: env '{}' has no target shape to draw", a.env));
+  OutputFile file("--out", a.out, a.force);
+  const std::vector<unsigned char> bytes = render::encode_frames(frames, options);
+  file.stream().write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  file.commit();
+  std::cout << fmt::format("render: the target of {} -> {} ({} bytes)\n", a.env, a.out, bytes.size());
+  return 0;
+}
+
+}  // namespace
+
 int command_render(const RenderArgs& a) {
   // arguments that need no env: output format, counts, the source of x
   render::RenderOptions options;
@@ -62,7 +82,8 @@ int command_render(const RenderArgs& a) {
     throw UsageError(fmt::format("--out: '{}' must end in .png or .gif", a.out));
   if (a.frames < 1 || a.frames > 20) throw UsageError(fmt::format("--frames must be from 1 to 20, got {}", a.frames));
   if (a.width < 64 || a.width > 2000) throw UsageError(fmt::format("--width must be from 64 to 2000, got {}", a.width));
-  if (a.x.empty() == a.best_of.empty()) throw UsageError("render needs exactly one of --x and --best-of");
+  if (a.target) return render_target(a, options);
+  if (a.x.empty() == a.best_of.empty()) throw UsageError("render needs exactly one of --x, --best-of and --target");
   // the env, which must be simulated, and the point
   const auto env = make_env(a.env);
   if (!env->renderable()) throw UsageError(fmt::format("env '{}' is not simulated: nothing to render", a.env));
@@ -94,10 +115,16 @@ Command render_command() {
             app.add_option("--x", a->x, "comma-separated parameters in [-1, 1]");
             app.add_option("--best-of", a->best_of, "harness database: render the best_x of the env's best done run");
             app.add_option("--out", a->out, "FILE.png (frames side by side) or FILE.gif (animation)")->required();
-            app.add_option("--frames", a->frames, "time points from the start to the end (default 5)");
+            auto* frames = app.add_option("--frames", a->frames, "time points from the start to the end (default 5)");
             app.add_option("--width", a->width, "pixels per frame (default 320)");
             app.add_flag("--force", a->force, "write over an existing file (never over a database)");
-            return [a] { return command_render(*a); };
+            app.add_flag("--target", a->target,
+                         "draw the env's target shape alone, no rollout (plb-*: the target grid's cells above 1% "
+                         "of its maximum and PlasticineLab's bounding boxes)");
+            return [a, frames] {
+              a->frames_given = frames->count() > 0;
+              return command_render(*a);
+            };
           }};
 }
 

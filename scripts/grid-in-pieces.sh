@@ -16,8 +16,10 @@
 # when whole) and resumes there when interrupted; once its runs are done (or failed, which are
 # results) they are written in the runs CSV format (scripts/study_results.py export,
 # reports/dsb_report/runs_csv.py) and copied into DEST under the same name, never over a file
-# there. A piece DEST already holds is taken as done without running, if this binary made it (its
-# git_sha column); one made by another commit is refused (exit 2, naming the file). At the end
+# there. A piece DEST already holds is taken as done without running if its runs carry this
+# binary's results versions (its results_versions column: pieces belong together when their
+# versions agree, whatever commit made them), or, for a piece written before versions, if this
+# very binary made it (its git_sha column); any other is refused (exit 2, naming the file). At the end
 # OUTDIR/runs.csv holds the runs of every piece of the grid, DEST's and new, sorted, for
 # `scripts/study_results.py tables`. Interrupted? Run the same command again.
 set -euo pipefail
@@ -100,12 +102,24 @@ PY
 )
 ((${#pairs[@]})) || { echo "grid-in-pieces: the grid has no runs" >&2; exit 2; }
 
-# a DEST piece made by this binary, or the runs would mix commits
+# a DEST piece that belongs to this grid: its runs carry this binary's results versions for their
+# env and optimizer (docs/database.md "Results versions": a later commit that changes no result
+# carries a grid on), or, for a piece written before versions, this binary's very commit
+listing=$("$harness" list)
 made_here() {
-  /usr/bin/python3 - "$1" "$sha" <<'PY' || { echo "grid-in-pieces: $1 was made by another commit than this binary's ($sha): build that commit, or move the file away" >&2; return 1; }
+  /usr/bin/python3 - "$1" "$sha" "$root/reports" "$listing" <<'PY' || { echo "grid-in-pieces: $1 was made by other results versions than this binary's (or, without versions, another commit than $sha): build code of those versions, or move the file away" >&2; return 1; }
 import csv, sys
-shas = {r["git_sha"] for r in csv.DictReader(open(sys.argv[1]))}
-sys.exit(0 if shas == {sys.argv[2]} else 1)
+sys.path.insert(0, sys.argv[3])
+from dsb_report import registry
+reg = registry.parse(sys.argv[4])
+rows = list(csv.DictReader(open(sys.argv[1])))
+def ours(r):
+    v = r.get("results_versions") or ""
+    if not v:
+        return r["git_sha"] == sys.argv[2]
+    now = reg.current_versions(r["env"], r["optimizer"])
+    return now is not None and v == "env {}, optimizer {}, run {}".format(*now)
+sys.exit(0 if rows and all(ours(r) for r in rows) else 1)
 PY
 }
 

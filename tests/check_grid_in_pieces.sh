@@ -3,7 +3,8 @@
 # 50 episodes, a knob of cmaes set): the pieces hold one run each (gd's seeds share episodes: one
 # piece), their runs CSV equals the one exported from the same grid run directly (every column
 # but the wall time), a second run with the pieces landed runs nothing and writes the same file,
-# a piece made by another commit is refused, and --split-groups-over cuts gd's group into one-run
+# a piece of other results versions is refused (one of another commit with the same versions is
+# taken), and --split-groups-over cuts gd's group into one-run
 # pieces (without sharing) that give the same runs.
 set -euo pipefail
 build=${1:?usage: check_grid_in_pieces.sh BUILD_DIR SOURCE_DIR}
@@ -64,24 +65,39 @@ PY
   { echo "a bad --split-groups-over was taken" >&2; exit 1; }
 grep -q "got 'x'" "$work/bad.err" || { cat "$work/bad.err" >&2; exit 1; }
 echo "--split-groups-over 0: gd in 3 one-run pieces without sharing, the same runs CSV"
-# a piece of another commit is refused, naming it
-mkdir "$work/other"
-cp "$work"/dest/*.csv "$work/other/"
-/usr/bin/python3 - "$work/other/sphere-10__gd.csv" <<'PY'
+# pieces belong together by their results versions, not their commit: a piece of another commit
+# with this binary's versions is taken; one of other versions, or one without versions from
+# another commit, is refused, naming it
+edit_piece() {  # FILE COLUMN VALUE: every row's COLUMN set to VALUE
+  /usr/bin/python3 - "$@" <<'PY'
 import csv, sys
 with open(sys.argv[1], newline="") as f:
     rows = list(csv.DictReader(f))
 for r in rows:
-    r["git_sha"] = "000000000000"   # by name: it is not the last column since seed_free_episodes
+    r[sys.argv[2]] = sys.argv[3]   # by name: the columns grow at the end
 with open(sys.argv[1], "w", newline="") as f:
     w = csv.DictWriter(f, fieldnames=list(rows[0]), lineterminator="\n")
     w.writeheader()
     w.writerows(rows)
 PY
-set +e
-"$src/scripts/grid-in-pieces.sh" "$work/third" "$work/other" "$build" -- "${grid[@]}" >/dev/null 2>"$work/third.err"
-code=$?
-set -e
-[[ $code == 2 ]] || { echo "expected exit 2 for another commit's piece, got $code" >&2; exit 1; }
-grep -q "sphere-10__gd.csv was made by another commit" "$work/third.err" || { cat "$work/third.err" >&2; exit 1; }
-echo "landed pieces: taken without running, the same runs CSV; another commit's refused"
+}
+try_other() {  # NAME: runs the grid with DEST = a copy of the landed pieces as edited; its exit code
+  set +e
+  "$src/scripts/grid-in-pieces.sh" "$work/$1" "$work/other" "$build" -- "${grid[@]}" >/dev/null 2>"$work/$1.err"
+  local code=$?
+  set -e
+  return $code
+}
+mkdir "$work/other"
+cp "$work"/dest/*.csv "$work/other/"
+edit_piece "$work/other/sphere-10__gd.csv" git_sha 000000000000
+try_other carried || { echo "a piece of another commit with this binary's versions was refused" >&2; cat "$work/carried.err" >&2; exit 1; }
+edit_piece "$work/other/sphere-10__gd.csv" results_versions "env 1, optimizer 99, run 1"
+if try_other versions; then echo "a piece of other results versions was taken" >&2; exit 1; else code=$?; fi
+[[ $code == 2 ]] || { echo "expected exit 2 for a piece of other versions, got $code" >&2; exit 1; }
+grep -q "sphere-10__gd.csv was made by other results versions" "$work/versions.err" || { cat "$work/versions.err" >&2; exit 1; }
+edit_piece "$work/other/sphere-10__gd.csv" results_versions ""
+if try_other third; then echo "a piece without versions from another commit was taken" >&2; exit 1; else code=$?; fi
+[[ $code == 2 ]] || { echo "expected exit 2 for another commit's piece without versions, got $code" >&2; exit 1; }
+grep -q "sphere-10__gd.csv was made by other results versions" "$work/third.err" || { cat "$work/third.err" >&2; exit 1; }
+echo "landed pieces: taken without running, the same runs CSV; another commit's of the same versions taken, other versions refused"

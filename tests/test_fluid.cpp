@@ -133,7 +133,10 @@ class FluidHarness : public dsb::testing::TempDirTest {};
 TEST_F(FluidHarness, ListEvalAndAGridOfCmaesAndGd) {
   auto r = testing::run_harness(dir_, "list");
   ASSERT_EQ(r.code, 0);
-  EXPECT_NE(r.out.find("fluid                     10            yes yes"), std::string::npos) << r.out;
+  // its row of `harness list`: name, results version, dim, differentiable, rl
+  char row[96];
+  std::snprintf(row, sizeof row, "%-22s %7d %5d %14s %3s", "fluid", env_results_version("fluid"), 10, "yes", "yes");
+  EXPECT_NE(r.out.find(row), std::string::npos) << r.out;
 
   r = testing::run_harness(dir_, "eval --env fluid --x 0.5,-1,0.6,-1,0.5,0.2,-0.3,1,-0.3,1 --grad");
   ASSERT_EQ(r.code, 0) << r.err;

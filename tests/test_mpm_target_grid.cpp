@@ -1,6 +1,7 @@
 // Target mass grids (envs/mpm/target_grid): the exact distance field against brute force and
 // closed forms, the soft IoU's closed forms and invariances, and the gzip files: bit-identical
-// round trips, stable bytes, and a UsageError naming the file for every kind of damage.
+// round trips, stable bytes, and a UsageError naming the file for every kind of damage; the
+// figures of a target's shape (target_shape) by hand.
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -20,6 +21,7 @@
 #include "common/error.hpp"
 #include "common/rng.hpp"
 #include "envs/mpm/target_grid.hpp"
+#include "envs/mpm/target_shape.hpp"
 #include "support/temp_dir_test.hpp"
 
 namespace dsb::mpm {
@@ -189,6 +191,64 @@ TEST(MpmTargetGrid, SoftIouScaleInvariant) {
 }
 
 // ---- files -------------------------------------------------------------------------------------
+
+// target_shape: a hand-made grid (pad 1, dx 1/64) of two blocks, the figures by hand
+TEST(MpmTargetShape, FiguresOfTwoBlocksByHand) {
+  NodeGrid g = NodeGrid::zeros({12, 10, 8});
+  // block A: nodes i 1..3, j 1..2, k 1 (6 cells of 1.0); block B: node (8, 5, 6) of 2.0 (the max)
+  for (int i = 1; i <= 3; ++i)
+    for (int j = 1; j <= 2; ++j) g.at(i, j, 1) = 1.0;
+  g.at(8, 5, 6) = 2.0;
+  // below 1% of the max (0.02): in the mass and centre, in no body
+  g.at(10, 8, 7) = 0.015;
+  const TargetShape s = describe_target_shape(g, 1, kDx);
+  EXPECT_DOUBLE_EQ(s.threshold, 0.02);
+  EXPECT_DOUBLE_EQ(s.mass, 8.015);
+  // centre: sum of value x (index - pad) dx over the mass
+  const double cx = (1.0 * (0 + 1 + 2) * 2 + 2.0 * 7 + 0.015 * 9) / 8.015 * kDx;
+  EXPECT_NEAR(s.centre.x(), cx, 1e-15);
+  ASSERT_EQ(s.bodies.size(), 2u);
+  EXPECT_EQ(s.cells, 7);
+  const TargetBody& a = s.bodies[0];  // most cells first
+  EXPECT_EQ(a.cells, 6);
+  EXPECT_DOUBLE_EQ(a.mass, 6.0);
+  EXPECT_EQ(a.lo, Vec3(0, 0, 0));
+  EXPECT_EQ(a.hi, Vec3(2 * kDx, kDx, 0));
+  EXPECT_NEAR(a.centre.x(), kDx, 1e-15);
+  EXPECT_NEAR(a.centre.y(), 0.5 * kDx, 1e-15);
+  const TargetBody& b = s.bodies[1];
+  EXPECT_EQ(b.cells, 1);
+  EXPECT_EQ(b.centre, Vec3(7 * kDx, 4 * kDx, 5 * kDx));
+  EXPECT_EQ(s.lo, Vec3(0, 0, 0));
+  EXPECT_EQ(s.hi, Vec3(7 * kDx, 4 * kDx, 5 * kDx));
+  // a threshold above block A leaves block B alone
+  EXPECT_EQ(describe_target_shape(g, 1, kDx, 0.6).bodies.size(), 1u);
+}
+
+TEST(MpmTargetShape, BodiesJoinAcrossFacesOnly) {
+  NodeGrid g = NodeGrid::zeros({4, 4, 4});
+  g.at(1, 1, 1) = 1.0;
+  g.at(2, 2, 1) = 1.0;  // an edge apart: two bodies
+  EXPECT_EQ(describe_target_shape(g, 0, kDx).bodies.size(), 2u);
+  g.at(2, 1, 1) = 1.0;  // the face between them: one
+  const TargetShape s = describe_target_shape(g, 0, kDx);
+  ASSERT_EQ(s.bodies.size(), 1u);
+  EXPECT_EQ(s.bodies[0].cells, 3);
+  EXPECT_THROW(describe_target_shape(NodeGrid::zeros({2, 2, 2}), 0, kDx), std::invalid_argument);
+  EXPECT_THROW(describe_target_shape(g, 0, kDx, 1.0), std::invalid_argument);
+}
+
+TEST(MpmTargetShape, BoxIouCountsCells) {
+  const Vec3 lo(0, 0, 0), hi(kDx, kDx, kDx);  // 2 x 2 x 2 cells
+  EXPECT_DOUBLE_EQ(box_iou(lo, hi, lo, hi, kDx), 1.0);
+  // one cell along x: 4 shared of 12
+  EXPECT_DOUBLE_EQ(box_iou(lo, hi, lo + Vec3(kDx, 0, 0), hi + Vec3(kDx, 0, 0), kDx), 4.0 / 12.0);
+  EXPECT_DOUBLE_EQ(box_iou(lo, hi, lo + Vec3(2 * kDx, 0, 0), hi + Vec3(2 * kDx, 0, 0), kDx), 0.0);
+  // rounded coordinates (3 decimals, as the facts give them) count the same cells
+  EXPECT_DOUBLE_EQ(box_iou(Vec3(0.391, 0.031, 0.359), Vec3(0.656, 0.219, 0.625), Vec3(25, 2, 23) * kDx,
+                           Vec3(42, 14, 40) * kDx, kDx),
+                   1.0);
+}
 
 class MpmTargetGridFile : public dsb::testing::TempDirTest {};
 

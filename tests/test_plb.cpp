@@ -1,6 +1,6 @@
 // The PlasticineLab tasks (envs/mpm/plb_*): models as the facts give them, gradients against
-// central differences at a short horizon, targets near PlasticineLab's, the loss measuring the
-// task, the RL view, the second metric, and the harness running them.
+// central differences at a short horizon, targets with PlasticineLab's figures, the loss measuring
+// the task, the RL view, the second metric, and the harness running them.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -17,6 +17,7 @@
 #include "envs/core/gradient_check.hpp"
 #include "envs/mpm/episode.hpp"
 #include "envs/mpm/plb_env.hpp"
+#include "envs/mpm/target_shape.hpp"
 #include "envs/registry.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
@@ -121,42 +122,43 @@ TEST(Plb, GradientsMatchCentralDifferencesOnEveryTask) {
   }
 }
 
-TEST(Plb, TargetsLieNearPlasticineLabs) {
-  // bounding box of target nodes above 1e-4 within 0.04 (2.5 cells) of PlasticineLab's, and the
-  // centre of mass within 0.05, where known
+TEST(Plb, TargetsHavePlasticineLabsFigures) {
+  // every generated target (data/targets) against the figures of PlasticineLab's v1 target
+  // (target_shape.hpp: cells above 1% of the grid's maximum, face-connected bodies): as many
+  // bodies, each within 0.01 of its PlasticineLab body's centre of mass (a single body: the whole
+  // target's) and its bounding box within one cell (1/64) on every face (plus 5e-4: the facts
+  // round to 3 decimals); the mass of 10,000 particles, as every PlasticineLab target has it
+  const double dx = 1.0 / 64, p_mass = 0.5 / 64 * 0.5 / 64;
+  const auto cells = [dx](double d) { return std::lround(d / dx); };
   for (const auto& t : mpm::plb_tasks()) {
+    SCOPED_TRACE(t.name);
     const auto& model = plb("plb-" + t.name).model();
-    const auto& g = model.target;
-    const int pad = model.mpm.config.pad;
-    const double dx = model.mpm.config.dx;
-    double lo[3] = {1e9, 1e9, 1e9}, hi[3] = {-1e9, -1e9, -1e9}, moment[3] = {0, 0, 0}, mass = 0.0;
-    for (int i = 0; i < g.n[0]; ++i)
-      for (int j = 0; j < g.n[1]; ++j)
-        for (int k = 0; k < g.n[2]; ++k) {
-          const double x[3] = {(i - pad) * dx, (j - pad) * dx, (k - pad) * dx};
-          mass += g.at(i, j, k);
-          for (int a = 0; a < 3; ++a) moment[a] += g.at(i, j, k) * x[a];
-          if (g.at(i, j, k) > 1e-4)
-            for (int a = 0; a < 3; ++a) {
-              lo[a] = std::min(lo[a], x[a]);
-              hi[a] = std::max(hi[a], x[a]);
-            }
-        }
-    // the centre of mass within 0.05 of PlasticineLab's, where known
-    for (int a = 0; a < 3; ++a)
-      if (!std::isnan(t.plb_centre[a])) {
-        EXPECT_NEAR(moment[a] / mass, t.plb_centre[a], 0.05) << t.name << " centre, axis " << a;
-      }
-    for (int a = 0; a < 3; ++a) {
-      if (!std::isnan(t.plb_bbox[2 * a])) {
-        EXPECT_NEAR(lo[a], t.plb_bbox[2 * a], 0.04) << t.name << " axis " << a;
-      }
-      if (!std::isnan(t.plb_bbox[2 * a + 1])) {
-        EXPECT_NEAR(hi[a], t.plb_bbox[2 * a + 1], 0.04) << t.name << " axis " << a;
+    const mpm::TargetShape s = mpm::describe_target_shape(model.target, model.mpm.config.pad, model.mpm.config.dx);
+    EXPECT_NEAR(s.mass, mpm::kPlbTargetParticles * p_mass, 1e-12);
+    ASSERT_EQ(s.bodies.size(), t.plb_target.size()) << "connected bodies";
+    std::vector<bool> matched(s.bodies.size(), false);
+    for (const auto& theirs : t.plb_target) {
+      // ours: the body whose centre is nearest
+      std::size_t best = 0;
+      for (std::size_t b = 1; b < s.bodies.size(); ++b)
+        if ((s.bodies[b].centre - theirs.centre).norm() < (s.bodies[best].centre - theirs.centre).norm()) best = b;
+      EXPECT_FALSE(matched[best]) << "two of PlasticineLab's bodies are nearest to one of ours";
+      matched[best] = true;
+      const auto& ours = s.bodies[best];
+      const Vec3 centre = t.plb_target.size() == 1 ? s.centre : ours.centre;
+      std::printf("  %-11s centre (%.3f, %.3f, %.3f) vs (%.3f, %.3f, %.3f): %.4f apart; box faces off by "
+                  "(%+ld %+ld %+ld)..(%+ld %+ld %+ld) cells\n",
+                  t.name.c_str(), centre.x(), centre.y(), centre.z(), theirs.centre.x(), theirs.centre.y(),
+                  theirs.centre.z(), (centre - theirs.centre).norm(), cells(ours.lo.x() - theirs.lo.x()),
+                  cells(ours.lo.y() - theirs.lo.y()), cells(ours.lo.z() - theirs.lo.z()),
+                  cells(ours.hi.x() - theirs.hi.x()), cells(ours.hi.y() - theirs.hi.y()),
+                  cells(ours.hi.z() - theirs.hi.z()));
+      EXPECT_LE((centre - theirs.centre).norm(), 0.01);
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_NEAR(ours.lo[a], theirs.lo[a], dx + 5e-4) << "lower face, axis " << a;
+        EXPECT_NEAR(ours.hi[a], theirs.hi[a], dx + 5e-4) << "upper face, axis " << a;
       }
     }
-    // the target holds all the plasticine's mass
-    EXPECT_NEAR(g.sum(), model.mpm.particles() * 0.5 / 64 * 0.5 / 64, 1e-9) << t.name;
   }
 }
 
@@ -179,6 +181,17 @@ TEST(Plb, RlViewReplaysTheEpisodeAndTheMetricIsTheFinalSoftIou) {
   EXPECT_GT(iou, 0.0);
   EXPECT_LT(iou, 1.0);
   EXPECT_EQ(env.info().metric, "soft_iou");
+  // PlasticineLab's subsampling, x[::N // 200]: TripleMove's 9,999 particles give a stride of 49 and
+  // 205 particles (0, 49, ..., 9996), then 6 spheres' poses
+  const auto& triple = plb("plb-triplemove-h5");
+  auto rl3 = triple.make_rl();
+  EXPECT_EQ(rl3->observation_dim(), 205 * 6 + 6 * 7);
+  rl3->reset();
+  const auto o = rl3->observe();
+  ASSERT_EQ(o.size(), 205u * 6 + 6 * 7);
+  const auto& initial = triple.model().mpm.initial;
+  for (int i : {0, 1, 204})
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(o[6 * i + a], initial[49 * i].x[a]) << "observed particle " << i;
 }
 
 TEST(Plb, BadNamesAreRefused) {
@@ -188,10 +201,11 @@ TEST(Plb, BadNamesAreRefused) {
   EXPECT_NO_THROW(make_env("plb-table-h10"));
 }
 
-// the task's row of `harness list`: name, dim, differentiable, rl
+// the task's row of `harness list`: name, results version, dim, differentiable, rl
 std::string fmt_line(const Expected& e) {
-  char buf[80];
-  std::snprintf(buf, sizeof buf, "%-22s %5d %14s %3s", (std::string("plb-") + e.task).c_str(), e.dim, "yes", "yes");
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%-22s %7d %5d %14s %3s", (std::string("plb-") + e.task).c_str(),
+                env_results_version("plb-" + std::string(e.task)), e.dim, "yes", "yes");
   return buf;
 }
 

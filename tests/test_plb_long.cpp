@@ -46,11 +46,12 @@ TEST(PlbLong, TheLossRanksTheReferenceMotionBelowZeroAndRandomActions) {
 }
 
 TEST(PlbLong, FullHorizonGradientMatchesCentralDifferences) {
-  // pinch over all 50 env steps (950 substeps) at a seeded point. The loss (about 117) is a sum of
-  // kinks and tiny jumps over 50 env steps x 262,144 nodes (|m - t|, Coulomb friction, the yield
-  // surface, the closest particle of the contact term): a difference window of +-1e-7 already
-  // crosses one at this point (coordinate 1: right difference 121.1, left 173.513, analytic
-  // 173.509; +-1e-6: 20.3 and 218.0), +-1e-8 crosses none (173.5093, 173.5085 vs 173.5087). So
+  // pinch over all 50 env steps (950 substeps) at a seeded point. The loss (211.15 with the target
+  // of issue 53, 117 before) is a sum of kinks and tiny jumps over 50 env steps x 262,144 nodes
+  // (|m - t|, Coulomb friction, the yield surface, the closest particle of the contact term): with
+  // the earlier target a difference window of +-1e-7 already crossed one at this point (coordinate
+  // 1: right difference 121.1, left 173.513, analytic 173.509; +-1e-6: 20.3 and 218.0), +-1e-8
+  // crossed none (173.5093, 173.5085 vs 173.5087); with the current one all 15 agree at 1e-8. So
   // h = 1e-8 (rounding noise ~ 2.6e-14 / 1e-8 = 3e-6, 1e-8 of the largest component), and a
   // coordinate whose window still crosses a switch passes when the analytic value equals one of
   // its one-sided differences (the piece it is evaluated in); at most 2 of 15 may.

@@ -1,6 +1,7 @@
 // `harness render`: the scenes the envs record (final frames against their losses, particle
-// counts), the rasteriser (a known segment and dot at their pixels, decoded back with libgd),
-// deterministic bytes, the command's errors and --best-of.
+// counts; the PlasticineLab targets' own pictures), the rasteriser (a known segment and dot at
+// their pixels, decoded back with libgd), deterministic bytes, the command's errors, --best-of and
+// --target.
 #include <unistd.h>
 
 #include <algorithm>
@@ -155,6 +156,39 @@ TEST(Render, ParticleEnvsDrawEveryParticleInsideTheDomain) {
   }
 }
 
+TEST(Render, PlbTargetFrameDrawsTheTargetsCellsAndPlasticineLabsBoxes) {
+  const auto env = make_env("plb-triplemove");
+  const auto& plb = dynamic_cast<const mpm::PlbEnv&>(*env);
+  const auto frames = env->target_frames();
+  ASSERT_EQ(frames.size(), 1u);
+  // every drawn point a cell of the target above 1% of its maximum (node i at (i - pad) dx)
+  const auto& g = plb.model().target;
+  const int pad = plb.model().mpm.layout.pad;
+  std::size_t tops = 0, sides = 0;
+  for (const auto& d : frames[0].scene.discs) {
+    const auto& p = d.centre;
+    const int i = static_cast<int>(std::lround(p[0] * 64)) + pad, j = static_cast<int>(std::lround(p[1] * 64)) + pad,
+              k = static_cast<int>(std::lround(p[2] * 64)) + pad;
+    ASSERT_GT(g.at(i, j, k), 0.01 * g.max());
+    // a lit face is a top face: no cell above it
+    if (d.role == Role::state) EXPECT_LE(g.at(i, j + 1, k), 0.01 * g.max());
+    tops += d.role == Role::state;
+    sides += d.role == Role::trace;
+  }
+  // three blocks of about 8 x 8 top cells
+  EXPECT_GT(tops, 150u);
+  EXPECT_GT(sides, 300u);
+  // PlasticineLab's three blocks' boxes: 6 polylines each (2 rectangles, 4 verticals), and the floor
+  std::size_t boxes = 0, floor = 0;
+  for (const auto& l : frames[0].scene.lines) {
+    boxes += l.role == Role::target;
+    floor += l.role == Role::fixed;
+  }
+  EXPECT_EQ(boxes, 18u);
+  EXPECT_EQ(floor, 1u);
+  EXPECT_TRUE(make_env("bounce")->target_frames().empty());
+}
+
 TEST(Render, SyntheticEnvsAreNotRenderable) {
   const auto env = make_env("sphere-10");
   EXPECT_FALSE(env->renderable());
@@ -259,6 +293,21 @@ TEST_F(RenderCli, BadValuesExitTwoWithOneLine) {
   expect_usage_error("render --env bounce" + out, "--best-of");
   expect_usage_error("render --env bounce --x 0,0,0 --best-of " + path("none.sqlite") + out, "--best-of");
   expect_usage_error("render --env bounce --best-of " + path("none.sqlite") + out, "none.sqlite");
+  EXPECT_FALSE(fs::exists(path("r.png")));
+}
+
+TEST_F(RenderCli, TargetDrawsOnePanelOfTheTarget) {
+  const auto r = harness("render --env plb-pinch --target --width 200 --out " + path("t.png"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string bytes = testing::read_file(path("t.png"));
+  GdImage img{gdImageCreateFromPngPtr(static_cast<int>(bytes.size()), const_cast<char*>(bytes.data()))};
+  ASSERT_NE(img.im, nullptr);
+  EXPECT_EQ(gdImageSX(img.im), 200);  // one panel
+  const std::string out = " --out " + path("r.png");
+  expect_usage_error("render --env plb-pinch --target --x 0" + out, "--x");
+  expect_usage_error("render --env plb-pinch --target --frames 3" + out, "--frames");
+  expect_usage_error("render --env bounce --target" + out, "bounce");
+  expect_usage_error("render --env sphere-10 --target" + out, "sphere-10");
   EXPECT_FALSE(fs::exists(path("r.png")));
 }
 

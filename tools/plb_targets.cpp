@@ -1,9 +1,13 @@
 // The PlasticineLab tasks' targets: each task's scripted reference motion (plb_tasks.cpp) run by
-// our engine, its final grid mass written as data/targets/plb-<task>.txt.gz; the check that
+// our engine, its final grid mass (scaled to the mass of kPlbTargetParticles particles, as
+// PlasticineLab's targets hold it) written as data/targets/plb-<task>.txt.gz; the check that
 // stored targets equal a fresh generation (decoded values, bit for bit); and our stored targets
 // beside PlasticineLab's own files.
-//   plb_targets --out DIR [--task NAME]      write targets, print bounding boxes vs PlasticineLab's
+//   plb_targets --out DIR [--task NAME]      write targets, print their figures vs PlasticineLab's
 //   plb_targets --check DIR [--task NAME]    generate and compare with DIR's files (exit 1 on a difference)
+//   plb_targets --figures DIR [--task NAME]  DIR's targets against PlasticineLab's figures, as a Markdown
+//       table (docs/plasticinelab.md): per PlasticineLab body, centre of mass, bounding box of the
+//       cells above 1% of the maximum, faces off in cells, the boxes' IoU, mass (target_shape.hpp)
 //   plb_targets --compare ASSETS [--task NAME]
 //       our stored targets against PlasticineLab's .npy files in ASSETS (its plb/envs/assets, e.g.
 //       Pinch3D-v1.npy), read as `--set plb-NAME.target=FILE` reads them: per task the bounding
@@ -26,6 +30,7 @@
 #include "envs/mpm/plb_model.hpp"
 #include "envs/mpm/plb_target_file.hpp"
 #include "envs/mpm/target_grid.hpp"
+#include "envs/mpm/target_shape.hpp"
 
 namespace {
 
@@ -39,14 +44,22 @@ class NoLoss : public EpisodeObjective {
                          std::vector<PoseAdjoint>&, ThreadTeam&) const override {}
 };
 
-// the reference motion's final grid mass on the scene's nodes
+// the target's grid mass on the scene's nodes: the reference motion's final state, or where the
+// task's construction places the initial particles (rope); scaled to the mass of
+// kPlbTargetParticles particles as PlasticineLab's targets are (pinch 10000/6000, triplemove
+// 10000/9999, the others 1)
 NodeGrid generate(const PlbTask& task, ThreadTeam& team) {
   const PlbConfig cfg = plb_config(task.name);
   const MpmModel model = build_plb_mpm_model(cfg);
   MpmWorkspace ws(model);
-  const auto actions = plb_reference_actions(task, cfg.env_steps);
-  const double loss = run_episode(model, ws, team, actions, cfg.env_steps, NoLoss{});
-  if (std::isnan(loss)) throw std::runtime_error("the reference motion of " + task.name + " blew up");
+  if (task.target_placement) {
+    ws.reset_state(model);
+    for (auto& p : ws.particles) p.x = task.target_placement(p.x);
+  } else {
+    const auto actions = plb_reference_actions(task, cfg.env_steps);
+    const double loss = run_episode(model, ws, team, actions, cfg.env_steps, NoLoss{});
+    if (std::isnan(loss)) throw std::runtime_error("the reference motion of " + task.name + " blew up");
+  }
   ParticleBins bins;
   bins.home.resize(model.particles());
   std::vector<double> mass;
@@ -55,30 +68,70 @@ NodeGrid generate(const PlbTask& task, ThreadTeam& team) {
   g.n = model.layout.n;
   g.values.assign(model.layout.nodes(), 0.0);
   for (int b : bins.active) for_each_node_of_block(model.layout, b, [&](int, int, int, int n) { g.values[n] = mass[n]; });
+  if (model.particles() != kPlbTargetParticles) {
+    const double scale = static_cast<double>(kPlbTargetParticles) / model.particles();
+    for (double& v : g.values) v *= scale;
+  }
   return g;
 }
 
-// bounding box of nodes above 1e-4 (positions) and centre of mass
+// our target's figures (target_shape.hpp) beside PlasticineLab's, body by body (ours matched to
+// the nearest of theirs by centre)
 void describe(const PlbTask& task, const NodeGrid& g, double dx, int pad) {
-  double lo[3] = {1e9, 1e9, 1e9}, hi[3] = {-1e9, -1e9, -1e9}, c[3] = {0, 0, 0}, total = 0.0;
-  for (int i = 0; i < g.n[0]; ++i)
-    for (int j = 0; j < g.n[1]; ++j)
-      for (int k = 0; k < g.n[2]; ++k) {
-        const double v = g.values[(static_cast<std::size_t>(i) * g.n[1] + j) * g.n[2] + k];
-        const double x[3] = {(i - pad) * dx, (j - pad) * dx, (k - pad) * dx};
-        total += v;
-        for (int a = 0; a < 3; ++a) c[a] += v * x[a];
-        if (v > 1e-4)
-          for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], x[a]);
-            hi[a] = std::max(hi[a], x[a]);
-          }
-      }
-  std::printf("%-11s ours: x [%.3f, %.3f] y [%.3f, %.3f] z [%.3f, %.3f] centre (%.3f, %.3f, %.3f) mass %.4f\n",
-              task.name.c_str(), lo[0], hi[0], lo[1], hi[1], lo[2], hi[2], c[0] / total, c[1] / total, c[2] / total, total);
-  const auto& b = task.plb_bbox;
-  std::printf("%-11s PlasticineLab: x [%.2f, %.2f] y [%.2f, %.2f] z [%.2f, %.2f] centre (%.3f, %.3f, %.3f)\n", "", b[0],
-              b[1], b[2], b[3], b[4], b[5], task.plb_centre.x(), task.plb_centre.y(), task.plb_centre.z());
+  const TargetShape s = describe_target_shape(g, pad, dx);
+  std::printf("%-11s mass %.4f, centre (%.3f, %.3f, %.3f), cells above 1%% of the max [%.3f, %.3f, %.3f]..[%.3f, %.3f, "
+              "%.3f], %zu bod%s\n",
+              task.name.c_str(), s.mass, s.centre.x(), s.centre.y(), s.centre.z(), s.lo.x(), s.lo.y(), s.lo.z(),
+              s.hi.x(), s.hi.y(), s.hi.z(), s.bodies.size(), s.bodies.size() == 1 ? "y" : "ies");
+  for (const auto& b : s.bodies) {
+    const PlbTargetBody* near = nullptr;
+    for (const auto& t : task.plb_target)
+      if (!near || (t.centre - b.centre).norm() < (near->centre - b.centre).norm()) near = &t;
+    const Vec3 c = task.plb_target.size() == 1 ? s.centre : b.centre;  // a single body: the whole centre
+    std::printf("%-11s   ours   centre (%.3f, %.3f, %.3f) box [%.3f, %.3f, %.3f]..[%.3f, %.3f, %.3f] (%ld cells, mass "
+                "%.4f)\n",
+                "", c.x(), c.y(), c.z(), b.lo.x(), b.lo.y(), b.lo.z(), b.hi.x(), b.hi.y(), b.hi.z(), b.cells, b.mass);
+    if (!near) continue;
+    const Vec3 dlo = (b.lo - near->lo) / dx, dhi = (b.hi - near->hi) / dx;
+    std::printf("%-11s   theirs centre (%.3f, %.3f, %.3f) box [%.3f, %.3f, %.3f]..[%.3f, %.3f, %.3f]; centre %.4f apart, "
+                "faces off by (%+.1f %+.1f %+.1f)..(%+.1f %+.1f %+.1f) cells, box IoU %.3f\n",
+                "", near->centre.x(), near->centre.y(), near->centre.z(), near->lo.x(), near->lo.y(), near->lo.z(),
+                near->hi.x(), near->hi.y(), near->hi.z(), (c - near->centre).norm(), dlo.x(), dlo.y(), dlo.z(), dhi.x(),
+                dhi.y(), dhi.z(), box_iou(b.lo, b.hi, near->lo, near->hi, dx));
+  }
+}
+
+// --figures: one Markdown row per body of PlasticineLab's target
+void figures(const std::string& dir, const std::string& only) {
+  std::printf("| task | centre of mass: ours / PlasticineLab's (apart) | box of the cells above 1%% of the max: ours / "
+              "PlasticineLab's | faces off (cells) | box IoU | mass: ours / PlasticineLab's |\n|---|---|---|---|---|---|\n");
+  auto v3 = [](const Vec3& v) {
+    char b[64];
+    std::snprintf(b, sizeof b, "(%.3f, %.3f, %.3f)", v.x(), v.y(), v.z());
+    return std::string(b);
+  };
+  for (const auto& task : plb_tasks()) {
+    if (!only.empty() && task.name != only) continue;
+    const PlbConfig cfg = plb_config(task.name);
+    const double dx = cfg.mpm.dx;
+    const TargetShape s = describe_target_shape(read_grid_gz(dir + "/plb-" + task.name + ".txt.gz"), cfg.mpm.pad, dx);
+    for (std::size_t t = 0; t < task.plb_target.size(); ++t) {
+      const PlbTargetBody& theirs = task.plb_target[t];
+      const TargetBody* ours = nullptr;
+      for (const auto& b : s.bodies)
+        if (!ours || (b.centre - theirs.centre).norm() < (ours->centre - theirs.centre).norm()) ours = &b;
+      const Vec3 c = task.plb_target.size() == 1 ? s.centre : ours->centre;
+      const Vec3 dlo = (ours->lo - theirs.lo) / dx, dhi = (ours->hi - theirs.hi) / dx;
+      const std::string name = task.plb_target.size() == 1 ? task.name : task.name + " block " + std::to_string(t + 1);
+      std::printf("| %s | %s / %s (%.4f) | %s..%s / %s..%s | (%+ld %+ld %+ld)..(%+ld %+ld %+ld) | %.2f | %.4f / %s |\n",
+                  name.c_str(), v3(c).c_str(), v3(theirs.centre).c_str(), (c - theirs.centre).norm(),
+                  v3(ours->lo).c_str(), v3(ours->hi).c_str(), v3(theirs.lo).c_str(), v3(theirs.hi).c_str(),
+                  std::lround(dlo.x()), std::lround(dlo.y()), std::lround(dlo.z()), std::lround(dhi.x()),
+                  std::lround(dhi.y()), std::lround(dhi.z()), box_iou(ours->lo, ours->hi, theirs.lo, theirs.hi, dx),
+                  task.plb_target.size() == 1 ? s.mass : ours->mass,
+                  task.plb_target.size() == 1 ? "0.6104" : "0.203");
+    }
+  }
 }
 
 // What --compare prints of a target: nodes above kInside, positions (I - pad) dx.
@@ -166,17 +219,27 @@ int compare(const std::string& assets, const std::string& only) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string out, check, assets, only;
+  std::string out, check, assets, figures_dir, only;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--out")) out = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--figures")) figures_dir = argv[i + 1];
     else if (!std::strcmp(argv[i], "--check")) check = argv[i + 1];
     else if (!std::strcmp(argv[i], "--compare")) assets = argv[i + 1];
     else if (!std::strcmp(argv[i], "--task")) only = argv[i + 1];
   }
-  const int modes = int{!out.empty()} + int{!check.empty()} + int{!assets.empty()};
+  const int modes = int{!out.empty()} + int{!check.empty()} + int{!assets.empty()} + int{!figures_dir.empty()};
   if (modes != 1) {
-    std::fprintf(stderr, "usage: plb_targets --out DIR | --check DIR | --compare ASSETS_DIR [--task NAME]\n");
+    std::fprintf(stderr, "usage: plb_targets --out DIR | --check DIR | --figures DIR | --compare ASSETS_DIR [--task NAME]\n");
     return 2;
+  }
+  if (!figures_dir.empty()) {
+    try {
+      figures(figures_dir, only);
+      return 0;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "plb_targets: %s\n", e.what());
+      return 2;
+    }
   }
   if (!assets.empty()) {
     try {

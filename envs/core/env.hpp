@@ -136,6 +136,10 @@ class Env {
   virtual std::vector<Frame> frames(std::span<const double> /*x*/, int /*n*/, ThreadTeam& /*team*/) const {
     return {};
   }
+  // A picture of the env's target on its own, without a rollout (`harness render --target`): the
+  // PlasticineLab tasks draw their target grid (frames_mpm.cpp). Empty where the env has no target
+  // shape to draw.
+  virtual std::vector<Frame> target_frames() const { return {}; }
 
  protected:
   virtual double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const = 0;

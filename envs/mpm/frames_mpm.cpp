@@ -138,4 +138,69 @@ std::vector<dsb::Frame> PlbEnv::frames(std::span<const double> x, int n, ThreadT
   return out;
 }
 
+std::vector<dsb::Frame> PlbEnv::target_frames() const {
+  const PlbModel& pm = model();
+  const MpmModel& m = pm.mpm;
+  const NodeGrid& g = pm.target;
+  const double dx = m.config.dx;
+  const int pad = m.layout.pad;
+  // the cells target_shape.hpp measures: above 1% of the grid's maximum
+  const double threshold = 0.01 * g.max();
+  auto inside = [&](int i, int j, int k) {
+    return i >= 0 && j >= 0 && k >= 0 && i < g.n[0] && j < g.n[1] && k < g.n[2] && g.at(i, j, k) > threshold;
+  };
+  // each column's highest cell (n0 x n2; -1: none)
+  std::vector<int> height(static_cast<std::size_t>(g.n[0]) * g.n[2], -1);
+  for (int i = 0; i < g.n[0]; ++i)
+    for (int j = 0; j < g.n[1]; ++j)
+      for (int k = 0; k < g.n[2]; ++k)
+        if (inside(i, j, k)) height[static_cast<std::size_t>(i) * g.n[2] + k] = j;
+  // a top face lies in a dent when a column within 3 cells stands 2 cells higher or more
+  auto in_dent = [&](int i, int j, int k) {
+    for (int a = std::max(0, i - 3); a <= std::min(g.n[0] - 1, i + 3); ++a)
+      for (int c = std::max(0, k - 3); c <= std::min(g.n[2] - 1, k + 3); ++c)
+        if (height[static_cast<std::size_t>(a) * g.n[2] + c] >= j + 2) return true;
+    return false;
+  };
+  // its shell (cells with a face neighbour outside) as discs of a cell's size: the top faces
+  // orange, those in dents and the other faces light orange (so that imprints show), far ones
+  // first (the oblique camera looks from -x, -z and above: render/camera.cpp) so the nearer cover them
+  struct Cell {
+    double far;
+    Disc disc;
+  };
+  std::vector<Cell> cells;
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (int i = 0; i < g.n[0]; ++i)
+    for (int j = 0; j < g.n[1]; ++j)
+      for (int k = 0; k < g.n[2]; ++k) {
+        if (!inside(i, j, k)) continue;
+        const Vec3 x((i - pad) * dx, (j - pad) * dx, (k - pad) * dx);
+        lo = lo.cwiseMin(x);
+        hi = hi.cwiseMax(x);
+        const bool top = !inside(i, j + 1, k);
+        if (!top && inside(i - 1, j, k) && inside(i + 1, j, k) && inside(i, j - 1, k) && inside(i, j, k - 1) &&
+            inside(i, j, k + 1))
+          continue;
+        const double far = 0.9063 * (0.5 * x.x() + 0.866 * x.z()) - 0.4226 * x.y();
+        const bool lit = top && !in_dent(i, j, k);
+        cells.push_back({far, Disc{lit ? Role::state : Role::trace, "target", sp(x), 0.6 * dx, true}});
+      }
+  std::stable_sort(cells.begin(), cells.end(), [](const Cell& a, const Cell& b) { return a.far > b.far; });
+  const int steps = cfg_.env_steps;
+  dsb::Frame f{steps, steps * m.config.substeps * m.config.dt, {}};
+  Scene& sc = f.scene;
+  sc.camera = Camera::oblique;
+  // a floor under the target, 0.05 around its cells
+  const double y0 = m.config.bound * dx, e = 0.05;
+  sc.lines.push_back({Role::fixed, "floor",
+                      {{lo.x() - e, y0, lo.z() - e}, {hi.x() + e, y0, lo.z() - e}, {hi.x() + e, y0, hi.z() + e},
+                       {lo.x() - e, y0, hi.z() + e}},
+                      true});
+  for (auto& c : cells) sc.discs.push_back(std::move(c.disc));
+  // PlasticineLab's target: each body's bounding box
+  for (const auto& b : find_plb_task(cfg_.task)->plb_target) add_box(sc, Role::target, "plasticinelab box", b.lo, b.hi);
+  return {std::move(f)};
+}
+
 }  // namespace dsb::mpm

@@ -1,10 +1,14 @@
 #include "envs/mpm/plb_config.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
 #include "common/error.hpp"
+#include "common/regular_file.hpp"
+#include "common/rng.hpp"
+#include "envs/core/data_dir.hpp"
 
 namespace dsb::mpm {
 
@@ -54,10 +58,29 @@ void PlbConfig::validate() const {
 
 namespace {
 
-// the generated target (its file and the motion that made it), or a target file by its values'
-// hash (never its path: the same values from anywhere are the same target)
+// FNV-1a 64 (hex) of a data file's bytes, "missing" when it cannot be read (a target being made)
+std::string file_content_hash(const std::string& path) {
+  try {
+    char buf[17];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(fnv1a64(read_regular_file("", path))));
+    return buf;
+  } catch (const UsageError&) {
+    return "missing";
+  }
+}
+
+// the generated target (its file, by name and content, and the motion that made it), or a target
+// file by its values' hash (never its path: the same values from anywhere are the same target)
 nlohmann::json target_json(const PlbConfig& c, const nlohmann::json& reference) {
-  if (!c.target_file) return {{"file", "data/targets/plb-" + c.task + ".txt.gz"}, {"reference_motion", reference}};
+  if (!c.target_file) {
+    const std::string file = "targets/plb-" + c.task + ".txt.gz";
+    nlohmann::json j = {{"file", "data/" + file},
+                        {"file_fnv1a64", file_content_hash(data_dir() + "/" + file)},
+                        {"reference_motion", reference}};
+    // a constructed target (rope's ring) in place of the reference motion's final state
+    if (const auto& how = find_plb_task(c.task)->construction; !how.empty()) j["construction"] = how;
+    return j;
+  }
   return {{"source", "a PlasticineLab-format .npy file (env option target)"},
           {"shape", c.mpm.grid},
           {"values_fnv1a64", c.target_file->hash}};

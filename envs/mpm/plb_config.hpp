@@ -27,7 +27,7 @@ struct PlbConfig {
   double density_weight = 10.0;  // PlasticineLab
   double contact_weight = 1.0;   // PlasticineLab: 1; set by plb_config() (see there)
   double target_threshold = 1e-4;  // target cells above this mass are "inside" for the SDF
-  int observed_particles = 200;    // RL observation: every N/200-th particle (PlasticineLab)
+  int observed_particles = 200;    // RL observation: every (N / 200)-th particle, integer division (PlasticineLab)
   std::uint64_t seed = 0;          // shape sampling (PlasticineLab samples with numpy seed 0)
   // a target read from a file (the env option `target`), in place of data/targets' generated one;
   // null: the generated one. In the stored config by the hash of its values only.

@@ -58,12 +58,13 @@ class PlbRl : public RlEnv {
     loss_ = 0.0;
     scratch_.final_iou = std::numeric_limits<double>::quiet_NaN();
   }
-  // every N/200-th particle's position and velocity, then each primitive's position and quaternion (w, x, y, z)
+  // the observed particles' positions and velocities (every stride()-th), then each primitive's
+  // position and quaternion (w, x, y, z)
   std::vector<double> observe() const override {
     std::vector<double> o;
-    const int n = env_.model().mpm.particles(), k = observed();
+    const int k = observed();
     for (int i = 0; i < k; ++i) {
-      const Particle& p = ws_.particles[static_cast<std::size_t>(i) * n / k];
+      const Particle& p = ws_.particles[static_cast<std::size_t>(i) * stride()];
       o.insert(o.end(), {p.x.x(), p.x.y(), p.x.z(), p.v.x(), p.v.y(), p.v.z()});
     }
     for (const auto& pose : ws_.poses)
@@ -86,7 +87,10 @@ class PlbRl : public RlEnv {
   double final_metric() const override { return std::isnan(loss_) ? loss_ : scratch_.final_iou; }
 
  private:
-  int observed() const { return std::min(env_.plb_config().observed_particles, env_.model().mpm.particles()); }
+  // PlasticineLab's subsampling: particles 0, s, 2s, ... with s = N / observed_particles (integer
+  // division, at least 1), ceil(N / s) of them: 200 of 10,000 or 6,000, but 205 of TripleMove's 9,999 (s = 49)
+  int stride() const { return std::max(1, env_.model().mpm.particles() / env_.plb_config().observed_particles); }
+  int observed() const { return (env_.model().mpm.particles() + stride() - 1) / stride(); }
   const PlbEnv& env_;
   MpmWorkspace ws_;
   PlbLossScratch scratch_;

@@ -41,6 +41,10 @@ class PlbEnv : public Env {
   }
   bool renderable() const override { return true; }
   std::vector<dsb::Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_mpm.cpp
+  // the target grid's cells above 1% of its maximum (its shell as discs: top faces in the state
+  // colour, those in dents and the other faces in the trace colour) and PlasticineLab's bounding
+  // boxes of its target's bodies (frames_mpm.cpp)
+  std::vector<dsb::Frame> target_frames() const override;
   double episode_metric(const Workspace& ws) const override;
 
   const PlbConfig& plb_config() const { return cfg_; }

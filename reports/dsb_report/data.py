@@ -19,9 +19,10 @@ RUN_COLUMNS = ["run_id", "env", "optimizer", "seed", "budget", "env_config_hash"
                "opt_config_hash", "status", "episodes", "failed_episodes", "best_loss",
                "wall_s", "error", "started_at", "finished_at", "harness_version", "git_sha",
                "host"]
-# read when the database has it (schema version 4 on; NULL or absent: not recorded): the episodes
-# of a run before its optimizer's first draw from its RNG (stats.seed_free)
-OPTIONAL_RUN_COLUMNS = ["seed_free_episodes"]
+# read when the database has them (NULL or absent: not recorded): the episodes of a run before its
+# optimizer's first draw from its RNG (schema version 4 on; stats.seed_free), and the results
+# versions of the code that made it (schema version 5 on; '' before: docs/database.md)
+OPTIONAL_RUN_COLUMNS = ["seed_free_episodes", "results_versions"]
 
 
 class DataError(Exception):
@@ -175,7 +176,8 @@ def load(path: str) -> Data:
         runs = pd.read_sql_query(f"SELECT {', '.join(RUN_COLUMNS + optional)} FROM runs", con)
         for c in OPTIONAL_RUN_COLUMNS:
             if c not in runs.columns:
-                runs[c] = np.nan
+                runs[c] = "" if c == "results_versions" else np.nan
+        runs["results_versions"] = runs["results_versions"].fillna("").astype(str)
         ev_cols = [r[1] for r in con.execute("PRAGMA table_info(evals)")]
         metric = ", e.metric" if "metric" in ev_cols else ""  # schema version 2 on
         ev = pd.read_sql_query(

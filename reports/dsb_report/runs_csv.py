@@ -6,14 +6,16 @@ final best loss; empty when it has none), best_episode (the first episode that r
 metric_at_best (the env's second metric, evals.metric, at that episode; empty where the env has
 none), wall_s, env_config_hash, opt_config_hash, harness_version, git_sha, seed_free_episodes (the
 episodes before the optimizer's first draw from its RNG, runs.seed_free_episodes: equal to episodes
-when no seed changes the run; empty where not recorded). Floats are written as
+when no seed changes the run; empty where not recorded), results_versions (runs.results_versions,
+"env E, optimizer O, run R": the code that made the run, docs/database.md; empty for runs made
+before versions). Floats are written as
 Python's repr, which reads back to the same bits, so verdicts and medians from the file are those
 from the database. Every run is written, whatever its status (the claims table says which runs are
 missing or incomplete); best_episode and metric_at_best only for the runs a report analyses
 (data.load: one config variant per env, optimizer and budget).
 
-A file without the last column (written before it existed) is read with seed_free_episodes empty:
-not recorded, so stats.seed_free counts none of its runs as one run.
+A file without the last columns (written before they existed) is read with them empty: not
+recorded (stats.seed_free counts none of its runs as one run; its runs name no results versions).
 
 A Data read back from the file holds final values only: each panel's `best` is its runs' final
 best loss as one column, so what needs whole curves (convergence plots, targets) is not for it.
@@ -31,8 +33,9 @@ from .data import Data, Panel, _choose_variants, slugify
 
 RUNS_CSV_COLUMNS = ["env", "optimizer", "seed", "budget", "status", "episodes", "best_loss", "best_episode",
                     "metric_at_best", "wall_s", "env_config_hash", "opt_config_hash", "harness_version",
-                    "git_sha", "seed_free_episodes"]
-OPTIONAL_COLUMNS = ["seed_free_episodes"]   # absent from files written before it existed
+                    "git_sha", "seed_free_episodes", "results_versions"]
+# absent from files written before they existed
+OPTIONAL_COLUMNS = ["seed_free_episodes", "results_versions"]
 
 
 class RunsCsvError(Exception):
@@ -75,7 +78,8 @@ def write(data: Data, path: str) -> int:
             episode, metric = at_best.get(int(r.run_id), ("", ""))
             w.writerow([r.env, r.optimizer, int(r.seed), int(r.budget), r.status, int(r.episodes),
                         _number(r.best_loss), episode, metric, _number(r.wall_s), r.env_config_hash,
-                        r.opt_config_hash, r.harness_version, r.git_sha, _count(r.seed_free_episodes)])
+                        r.opt_config_hash, r.harness_version, r.git_sha, _count(r.seed_free_episodes),
+                        getattr(r, "results_versions", "") or ""])
     os.replace(tmp, path)
     return len(data.runs)
 
@@ -85,14 +89,15 @@ RUN_KEY = ["env", "optimizer", "seed", "budget", "env_config_hash", "opt_config_
 
 def _read(path: str) -> pd.DataFrame:
     try:
-        runs = pd.read_csv(path, dtype={"env_config_hash": str, "opt_config_hash": str, "git_sha": str,
+        runs = pd.read_csv(path, dtype={"env_config_hash": str, "opt_config_hash": str, "git_sha": str, "results_versions": str,
                                         "harness_version": str}, float_precision="round_trip",
                            keep_default_na=False, na_values=[""])
     except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as e:
         raise RunsCsvError(f"cannot read '{path}': {e}") from None
     for c in OPTIONAL_COLUMNS:
         if c not in runs.columns:
-            runs[c] = np.nan
+            runs[c] = "" if c == "results_versions" else np.nan
+    runs["results_versions"] = runs["results_versions"].fillna("").astype(str)
     absent = [c for c in RUNS_CSV_COLUMNS if c not in runs.columns]
     if absent:
         raise RunsCsvError(f"'{path}' lacks column(s) {', '.join(absent)}")
