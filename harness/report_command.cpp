@@ -39,7 +39,8 @@ void check_report_folder(const std::string& dir, bool force, const std::string& 
 }
 
 int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
-                   bool quiet, const std::string& gradient_quality, const std::string& renders) {
+                   bool quiet, const std::string& gradient_quality, const std::string& renders,
+                   bool include_stale) {
   check_database_path("--db", db_path, true);
   // Debian's pandas/matplotlib/scipy import only in Debian's interpreter; DSB_PYTHON overrides
   const char* python_env = std::getenv("DSB_PYTHON");
@@ -49,7 +50,8 @@ int command_report(const std::string& db_path, const std::string& out_dir, const
   const std::string script = std::string(reports_env ? reports_env : DSB_SOURCE_DIR "/reports") + "/make_report.py";
   if (!std::filesystem::is_regular_file(script)) throw UsageError("report generator not found at '" + script + "'");
   std::vector<std::string> args = {python, script, "--db", db_path, "--out", out_dir, "--build-type", DSB_BUILD_TYPE};
-  // this binary's `list` tells the report which envs exist (a missing env from missing runs)
+  // this binary's `list` tells the report which envs exist (a missing env from missing runs) and
+  // its results versions, which make a stored run current or stale
   std::error_code self_error;
   const auto self = std::filesystem::read_symlink("/proc/self/exe", self_error);
   if (!self_error) {
@@ -68,6 +70,7 @@ int command_report(const std::string& db_path, const std::string& out_dir, const
     args.push_back("--renders");
     args.push_back(renders);
   }
+  if (include_stale) args.push_back("--include-stale");
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -99,7 +102,7 @@ Command report_command() {
   return {"report", "comparison report (index.html, figures, tables) from a database", [](CLI::App& app) {
             struct Args {
               std::string db = "results.sqlite", out = "report", landscapes, gradient_quality, renders;
-              bool force = false;
+              bool force = false, include_stale = false;
             };
             auto a = std::make_shared<Args>();
             app.add_option("--db", a->db, "results database (default ./results.sqlite)");
@@ -110,9 +113,13 @@ Command report_command() {
             app.add_option("--renders", a->renders, "folder of scripts/render-best.sh's render_<env>.png to show");
             app.add_flag("--force", a->force,
                          "write into a folder that holds other files (files of the report's names are replaced)");
+            app.add_flag("--include-stale", a->include_stale,
+                         "also the runs made by other results versions (stale), each marked as an optimizer of "
+                         "its own (OPT-stale-eEoOrR); the claims still judge current runs only");
             return [a] {
               check_report_folder(a->out, a->force);
-              return command_report(a->db, a->out, a->landscapes, false, a->gradient_quality, a->renders);
+              return command_report(a->db, a->out, a->landscapes, false, a->gradient_quality, a->renders,
+                                    a->include_stale);
             };
           }};
 }

@@ -11,9 +11,12 @@ void check_report_folder(const std::string& dir, bool force, const std::string& 
 // quiet: the generator's stdout is dropped and it ignores SIGINT and SIGHUP, so the terminal's stop
 // of a grid does not cut a report short (refreshes during a grid run); gradient_quality: a CSV of
 // scripts/gradient-quality.sh for the "Gradient quality" section (empty: the generator's default,
-// data/gradient_quality.csv); renders: a folder of scripts/render-best.sh's render_<env>.png
+// data/gradient_quality.csv); renders: a folder of scripts/render-best.sh's render_<env>.png;
+// include_stale: the report shows the runs of other results versions, marked, instead of leaving
+// them out (make_report.py --include-stale; docs/database.md "Results versions")
 int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
-                   bool quiet = false, const std::string& gradient_quality = "", const std::string& renders = "");
+                   bool quiet = false, const std::string& gradient_quality = "", const std::string& renders = "",
+                   bool include_stale = false);
 // (the exit code: the generator's, or 128 + the signal that killed it)
 
 }  // namespace dsb

@@ -4,7 +4,7 @@ self-contained folder with index.html, summary.md, PNG figures and CSV tables.
 
 usage: /usr/bin/python3 reports/make_report.py --db FILE --out DIR [--landscapes DIR] [--build-type T]
                                               [--claims FILE] [--gradient-quality FILE] [--renders DIR]
-                                              [--harness BIN]
+                                              [--harness BIN] [--include-stale]
 
 Needs pandas, matplotlib and scipy (Debian: python3-pandas python3-matplotlib python3-scipy, which
 only Debian's /usr/bin/python3 sees). Exit codes: 0 written, 2 bad input or missing modules.
@@ -23,7 +23,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 REQUIRED = ("pandas", "matplotlib", "scipy", "scipy.stats")
 OWN_FILES = re.compile(r"^(curves_.+\.png|final_.+\.(png|csv)|landscape_.+\.png|render_.+\.png|"
-                       r"gradient_quality\.csv|gallery\.html)$")
+                       r"gradient_quality\.csv|gallery\.html|stale_runs\.csv)$")
 DEFAULT_GRADIENT_QUALITY = os.path.join(os.path.dirname(HERE), "data", "gradient_quality.csv")
 
 
@@ -81,13 +81,19 @@ def parse_args(argv):
                                      "in each env's section")
     p.add_argument("--harness", help="harness binary whose `list` says which envs exist and which "
                                      "optimizers --all runs on each (default: $DSB_HARNESS, else "
-                                     "build/bin/harness of this source tree if it exists)")
+                                     "build/bin/harness of this source tree if it exists); its "
+                                     "results versions tell which runs are stale")
+    p.add_argument("--include-stale", action="store_true",
+                   help="show the runs made by other results versions than the harness's (stale), "
+                        "each as an optimizer of its own (OPT-stale-eEoOrR), instead of leaving them "
+                        "out; the claims still judge current runs only")
     return p.parse_args(argv)
 
 
 def load_registry(registry, harness):
     """`harness list` of --harness (an error when it cannot be read) or of the default harness
-    (None when there is none or it cannot be read: the claims then cannot tell a missing env)."""
+    (None when there is none or it cannot be read: the claims then cannot tell a missing env, and
+    no run can be judged stale)."""
     if harness:
         return registry.load(harness)
     default = registry.default_harness(os.path.dirname(HERE))
@@ -116,10 +122,6 @@ def main(argv=None) -> int:
         if problem:
             return fail(problem.encode("unicode_escape").decode("ascii") if not problem.isprintable() else problem)
     try:
-        data = load(args.db)
-    except DataError as e:
-        return fail(str(e))
-    try:
         claim_list = claims.load(args.claims)
     except claims.ClaimsError as e:
         return fail(str(e))
@@ -133,6 +135,10 @@ def main(argv=None) -> int:
     try:
         env_registry = load_registry(registry, args.harness)
     except registry.RegistryError as e:
+        return fail(str(e))
+    try:
+        data = load(args.db, env_registry, args.include_stale)   # stale runs judged by its versions
+    except DataError as e:
         return fail(str(e))
     if args.landscapes is not None and not os.path.isdir(args.landscapes):
         return fail(f"--landscapes '{args.landscapes}' is not a directory")

@@ -45,6 +45,31 @@ def need_harness():
     return harness
 
 
+_REGISTRY = {}
+
+
+def registry_of_harness():
+    """`harness list` of the test's harness (dsb_report.registry), or None without one."""
+    harness = harness_path()
+    if harness is None:
+        return None
+    if harness not in _REGISTRY:
+        if HERE not in sys.path:
+            sys.path.insert(0, HERE)
+        from dsb_report import registry
+        _REGISTRY[harness] = registry.load(harness)
+    return _REGISTRY[harness]
+
+
+def versions_text(env, optimizer):
+    """runs.results_versions of a run of env with optimizer made by the test's harness ('env E,
+    optimizer O, run R', from its `harness list`); '' without a harness (the report then judges
+    no run stale)."""
+    reg = registry_of_harness()
+    v = reg.current_versions(env, optimizer) if reg else None
+    return "" if v is None else f"env {v[0]}, optimizer {v[1]}, run {v[2]}"
+
+
 def db_path():
     """The database under test: argv, $DSB_REPORT_DB, or one made now with the harness."""
     if _DB["path"]:
@@ -94,6 +119,12 @@ def copy_db(dst):
     src.close()
     out.close()
     return dst
+
+
+def file_sha256(path):
+    import hashlib
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
 
 
 def slug(text):
@@ -168,6 +199,7 @@ class ReportCase(unittest.TestCase):
             cls.modify(con)
             con.commit()
             con.close()
+        cls.db_sha = file_sha256(cls.db)
         cls.land = os.path.join(cls.tmp, "landscapes")
         os.makedirs(cls.land)
         write_sphere_landscape(cls.land)
@@ -335,6 +367,21 @@ class TestReport(ReportCase):
         rows = [c for c in map(row_cells, html_rows(sec)) if c]
         self.assertEqual([r[0].split(" (as ")[0] for r in rows], envs)
 
+    def test_the_harness_runs_are_current(self):
+        # the versions the harness stored (harness/results_versions.cpp) are the ones its `harness
+        # list` gives (dsb_report.staleness): no run left out, no stale file, no note
+        need_harness()
+        con = sqlite3.connect(self.db)
+        stored = con.execute("SELECT DISTINCT env, optimizer, results_versions FROM runs").fetchall()
+        con.close()
+        self.assertEqual(len(stored), 6)
+        for env, opt, text in stored:
+            self.assertEqual(text, versions_text(env, opt))
+            self.assertRegex(text, r"^env [1-9][0-9]*, optimizer [1-9][0-9]*, run [1-9][0-9]*$")
+        self.assertFalse(os.path.exists(self.file("stale_runs.csv")))
+        self.assertNotIn("stale", self.html.split('<h2 id="contents">')[0])
+        self.assertNotIn('id="stale"', self.html)
+
     def test_ranks_and_ecdf_tables(self):
         ranks = read_csv(self.file("ranks.csv"))
         opts = {o for per in self.cells.values() for o in per}
@@ -468,9 +515,9 @@ def _synthetic_runs(con, cells=CLAIM_CELLS):
         for seed, best in enumerate(losses):
             cur = con.execute(
                 "INSERT INTO runs(env, optimizer, seed, budget, env_config_hash, opt_config_hash, "
-                "rng_seed, status, episodes, best_loss, wall_s, harness_version, git_sha, host) "
-                "VALUES (?, ?, ?, 2, ?, ?, '0', 'done', 2, ?, 0.1, ?, 'test', 'test')",
-                (env, opt, seed, env_h, opt_h, best, ver))
+                "rng_seed, status, episodes, best_loss, wall_s, harness_version, git_sha, host, "
+                "results_versions) VALUES (?, ?, ?, 2, ?, ?, '0', 'done', 2, ?, 0.1, ?, 'test', 'test', ?)",
+                (env, opt, seed, env_h, opt_h, best, ver, versions_text(env, opt)))
             first = None if best is None else best + 1
             for ep, (loss, b) in enumerate([(first, first), (best, best)]):
                 con.execute("INSERT INTO evals(run_id, episode, loss, best_loss, used_grad, wall_s, "
@@ -751,6 +798,289 @@ class TestClaimStates(ReportCase):
         self.assertIn("| harness --claims --env sphere-2 --seeds 5 |", md)
 
 
+def _older_binary(con):
+    """The harness's database as older binaries leave it: random's runs without results versions
+    (a schema-4 file's, migrated: ''), branin's random seed 2 failed, and sphere-2's cmaes seeds 0
+    and 1 of another optimizer version (this binary's + 1); sphere-2's cmaes seed 2 and every gd
+    run stay current."""
+    e, o, r = registry_of_harness().current_versions("sphere-2", "cmaes")
+    con.execute("UPDATE runs SET results_versions = '' WHERE optimizer = 'random'")
+    con.execute("UPDATE runs SET status = 'failed', error = 'old' WHERE optimizer = 'random' AND "
+                "env = 'branin' AND seed = 2")
+    con.execute("UPDATE runs SET results_versions = ? WHERE env = 'sphere-2' AND optimizer = 'cmaes' "
+                "AND seed < 2", (f"env {e}, optimizer {o + 1}, run {r}",))
+
+
+def _stale_claims(tmp, *more):
+    """A claim on sphere-2's cmaes and random: the runs it counts are the current ones only."""
+    path = os.path.join(tmp, "stale_claims.csv")
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["id", "env", "kind", "a", "b", "threshold", "statement", "source", "note"])
+        w.writerow(["cm-rand", "sphere-2", "a_below_b", "cmaes", "random", "", "s", "t", ""])
+        w.writerow(["gd-cm", "branin", "a_below_b", "gd", "cmaes", "", "s", "t", ""])
+    return ("--claims", path) + more
+
+
+def finals_of(case, env):
+    return {r["optimizer"]: r for r in read_csv(case.file(f"final_{slug(env)}.csv"))}
+
+
+def best_losses(db, where, args=()):
+    con = sqlite3.connect(db)
+    out = [b for (b,) in con.execute(f"SELECT best_loss FROM runs WHERE status = 'done' AND {where}", args)]
+    con.close()
+    return out
+
+
+class StaleCase(ReportCase):
+    modify = staticmethod(_older_binary)
+
+    @classmethod
+    def setUpClass(cls):
+        need_harness()
+        super().setUpClass()
+        e, o, r = registry_of_harness().current_versions("sphere-2", "cmaes")
+        cls.cmaes_now, cls.cmaes_label = o, f"cmaes-stale-e{e}o{o + 1}r{r}"
+        cls.unversioned = "made before results versions (a database of schema 4 or older)"
+
+    def notes(self):
+        return [html.unescape(n) for n in re.findall(r'<p class="note">(.*?)</p>', self.html)]
+
+    def groups(self, shown):
+        suffix = (lambda lab: f" (shown as {lab})") if shown else (lambda lab: "")
+        return (f"branin / random: 2 done, 1 unfinished: {self.unversioned}{suffix('random-stale-unversioned')}; "
+                f"sphere-2 / cmaes: 2 done, 0 unfinished: optimizer cmaes version {self.cmaes_now + 1}, "
+                f"this binary's {self.cmaes_now}{suffix(self.cmaes_label)}; "
+                f"sphere-2 / random: 3 done, 0 unfinished: {self.unversioned}{suffix('random-stale-unversioned')}.")
+
+    def check_stale_file(self, shown):
+        rows = [(r["env"], r["optimizer"], r["results_versions"], r["done"], r["unfinished"], r["shown_as"])
+                for r in read_csv(self.file("stale_runs.csv"))]
+        e, o, r = registry_of_harness().current_versions("sphere-2", "cmaes")
+        self.assertEqual(rows, [
+            ("branin", "random", "", "2", "1", "random-stale-unversioned" if shown else ""),
+            ("sphere-2", "cmaes", f"env {e}, optimizer {o + 1}, run {r}", "2", "0", self.cmaes_label if shown else ""),
+            ("sphere-2", "random", "", "3", "0", "random-stale-unversioned" if shown else "")])
+        self.assertIn("Stale runs (8)", self.html)
+
+    def check_claims_judge_current_runs(self):
+        # sphere-2: cmaes seed 2 is the one current run of the 10 (cmaes, random x seeds 0-4)
+        v = {r["id"]: r for r in read_csv(self.file("claims.csv"))}
+        self.assertEqual(v["cm-rand"]["verdict"], "runs missing: 1 of 10 done")
+        self.assertTrue(v["cm-rand"]["reason"].startswith(
+            "1 of 10 runs done (cmaes, random x seeds 0-4, budget 20). Absent: cmaes seeds 0-1, 3-4; "
+            "random seeds 0-4."), v["cm-rand"]["reason"])
+        # branin's gd and cmaes are current: 3 seeds each, as the database has them
+        self.assertEqual(v["gd-cm"]["n"].split("; ")[1], "cmaes 3")
+        comps = read_csv(self.file("claims_comparisons.csv"))
+        self.assertFalse([c for c in comps if "stale" in c["a"] + c["b"]])
+
+
+class TestStaleLeftOut(StaleCase):
+    """Runs of other results versions are left out of every table, figure, test and claim, and
+    the overview says how many and why, as `harness export` counts them."""
+    extra = staticmethod(_stale_claims)
+
+    def test_overview_says_how_many_and_why(self):
+        note = next(n for n in self.notes() if "stale" in n)
+        self.assertEqual(note, (
+            f"Left out: 8 stale run(s) (7 done, 1 unfinished), made by other results versions than this "
+            f"harness's (`harness list` of {harness_path()}); --include-stale shows them, marked: "
+            + self.groups(False)))
+        with open(self.file("summary.md"), encoding="utf-8") as f:
+            self.assertIn("> " + note, f.read())
+        self.check_stale_file(False)
+
+    def test_the_harness_counts_the_same_stale_runs(self):
+        ex = subprocess.run([need_harness(), "export", "--db", self.db, "--out", os.path.join(self.tmp, "t.csv")],
+                            capture_output=True, text=True, timeout=120)
+        self.assertEqual(ex.returncode, 0, ex.stderr)
+        self.assertIn("left out 7 stale done runs", ex.stderr)
+        self.assertIn(f"sphere-2 / cmaes: 2 (optimizer cmaes version {self.cmaes_now + 1}, this binary's "
+                      f"{self.cmaes_now})", ex.stderr)
+        self.assertIn(f"sphere-2 / random: 3 ({self.unversioned})", ex.stderr)
+
+    def test_tables_hold_current_runs_only(self):
+        sphere, branin = finals_of(self, "sphere-2"), finals_of(self, "branin")
+        self.assertEqual(sorted(sphere), ["cmaes", "gd"])
+        self.assertEqual(sorted(branin), ["cmaes", "gd"])
+        # sphere-2's cmaes: seed 2 alone, its median its own best loss
+        (seed2,) = best_losses(self.db, "env = 'sphere-2' AND optimizer = 'cmaes' AND seed = 2")
+        self.assertEqual((sphere["cmaes"]["n_seeds"], float(sphere["cmaes"]["median"])), ("1", seed2))
+        self.assertEqual(branin["cmaes"]["n_seeds"], "3")
+        self.assertEqual(float(branin["cmaes"]["median"]),
+                         statistics.median(best_losses(self.db, "env = 'branin' AND optimizer = 'cmaes'")))
+        self.assertEqual({r["optimizer"] for r in read_csv(self.file("significance.csv"))}, {"cmaes", "gd"})
+        self.assertEqual({r["optimizer"] for r in read_csv(self.file("ranks.csv"))}, {"cmaes", "gd"})
+        head = re.findall(r"<th>(.*?)</th>", html_rows(section(self.html, "overview"))[0])
+        self.assertEqual(head, ["env (budget)", "cmaes", "gd"])
+        self.assertNotIn("random", section(self.html, "failed"))     # the stale failed run too
+        # a stale run is not done: sphere-2's cmaes seeds 0-1 are missing, to be run anew
+        missing = {(r["env"], r["optimizer"], r["seed"], r["reason"]) for r in read_csv(self.file("missing.csv"))}
+        self.assertEqual(missing, {("sphere-2", "cmaes", "0", "absent"), ("sphere-2", "cmaes", "1", "absent")})
+
+    def test_claims_judge_current_runs_only(self):
+        self.check_claims_judge_current_runs()
+
+
+class TestStaleIncluded(StaleCase):
+    """--include-stale: every stale (optimizer, versions) is an optimizer of its own, marked,
+    never pooled with the current runs of its optimizer; the claims still judge current runs."""
+    extra = staticmethod(lambda tmp: _stale_claims(tmp, "--include-stale"))
+
+    def test_overview_says_they_are_shown(self):
+        note = next(n for n in self.notes() if "stale" in n)
+        self.assertEqual(note, (
+            f"Shown: 8 stale run(s) (7 done, 1 unfinished), made by other results versions than this "
+            f"harness's (`harness list` of {harness_path()}); each is its own optimizer, OPT-stale-eEoOrR "
+            f"or OPT-stale-unversioned, never pooled with current runs, and the claims judge current runs "
+            f"only: " + self.groups(True)))
+        self.check_stale_file(True)
+
+    def test_stale_runs_are_samples_of_their_own(self):
+        sphere, branin = finals_of(self, "sphere-2"), finals_of(self, "branin")
+        self.assertEqual(sorted(sphere), ["cmaes", self.cmaes_label, "gd", "random-stale-unversioned"])
+        (seed2,) = best_losses(self.db, "env = 'sphere-2' AND optimizer = 'cmaes' AND seed = 2")
+        self.assertEqual((sphere["cmaes"]["n_seeds"], float(sphere["cmaes"]["median"])), ("1", seed2))
+        old = best_losses(self.db, "env = 'sphere-2' AND optimizer = 'cmaes' AND seed < 2")
+        self.assertEqual(sphere[self.cmaes_label]["n_seeds"], "2")
+        self.assertAlmostEqual(float(sphere[self.cmaes_label]["median"]), statistics.median(old), delta=1e-15)
+        self.assertEqual(float(sphere[self.cmaes_label]["min"]), min(old))
+        # branin's random: 2 done seeds, the failed third counted as its failed run
+        self.assertEqual((branin["random-stale-unversioned"]["n_seeds"],
+                          branin["random-stale-unversioned"]["failed_runs"]), ("2", "1"))
+        sig = {(r["env"], r["optimizer"]) for r in read_csv(self.file("significance.csv"))}
+        self.assertIn(("sphere-2", self.cmaes_label), sig)
+        head = re.findall(r"<th>(.*?)</th>", html_rows(section(self.html, "overview"))[0])
+        self.assertEqual(head, ["env (budget)", "cmaes", self.cmaes_label, "gd", "random-stale-unversioned"])
+        self.assertIn("random-stale-unversioned", section(self.html, "failed"))
+        # the figures' legends name them as the tables do: the labels the curves are drawn under
+        from dsb_report import data
+        d = data.load(self.db, registry_of_harness(), include_stale=True)
+        pn = next(p for p in d.panels if p.env == "sphere-2")
+        self.assertEqual(pn.optimizers, ["cmaes", self.cmaes_label, "gd", "random-stale-unversioned"])
+        self.assertEqual(pn.rows(self.cmaes_label).size, 2)
+
+    def test_claims_judge_current_runs_only(self):
+        self.check_claims_judge_current_runs()
+        # and a stale run is no run to make again under its label
+        self.assertFalse([r for r in read_csv(self.file("missing.csv")) if "stale" in r["optimizer"]])
+
+
+def _schema_4(con):
+    """The database as a schema-4 harness left it: runs without the results_versions column (the
+    table rebuilt without it), meta.schema_version 4."""
+    cols = [r[1] for r in con.execute("PRAGMA table_info(runs)") if r[1] != "results_versions"]
+    con.execute(f"CREATE TABLE runs4 AS SELECT {', '.join(cols)} FROM runs")
+    con.execute("DROP TABLE runs")
+    con.execute("ALTER TABLE runs4 RENAME TO runs")
+    con.execute("UPDATE meta SET value = '4' WHERE key = 'schema_version'")
+
+
+class TestStaleSchema4(ReportCase):
+    """A database of schema 4 (no runs.results_versions) is read without being changed; its runs
+    were made before results versions, so all are stale for this harness."""
+    modify = staticmethod(_schema_4)
+
+    @classmethod
+    def setUpClass(cls):
+        need_harness()
+        super().setUpClass()
+
+    def test_every_run_is_left_out_and_the_file_is_unchanged(self):
+        con = sqlite3.connect(self.db)
+        self.assertNotIn("results_versions", [r[1] for r in con.execute("PRAGMA table_info(runs)")])
+        n = con.execute("SELECT count(*) FROM runs").fetchone()[0]
+        con.close()
+        self.assertEqual(n, 18)
+        notes = [html.unescape(x) for x in re.findall(r'<p class="note">(.*?)</p>', self.html)]
+        self.assertTrue(notes[0].startswith("Left out: 18 stale run(s) (18 done, 0 unfinished)"), notes[0])
+        self.assertIn("No run of this harness's results versions is done: there is nothing to compare yet.", notes)
+        self.assertEqual({r["reason"] for r in read_csv(self.file("stale_runs.csv"))},
+                         {"made before results versions (a database of schema 4 or older)"})
+        self.assertEqual(sum(int(r["done"]) for r in read_csv(self.file("stale_runs.csv"))), 18)
+        self.assertEqual(file_sha256(self.db), self.db_sha)
+
+    def test_include_stale_shows_them_all(self):
+        out = os.path.join(self.tmp, "report_all")
+        proc = run_report(self.db, out, "--harness", need_harness(), "--include-stale")
+        self.assertEqual(proc.returncode, 0, proc.stderr)
+        for env in ("sphere-2", "branin"):
+            rows = {r["optimizer"]: r for r in read_csv(os.path.join(out, f"final_{env}.csv"))}
+            self.assertEqual(sorted(rows), ["cmaes-stale-unversioned", "gd-stale-unversioned",
+                                            "random-stale-unversioned"])
+            self.assertEqual({r["n_seeds"] for r in rows.values()}, {"3"})
+            self.assertEqual(float(rows["random-stale-unversioned"]["median"]),
+                             statistics.median(best_losses(self.db, "env = ? AND optimizer = 'random'", (env,))))
+        self.assertEqual(file_sha256(self.db), self.db_sha)
+
+
+class TestStaleNotJudged(unittest.TestCase):
+    """Without a harness to ask, no run can be judged stale: all are kept, and the overview says so."""
+
+    def test_all_runs_kept(self):
+        need_harness()
+        tmp = tempfile.mkdtemp(prefix="dsb_report_nojudge_")
+        try:
+            db = copy_db(os.path.join(tmp, "copy.sqlite"))
+            con = sqlite3.connect(db)
+            _older_binary(con)
+            con.commit()
+            con.close()
+            # the generator alone, beside no build/bin/harness, without $DSB_HARNESS
+            shutil.copytree(HERE, os.path.join(tmp, "reports"),
+                            ignore=shutil.ignore_patterns("__pycache__", "test_*.py"))
+            env = {k: v for k, v in os.environ.items() if k != "DSB_HARNESS"}
+            out = os.path.join(tmp, "report")
+            proc = subprocess.run([sys.executable, os.path.join(tmp, "reports", "make_report.py"), "--db", db,
+                                   "--out", out], capture_output=True, text=True, timeout=600, env=env)
+            self.assertEqual(proc.returncode, 0, proc.stderr)
+            with open(os.path.join(out, "index.html"), encoding="utf-8") as f:
+                page = f.read()
+            notes = [html.unescape(x) for x in re.findall(r'<p class="note">(.*?)</p>', page)]
+            self.assertEqual(notes[0], (
+                "Staleness could not be judged: no harness to ask for its results versions (make_report.py "
+                "--harness BIN, $DSB_HARNESS or build/bin/harness), so all 18 run(s) are kept, whatever "
+                "versions of the code made them (docs/database.md, \"Results versions\")."))
+            rows = {r["optimizer"]: r for r in read_csv(os.path.join(out, "final_sphere-2.csv"))}
+            self.assertEqual({o: r["n_seeds"] for o, r in rows.items()}, {"cmaes": "3", "gd": "3", "random": "3"})
+            self.assertFalse(os.path.exists(os.path.join(out, "stale_runs.csv")))
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+class TestStaleReasons(unittest.TestCase):
+    """dsb_report.staleness reads stored versions and says why a run is stale in the harness's
+    words (harness/results_versions.cpp, stale_reason)."""
+
+    def test_reasons(self):
+        reg = registry_of_harness() if harness_path() else None
+        if reg is None:
+            self.skipTest("no harness binary: set DSB_HARNESS")
+        from dsb_report import staleness
+        e, o, r = reg.current_versions("plb-pinch-h5", "boleap")
+        now = f"env {e}, optimizer {o}, run {r}"
+        self.assertEqual(staleness.parse(now), (e, o, r))
+        for bad in ("", f"env 0{e}, optimizer {o}, run {r}", f"env {e}, optimizer {o}", "env 0, optimizer 0, run 0"):
+            self.assertEqual(staleness.parse(bad), (0, 0, 0), bad)
+        self.assertEqual(staleness.reason(reg, "plb-pinch-h5", "boleap", now), "")
+        self.assertEqual(staleness.reason(reg, "plb-pinch", "boleap", now), "")       # a variant: its env's
+        self.assertEqual(staleness.reason(reg, "plb-pinch", "boleap", "garbage"), staleness.UNVERSIONED)
+        self.assertEqual(staleness.reason(reg, "plb-pinch", "boleap", f"env {e + 1}, optimizer {o}, run {r + 2}"),
+                         f"env plb-pinch version {e + 1}, this binary's {e}; run code version {r + 2}, "
+                         f"this binary's {r}")
+        self.assertEqual(staleness.reason(reg, "no-such-env", "boleap", now),
+                         f"env no-such-env version {e}, this binary's none (unknown here)")
+        # an external optimizer has the ext: adapter's version
+        es, x = reg.current_versions("sphere-2", "cmaes")[0], reg.versions["optimizer"]["ext:NAME"]
+        self.assertEqual(staleness.reason(reg, "sphere-2", "ext:mine", f"env {es}, optimizer {x}, run {r}"), "")
+        self.assertEqual(staleness.reason(reg, "sphere-2", "ext:mine", f"env {es}, optimizer {x + 1}, run {r}"),
+                         f"optimizer ext:mine version {x + 1}, this binary's {x}")
+        self.assertEqual(staleness.label("cmaes", "env 1, optimizer 2, run 3"), "cmaes-stale-e1o2r3")
+        self.assertEqual(staleness.label("cmaes", ""), "cmaes-stale-unversioned")
+
+
 class TestRegistry(unittest.TestCase):
     """dsb_report.registry reads `harness list`: which envs exist, which optimizers --all runs."""
 
@@ -836,10 +1166,10 @@ def _curve_runs(con, cells, nan_episodes):
     def insert(env, opt, seed, final, status):
         cur = con.execute(
             "INSERT INTO runs(env, optimizer, seed, budget, env_config_hash, opt_config_hash, "
-            "rng_seed, status, episodes, best_loss, wall_s, harness_version, git_sha, host, error) "
-            "VALUES (?, ?, ?, ?, ?, ?, '0', ?, ?, ?, 0.1, ?, 'test', 'test', ?)",
+            "rng_seed, status, episodes, best_loss, wall_s, harness_version, git_sha, host, error, "
+            "results_versions) VALUES (?, ?, ?, ?, ?, ?, '0', ?, ?, ?, 0.1, ?, 'test', 'test', ?, ?)",
             (env, opt, seed, b, env_h, opt_h, status, b, final, ver,
-             "blew up" if status == "failed" else None))
+             "blew up" if status == "failed" else None, versions_text(env, opt)))
         nan = nan_episodes.get((env, opt, seed), [0, 1] if status == "failed" else [])
         best = None
         for ep in range(b):

@@ -127,6 +127,59 @@ TEST_F(ResultsVersionsTest, ADatabaseOfOtherVersionsResumesNothingAndEveryComman
   EXPECT_NE(recheck.out.find(" 0 changed, 0 missing"), std::string::npos) << recheck.out;
 }
 
+// `harness report` (reports/make_report.py, told this binary's results versions by its `harness
+// list`) leaves the runs an older binary made out of every table and says how many and why;
+// --include-stale shows them, each an optimizer of its own, never pooled with the current runs. A
+// schema-4 file (no runs.results_versions) is read as it is: every run stale, the file unchanged.
+TEST_F(ResultsVersionsTest, TheReportLeavesStaleRunsOutAndShowsThemWhenAsked) {
+  const std::string db = path("r.sqlite");
+  ASSERT_EQ(harness(kGrid + " --budget 12 --db " + db).code, 0);
+  // random's 4 runs as a binary from before versions left them; cmaes's 4 stay current
+  testing::execute(db, "UPDATE runs SET results_versions='' WHERE optimizer='random'");
+  const std::string made_before = "made before results versions (a database of schema 4 or older)";
+
+  const auto left_out = harness("report --db " + db + " --out " + path("rep"));
+  ASSERT_EQ(left_out.code, 0) << left_out.err;
+  const std::string page = read_file(path("rep/index.html"));
+  EXPECT_NE(page.find("Left out: 4 stale run(s) (4 done, 0 unfinished)"), std::string::npos) << page;
+  EXPECT_NE(page.find("branin / random: 2 done, 0 unfinished: " + made_before), std::string::npos);
+  EXPECT_NE(page.find("sphere-2 / random: 2 done, 0 unfinished: " + made_before), std::string::npos);
+  const std::string finals = read_file(path("rep/final_sphere-2.csv"));
+  EXPECT_NE(finals.find("\nsphere-2,12,cmaes,2,"), std::string::npos) << finals;
+  EXPECT_EQ(finals.find("random"), std::string::npos) << finals;
+  EXPECT_EQ(read_file(path("rep/stale_runs.csv")),
+            "env,optimizer,results_versions,reason,done,unfinished,shown_as\n"
+            "branin,random,,made before results versions (a database of schema 4 or older),2,0,\n"
+            "sphere-2,random,,made before results versions (a database of schema 4 or older),2,0,\n");
+
+  const auto shown = harness("report --include-stale --db " + db + " --out " + path("all"));
+  ASSERT_EQ(shown.code, 0) << shown.err;
+  EXPECT_NE(read_file(path("all/index.html")).find("Shown: 4 stale run(s) (4 done, 0 unfinished)"), std::string::npos);
+  const std::string all = read_file(path("all/final_sphere-2.csv"));
+  EXPECT_NE(all.find("\nsphere-2,12,cmaes,2,"), std::string::npos) << all;
+  EXPECT_NE(all.find("\nsphere-2,12,random-stale-unversioned,2,"), std::string::npos) << all;
+
+  // schema 4: the runs table rebuilt without results_versions, as a file of version 4 has it
+  testing::execute(db,
+                   "CREATE TABLE runs4 AS SELECT run_id, env, optimizer, seed, budget, env_config_hash, "
+                   "opt_config_hash, rng_seed, status, episodes, failed_episodes, best_loss, best_x, wall_s, error, "
+                   "started_at, finished_at, harness_version, git_sha, host, diagnostics, seed_free_episodes, "
+                   "seed_free_calls, shared_episodes, shared_from_seed FROM runs; DROP TABLE runs; "
+                   "ALTER TABLE runs4 RENAME TO runs; UPDATE meta SET value='4' WHERE key='schema_version'");
+  ASSERT_EQ(scalar(db, "SELECT count(*) FROM pragma_table_info('runs') WHERE name='results_versions'"), "0");
+  const std::string before = read_file(db);
+  const auto old = harness("report --db " + db + " --out " + path("v4"));
+  ASSERT_EQ(old.code, 0) << old.err;
+  const std::string v4 = read_file(path("v4/index.html"));
+  EXPECT_NE(v4.find("Left out: 8 stale run(s) (8 done, 0 unfinished)"), std::string::npos) << v4;
+  EXPECT_NE(v4.find("sphere-2 / cmaes: 2 done, 0 unfinished: " + made_before), std::string::npos);
+  const auto old_all = harness("report --include-stale --db " + db + " --out " + path("v4all"));
+  ASSERT_EQ(old_all.code, 0) << old_all.err;
+  EXPECT_NE(read_file(path("v4all/final_branin.csv")).find("\nbranin,12,cmaes-stale-unversioned,2,"),
+            std::string::npos);
+  EXPECT_EQ(read_file(db), before);  // read, never changed
+}
+
 TEST_F(ResultsVersionsTest, MergeKeepsTheVersionsApart) {
   const std::string a = path("a.sqlite"), b = path("b.sqlite");
   ASSERT_EQ(harness(kGrid + " --budget 12 --db " + a).code, 0);

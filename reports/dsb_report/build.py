@@ -12,7 +12,7 @@ import scipy
 
 from . import (captions, claims, grid, html, landscape, metric_counts, optima, plots, renders, stats, style,
                summary)
-from .data import main_panels, slugify
+from .data import current_view, main_panels, slugify
 from .tables import FINAL_COLUMNS, SIGNIFICANCE_COLUMNS, failures, mark, overview, write_csv
 
 
@@ -125,10 +125,12 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
         tables.append(t)
 
     mp = main_panels(data)
-    verdicts, comparisons = claims.evaluate(list(claim_list), mp, data.runs, registry)
+    # the claims judge the runs of this harness's results versions only, shown stale runs or not
+    claim_panels, current_runs = current_view(data)
+    verdicts, comparisons = claims.evaluate(list(claim_list), claim_panels, current_runs, registry)
     write_csv(verdicts, path("claims.csv"))
     write_csv(comparisons, path("claims_comparisons.csv"))
-    reached = metric_counts.table(list(claim_list), mp)
+    reached = metric_counts.table(list(claim_list), claim_panels)
     if len(reached):
         write_csv(reached, path("claims_metric_counts.csv"))
     by_env = stats.ranks(mp)
@@ -151,7 +153,10 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
     if gradient_quality is not None:  # the survey's file as it is
         shutil.copyfile(gradient_quality_path, path("gradient_quality.csv"))
 
-    missing = grid.missing_runs(data.runs)
+    missing = grid.missing_runs(current_runs)     # a stale run is no run to make
+    stale_table = data.stale.table()
+    if len(stale_table):
+        write_csv(stale_table, path("stale_runs.csv"))
     write_csv(missing, path("missing.csv"))
     failed = grid.runs_with_status(data.runs, "failed")
     running = grid.runs_with_status(data.runs, "running")
@@ -168,11 +173,13 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
             written.append(name)
             lands.append(dict(env=env, i=i, j=j, png=name, source=os.path.basename(src), desc=desc))
 
-    rends = renders.collect(data.runs, render_dir, out, written)
+    rends = renders.collect(current_runs, render_dir, out, written)   # as render --best-of picks
 
-    notes = []
+    notes = [n for n in [data.stale.note(len(data.runs))] if n]
     if not data.panels:
-        notes.append("No run is done: there is nothing to compare yet.")
+        notes.append("No run of this harness's results versions is done: there is nothing to compare yet."
+                     if data.stale.count and not data.stale.shown else
+                     "No run is done: there is nothing to compare yet.")
     if len(missing):
         notes.append(f"{len(missing)} expected run(s) are not done; see Missing runs.")
     if len(failed):
@@ -206,7 +213,9 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
         significance=sig,
         minp_text=_minp_text(tables), landscapes=lands, landscape_errors=lerrors,
         landscape_dir=landscape_dir, missing=missing, failed=failed, running=running,
-        ignored=data.ignored, max_seed=int(r["seed"].max()) if len(r) else 0, renders=rends)
+        ignored=data.ignored, max_seed=int(current_runs["seed"].max()) if len(current_runs) else 0,
+        renders=rends,
+        stale=stale_table, stale_shown=data.stale.shown)
 
     with open(path("summary.md"), "w", encoding="utf-8") as f:
         f.write(summary.render(ctx))

@@ -132,3 +132,13 @@ GALLERY = ("The loss on 2-D slices of every env given to the report (--landscape
            "seed's Figures 8-15 dims where it gives them, else the first two dims, the particle "
            "envs at their 5-env-step variants), side by side per env under that env's row of the "
            "gradient quality survey. " + LANDSCAPE)
+
+STALE_LEFT_OUT = ("Runs made by other results versions than the harness's (docs/database.md, \"Results "
+                  "versions\"): another code made them, so they are left out of every table, figure, "
+                  "test and claim, and count as not done (a grid of this harness runs them anew). "
+                  "--include-stale shows them, each under its own name.")
+
+STALE_SHOWN = ("Runs made by other results versions than the harness's (docs/database.md, \"Results "
+               "versions\"), shown as asked (--include-stale): each (optimizer, stored versions) is an "
+               "optimizer of its own, named as in the IOH export, never pooled with the current runs "
+               "of its optimizer; the claims judge current runs only.")

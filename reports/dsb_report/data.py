@@ -4,6 +4,9 @@ Analysis unit: a *panel* = (env, budget). Within a panel each optimizer contribu
 runs, one per seed. If one (env, optimizer, budget) has runs under more than one config variant
 (env_config_hash, opt_config_hash), the variant with the most 'done' runs is analysed (ties: the
 one with the newest run) and the others are listed in the report, never mixed silently.
+
+Runs made by other results versions than the harness's (stale, staleness.py) are left out before
+anything else, or with include_stale analysed as optimizers of their own (OPT-stale-...).
 """
 from __future__ import annotations
 
@@ -15,14 +18,17 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from . import staleness
+
 RUN_COLUMNS = ["run_id", "env", "optimizer", "seed", "budget", "env_config_hash",
                "opt_config_hash", "status", "episodes", "failed_episodes", "best_loss",
                "wall_s", "error", "started_at", "finished_at", "harness_version", "git_sha",
                "host"]
-# read when the database has them (NULL or absent: not recorded): the episodes of a run before its
-# optimizer's first draw from its RNG (schema version 4 on; stats.seed_free), and the results
-# versions of the code that made it (schema version 5 on; '' before: docs/database.md)
-OPTIONAL_RUN_COLUMNS = ["seed_free_episodes", "results_versions"]
+# read when the database has it (schema version 4 on; NULL or absent: not recorded): the episodes
+# of a run before its optimizer's first draw from its RNG (stats.seed_free)
+OPTIONAL_RUN_COLUMNS = ["seed_free_episodes"]
+# read when the database has it (schema version 5 on; absent: '', made before results versions)
+VERSIONS_COLUMN = "results_versions"
 
 
 class DataError(Exception):
@@ -49,6 +55,14 @@ class Panel:
     def rows(self, optimizer: str) -> np.ndarray:
         return np.flatnonzero(self.runs["optimizer"].to_numpy() == optimizer)
 
+    def subset(self, keep: np.ndarray):
+        """The panel of the runs where keep ([n_runs] bool) is True; None when none is."""
+        if not keep.any():
+            return None
+        runs = self.runs[keep].reset_index(drop=True)
+        return Panel(self.env, self.budget, self.slug, runs, self.best[keep], self.first_loss[keep],
+                     sorted(runs["optimizer"].unique()), self.metric_at_best[keep])
+
     @property
     def fstar(self) -> float:
         finite = self.best[np.isfinite(self.best)]
@@ -70,6 +84,8 @@ class Data:
     ignored: pd.DataFrame     # 'done' runs of other config variants
     panels: list
     optimizers: list          # sorted names of every optimizer in the database
+    # the runs made by other results versions, and what was done with them (staleness.py)
+    stale: staleness.Staleness = field(default_factory=lambda: staleness.Staleness(judged=False))
 
 
 def slugify(text: str) -> str:
@@ -164,7 +180,10 @@ def _metric_at_best(runs: pd.DataFrame, ev: pd.DataFrame, budget: int) -> np.nda
     return out
 
 
-def load(path: str) -> Data:
+def load(path: str, registry=None, include_stale: bool = False) -> Data:
+    """The database at path. registry: `harness list` of the harness whose results versions make a
+    run current (None: staleness not judged, every run kept); include_stale: analyse stale runs as
+    optimizers of their own instead of leaving them out."""
     con = connect_ro(path)
     try:
         meta = dict(con.execute("SELECT key, value FROM meta").fetchall())
@@ -172,12 +191,14 @@ def load(path: str) -> Data:
         absent = [c for c in RUN_COLUMNS if c not in cols]
         if absent:
             raise DataError(f"'{path}': table runs lacks column(s) {', '.join(absent)}")
-        optional = [c for c in OPTIONAL_RUN_COLUMNS if c in cols]
+        optional = [c for c in OPTIONAL_RUN_COLUMNS + [VERSIONS_COLUMN] if c in cols]
         runs = pd.read_sql_query(f"SELECT {', '.join(RUN_COLUMNS + optional)} FROM runs", con)
         for c in OPTIONAL_RUN_COLUMNS:
             if c not in runs.columns:
-                runs[c] = "" if c == "results_versions" else np.nan
-        runs["results_versions"] = runs["results_versions"].fillna("").astype(str)
+                runs[c] = np.nan
+        if VERSIONS_COLUMN not in runs.columns:
+            runs[VERSIONS_COLUMN] = ""
+        runs[VERSIONS_COLUMN] = runs[VERSIONS_COLUMN].fillna("").astype(str)
         ev_cols = [r[1] for r in con.execute("PRAGMA table_info(evals)")]
         metric = ", e.metric" if "metric" in ev_cols else ""  # schema version 2 on
         ev = pd.read_sql_query(
@@ -202,6 +223,8 @@ def load(path: str) -> Data:
     runs["failed_episodes"] = pd.to_numeric(runs["failed_episodes"], errors="coerce").fillna(0)
     runs.loc[done, "failed_episodes"] = runs.loc[done, "run_id"].map(nan_eps).fillna(0)
     runs["failed_episodes"] = runs["failed_episodes"].astype(int)
+    runs, stale = staleness.judge(runs, registry, include_stale)
+    runs = runs.sort_values(["env", "optimizer", "seed", "budget", "run_id"]).reset_index(drop=True)
 
     selected, ignored = _choose_variants(runs[runs["status"] == "done"])
     panels = []
@@ -216,13 +239,23 @@ def load(path: str) -> Data:
                             _metric_at_best(g, gev, int(budget))))
     return Data(db_path=path, db_size=os.path.getsize(path), meta=meta, runs=runs,
                 selected=selected, ignored=ignored, panels=panels,
-                optimizers=sorted(runs["optimizer"].unique()))
+                optimizers=sorted(runs["optimizer"].unique()), stale=stale)
 
 
-def main_panels(data: Data) -> list:
-    """One panel per env for the across-env views: the one with the largest budget."""
+def main_panels(data: Data, panels=None) -> list:
+    """One panel per env for the across-env views: the one with the largest budget (of `panels`,
+    default data.panels)."""
     out = {}
-    for p in data.panels:
+    for p in data.panels if panels is None else panels:
         if p.env not in out or p.budget > out[p.env].budget:
             out[p.env] = p
     return [out[e] for e in sorted(out)]
+
+
+def current_view(data: Data):
+    """(one panel per env, runs) of the current runs only: what the claims judge. Without stale
+    runs shown these are main_panels(data) and data.runs."""
+    if not data.stale.shown or not data.stale.count:
+        return main_panels(data), data.runs
+    panels = [q for q in (p.subset(~p.runs["stale"].to_numpy(dtype=bool)) for p in data.panels) if q is not None]
+    return main_panels(data, panels), data.runs[~data.runs["stale"]].reset_index(drop=True)

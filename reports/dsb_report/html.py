@@ -339,6 +339,16 @@ def _problems(ctx) -> str:
                         "optimizer config", "best loss"],
                        _df_rows(ig, ["env", "optimizer", "seed", "budget", "run_id",
                                      "env_config_hash", "opt_config_hash", "best_loss"])))
+    st = ctx.get("stale")
+    if st is not None and not st.empty:
+        p.append('<h2 id="stale">Stale runs</h2>')
+        p.append("<p>" + escape(captions.STALE_SHOWN if ctx["stale_shown"] else captions.STALE_LEFT_OUT) +
+                 f" ({link('stale_runs.csv')})</p>")
+        p.append(table(["env", "optimizer", "stored results versions", "why stale", "done", "unfinished",
+                        "shown as"],
+                       [[r["env"], r["optimizer"], r["results_versions"] or "(none)", r["reason"], r["done"],
+                         r["unfinished"], r["shown_as"] or "—"] for _, r in st.iterrows()],
+                       numeric={4, 5}))
     return "\n".join(p)
 
 
@@ -353,8 +363,10 @@ def render(ctx) -> str:
             ("landscapes", "Landscapes"),
             ("missing", f"Missing runs ({len(ctx['missing'])})"),
             ("failed", f"Failed runs ({len(ctx['failed'])})"),
-            ("incomplete", f"Incomplete runs ({len(ctx['running'])})"),
-            ("provenance", "Provenance"), ("files", "Files")]
+            ("incomplete", f"Incomplete runs ({len(ctx['running'])})")]
+    if ctx.get("stale") is not None and not ctx["stale"].empty:
+        toc.append(("stale", f"Stale runs ({int(ctx['stale']['done'].sum() + ctx['stale']['unfinished'].sum())})"))
+    toc += [("provenance", "Provenance"), ("files", "Files")]
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
              "<title>diffsim-bench report</title>", f"<style>{CSS}</style></head><body>",
              "<h1>diffsim-bench comparison report</h1>", f"<p>{escape(ctx['headline'])}</p>"]
