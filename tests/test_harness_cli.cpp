@@ -22,7 +22,7 @@
 
 #include "envs/core/gradient_check.hpp"
 #include "envs/registry.hpp"
-#include "harness/grid.hpp"
+#include "harness/plan/grid.hpp"
 #include "optimizers/registry.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"

@@ -21,12 +21,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include "harness/cost_model.hpp"
-#include "harness/plan.hpp"
-#include "harness/plan_report.hpp"
-#include "harness/progress.hpp"
-#include "harness/run_order.hpp"
-#include "harness/slurm_command.hpp"
+#include "harness/plan/cost_model.hpp"
+#include "harness/plan/plan.hpp"
+#include "harness/plan/plan_report.hpp"
+#include "harness/run/probe.hpp"
+#include "harness/run/progress.hpp"
+#include "harness/plan/run_order.hpp"
+#include "harness/commands/slurm_command.hpp"
 #include "optimizers/bo/gp_cost.hpp"
 #include "optimizers/registry.hpp"
 #include "support/harness_process.hpp"
@@ -349,7 +350,7 @@ TEST_F(PlanFromDatabase, CalibrationTimesShortRunsInRoundsAcrossThePairsAsAGridR
   std::vector<std::string> started;
   int rounds = 0;
   costs.calibrate_runs(
-      plan.pending, [&](const PlannedRun& run) { started.push_back(run.spec.env); },
+      plan.pending, time_probe, [&](const PlannedRun& run) { started.push_back(run.spec.env); },
       [&] {
         // after the first round every pair has been timed once: a pair's repeats come after the
         // other pairs' runs, not back to back
@@ -447,7 +448,8 @@ TEST(PlanCosts, BoLeapsGpIsFittedOnItsDesignAndAfterEveryLeapThatLeavesBudget) {
 
 TEST(PlanCosts, NoOptimizerIsNamedInTheHarness) {
   // their costs, families and seed use come from the registry: harness/ code names none of them
-  for (const auto& entry : std::filesystem::directory_iterator(std::string(DSB_SOURCE_DIR) + "/harness")) {
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(std::string(DSB_SOURCE_DIR) + "/harness")) {
+    if (!entry.is_regular_file()) continue;
     // the code without its comments (a comment may give an example)
     std::string text;
     std::istringstream lines(testing::read_file(entry.path()));

@@ -13,7 +13,7 @@
 #include <benchmark/benchmark.h>
 
 #include "envs/registry.hpp"
-#include "harness/runner.hpp"
+#include "harness/run/runner.hpp"
 #include "optimizers/bo/acquisition.hpp"
 #include "optimizers/bo/gp.hpp"
 #include "optimizers/bo/gp_pairs.hpp"
