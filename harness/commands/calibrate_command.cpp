@@ -32,14 +32,14 @@ int command_calibrate(const RunArgs& a, bool force) {
   CostModel costs;
   std::cout << fmt::format("{:<26} {:>12} {:>12} {:>10}  {}\n", "env", "forward s", "gradient s", "decisions",
                            "source");
-  std::map<std::string, EnvOptions> options;  // of each env of the grid (one set per env name)
-  for (const auto& spec : run.grid) options[spec.env] = spec.env_options;
-  for (const auto& [name, config] : plan.env_configs) {
-    EpisodeCost c = costs.episode(name, config.hash);
+  std::map<std::string, const RunSpec*> envs;  // the first run of each env of the grid, by name
+  for (const auto& spec : run.grid) envs.emplace(spec.env, &spec);
+  for (const auto& [name, spec] : envs) {
+    EpisodeCost c = costs.episode(*spec);
     const bool measure = force || !c.measured;
     if (measure) {
       std::cerr << "harness: timing " << name << " ..." << std::endl;
-      c = costs.calibrate(name, config.hash, run.tape_memory_bytes, options[name]);
+      c = costs.calibrate(*spec, run.tape_memory_bytes);
       costs.save();  // after each env: an interrupted calibration keeps what it measured
     }
     std::cout << fmt::format("{:<26} {:>12.4g} {:>12.4g} {:>10}  {}\n", name, c.forward_s, c.gradient_s, c.decisions,

@@ -12,7 +12,6 @@
 #include "common/error.hpp"
 #include "common/shown_value.hpp"
 #include "common/simd_path.hpp"
-#include "envs/mpm/lane_path.hpp"
 #include "git_sha.hpp"  // generated: DSB_GIT_SHA
 #include "harness/commands/command.hpp"
 
@@ -50,11 +49,10 @@ int harness_main(int argc, char** argv) {
     return 2;
   }
 
-  // the kernel paths the environment may force (DSB_SIMD, DSB_MPM_LANES; docs/determinism.md): a
-  // bad value stops the command here, before anything is stored, rather than failing each run
+  // the kernel path the environment may force (DSB_SIMD; common/simd_path.hpp, docs/determinism.md):
+  // a bad value stops the command here, before anything is stored, rather than failing each run
   try {
-    (void)simd_path();
-    (void)mpm::default_lane_path();
+    (void)simd_ceiling();
   } catch (const std::runtime_error& e) {
     std::fprintf(stderr, "harness: error: %s\n", one_line(e.what()).c_str());
     return 2;

@@ -364,7 +364,7 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
   std::vector<std::int64_t> shard_runs;
   if (options.shards >= 1 && options.shards <= kMaxSlurmShards) {
     shard_runs.assign(options.shards, 0);
-    for (const PlannedRun& p : plan_grid(run.grid, {}, harness_version()).pending) ++shard_runs[shard_of(p.key, options.shards)];
+    for (const PlannedRun& p : plan_grid(run.grid, {}, harness_version()).pending) ++shard_runs[shard_of(p, options.shards)];
   }
   // the tasks run in another folder: a target file's path goes to them absolute
   const SlurmGridFlags flags{
@@ -378,7 +378,7 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
     const std::vector<double> cost = run_costs(plan, CostModel{});
     std::vector<double> total(static_cast<std::size_t>(o.shards), 0.0), longest(total);
     for (std::size_t i = 0; i < plan.pending.size(); ++i) {
-      const auto s = static_cast<std::size_t>(shard_of(plan.pending[i].key, o.shards));
+      const auto s = static_cast<std::size_t>(shard_of(plan.pending[i], o.shards));
       total[s] += cost[i];
       longest[s] = std::max(longest[s], cost[i]);
     }

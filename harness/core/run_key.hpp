@@ -35,8 +35,6 @@ struct RunKey {
 struct PlannedRun {
   RunSpec spec;
   RunKey key;
-  const ResolvedConfig* env_config;  // owned by the GridPlan
-  const ResolvedConfig* opt_config;
 };
 
 }  // namespace dsb

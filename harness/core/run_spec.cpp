@@ -1,7 +1,8 @@
 #include "harness/core/run_spec.hpp"
 
+#include <stdexcept>
+
 #include "common/rng.hpp"
-#include "optimizers/registry.hpp"
 
 namespace dsb {
 
@@ -15,13 +16,12 @@ std::uint64_t per_run_seed(const std::string& env, const std::string& optimizer,
   return splitmix64(h);
 }
 
-std::unique_ptr<Optimizer> make_run_optimizer(const RunSpec& spec) {
-  if (spec.ext) return make_ext_optimizer(*spec.ext, spec.env, spec.rng_seed);
-  return make_optimizer(spec.optimizer, spec.knobs);
+std::unique_ptr<Optimizer> RunSpec::new_optimizer() const {
+  if (ext) return make_ext_optimizer(*ext, env, rng_seed);
+  if (!entry) throw std::logic_error("run " + env + "/" + optimizer + ": its optimizer was never resolved");
+  return knobs.empty() ? entry->make() : entry->make_with(knobs);
 }
 
-bool may_share_seeds(const RunSpec& spec) {
-  return !spec.ext && optimizer_entry(spec.optimizer).seed_use != SeedUse::at_start;
-}
+bool RunSpec::may_share_seeds() const { return !ext && entry && entry->seed_use != SeedUse::at_start; }
 
 }  // namespace dsb

@@ -14,8 +14,6 @@
 #include "common/error.hpp"
 #include "common/parallel.hpp"
 #include "common/regular_file.hpp"
-#include "envs/registry.hpp"
-#include "optimizers/registry.hpp"
 #include "git_sha.hpp"  // generated at build time: DSB_GIT_SHA
 
 namespace dsb {
@@ -121,9 +119,9 @@ std::string CostModel::run_key(const PlannedRun& run) const {
 }
 
 std::int64_t CostModel::probe_episodes(const PlannedRun& run) const {
-  const OptimizerEntry& opt = optimizer_entry(run.spec.optimizer);
+  const OptimizerEntry& opt = *run.spec.entry;
   if (opt.needs_rl) {
-    const std::int64_t decisions = std::max(1, episode(run.spec.env, run.key.env_config_hash).decisions);
+    const std::int64_t decisions = std::max(1, episode(run.spec).decisions);
     return std::min<std::int64_t>(run.spec.budget, (kProbeRlDecisions + decisions - 1) / decisions);
   }
   const bool modelled = static_cast<bool>(opt.costs.own_seconds);
@@ -132,9 +130,9 @@ std::int64_t CostModel::probe_episodes(const PlannedRun& run) const {
 
 bool CostModel::probes(const PlannedRun& run) const {
   if (run.spec.ext) return false;
-  const EpisodeCost c = episode(run.spec.env, run.key.env_config_hash);
+  const EpisodeCost c = episode(run.spec);
   // an RL learner needs the env's measured decisions per episode to size its probe
-  if (optimizer_entry(run.spec.optimizer).needs_rl && c.decisions <= 0) return false;
+  if (run.spec.entry->needs_rl && c.decisions <= 0) return false;
   return c.measured && std::max(c.forward_s, c.gradient_s) <= kProbeMaxEpisodeSeconds;
 }
 
@@ -167,7 +165,7 @@ void CostModel::calibrate_runs(const std::vector<PlannedRun>& runs, const ProbeT
   for (const PlannedRun& run : runs) {
     RunSpec spec = run.spec;
     spec.budget = probe_episodes(run);
-    pending.push_back({&run, spec, shared_env(spec.env, spec.env_options), {}, {}});
+    pending.push_back({&run, spec, spec.resolved_env, {}, {}});
   }
   // a round times each pair not yet done once, in the order given (the grid's): a pair of a
   // second of runs is done after its first round, one of 0.1 ms after nine
@@ -188,20 +186,20 @@ void CostModel::calibrate_runs(const std::vector<PlannedRun>& runs, const ProbeT
   }
 }
 
-EpisodeCost CostModel::episode(const std::string& env_name, const std::string& env_config_hash) const {
-  if (const auto it = table_.find(key(env_name, env_config_hash)); it != table_.end()) return it->second;
-  const EnvInfo& info = shared_env(env_name)->info();  // metadata: no model is built
+EpisodeCost CostModel::episode(const RunSpec& spec) const {
+  if (const auto it = table_.find(key(spec.env, spec.env_config->hash)); it != table_.end()) return it->second;
+  const EnvInfo& info = spec.resolved_env->info();  // metadata: no model is built
   return {info.cost_hint_forward_s > 0.0 ? info.cost_hint_forward_s : info.cost_hint_s, info.cost_hint_s, 0, false};
 }
 
 double CostModel::run_seconds(const PlannedRun& run, double shared_share) const {
-  const EpisodeCost c = episode(run.spec.env, run.key.env_config_hash);
+  const EpisodeCost c = episode(run.spec);
   if (run.spec.ext) {
     // an external optimizer: whether it asks for gradients is its own affair; counted at the
     // gradient episode's cost (the upper bound), its own time unknown
     return c.gradient_s * static_cast<double>(run.spec.budget);
   }
-  const OptimizerEntry& opt = optimizer_entry(run.spec.optimizer);
+  const OptimizerEntry& opt = *run.spec.entry;
   const double g = opt.costs.gradient_share;
   double per_episode = opt.needs_gradient ? g * c.gradient_s + (1.0 - g) * c.forward_s : c.forward_s;
   if (opt.needs_rl) {
@@ -209,7 +207,7 @@ double CostModel::run_seconds(const PlannedRun& run, double shared_share) const 
     const int decisions = c.decisions > 0 ? c.decisions : 10;
     per_episode += decisions * opt.costs.learner_s_per_decision;
   }
-  const int dim = shared_env(run.spec.env)->info().dim;  // metadata
+  const int dim = run.spec.resolved_env->info().dim;  // metadata
   const auto own = [&](std::int64_t budget) {
     return opt.costs.own_seconds ? opt.costs.own_seconds(dim, budget) : 0.0;
   };
@@ -232,9 +230,8 @@ double CostModel::run_seconds(const PlannedRun& run, double shared_share) const 
   return per_episode * budget * (1.0 - shared_share) + own(run.spec.budget);
 }
 
-EpisodeCost CostModel::calibrate(const std::string& env_name, const std::string& env_config_hash,
-                                 std::size_t tape_memory_bytes, const EnvOptions& env_options) {
-  const auto env = shared_env(env_name, env_options);
+EpisodeCost CostModel::calibrate(const RunSpec& spec, std::size_t tape_memory_bytes) {
+  const auto& env = spec.resolved_env;
   const auto ws = env->make_workspace();
   ws->tape_memory_bytes = tape_memory_bytes;
   const std::vector<double> x(static_cast<std::size_t>(env->dim()), 0.0);
@@ -250,7 +247,7 @@ EpisodeCost CostModel::calibrate(const std::string& env_name, const std::string&
     const auto rl = env->make_rl();
     c.decisions = (rl->horizon() + rl->action_repeat() - 1) / rl->action_repeat();
   }
-  table_[key(env_name, env_config_hash)] = c;
+  table_[key(spec.env, spec.env_config->hash)] = c;
   return c;
 }
 

@@ -33,7 +33,6 @@
 #include <vector>
 
 #include "envs/core/env.hpp"
-#include "envs/core/env_options.hpp"
 #include "harness/core/probe_timing.hpp"
 #include "harness/core/run_key.hpp"
 
@@ -82,17 +81,16 @@ class CostModel {
   // loads the cache (a missing or unreadable cache is empty)
   CostModel();
 
-  // the cost of one episode of `env_name` (config hash as stored with runs)
-  EpisodeCost episode(const std::string& env_name, const std::string& env_config_hash) const;
+  // the cost of one episode of the run's env (its config hash as stored with runs)
+  EpisodeCost episode(const RunSpec& spec) const;
   // the estimated seconds of a whole run on one core, `shared_share` of its episodes taken from
   // another seed's run (replayed: at the probe's replay cost for a probed pair, else free)
   double run_seconds(const PlannedRun& run, double shared_share = 0.0) const;
 
-  // times one forward and one gradient episode of the env (repeated to at least 0.2 s for cheap
-  // envs: the median is kept; the gradient with `tape_memory_bytes` as a run has them) and its RL
-  // view's decisions, and records them; `env_options` as the grid gives the env (--set ENV.KEY=VALUE)
-  EpisodeCost calibrate(const std::string& env_name, const std::string& env_config_hash,
-                        std::size_t tape_memory_bytes = 0, const EnvOptions& env_options = {});
+  // times one forward and one gradient episode of the run's env (repeated to at least 0.2 s for
+  // cheap envs: the median is kept; the gradient with `tape_memory_bytes` as a run has them) and
+  // its RL view's decisions, and records them
+  EpisodeCost calibrate(const RunSpec& spec, std::size_t tape_memory_bytes = 0);
   // whether `calibrate_runs` applies to the run: its env's measured episodes are cheap and its
   // optimizer is not external
   bool probes(const PlannedRun& run) const;

@@ -4,11 +4,20 @@
 #include <filesystem>
 #include <set>
 
+#include "common/config_hash.hpp"
 #include "common/error.hpp"
 #include "envs/registry.hpp"
 #include "optimizers/registry.hpp"
 
 namespace dsb {
+namespace {
+
+std::shared_ptr<const ResolvedConfig> resolved_config(nlohmann::json config) {
+  std::string hash = config_hash(config);
+  return std::make_shared<const ResolvedConfig>(ResolvedConfig{std::move(config), std::move(hash)});
+}
+
+}  // namespace
 
 std::vector<RunSpec> expand_grid(const GridRequest& req) {
   if (req.seeds < 1 || req.seeds > kMaxSeeds)
@@ -36,19 +45,21 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
       knobs[owner] = settings;
   }
 
-  // validate every name before anything runs; duplicates are a user error too
+  // validate every name before anything runs; duplicates are a user error too. Each env is
+  // resolved once: its one shared object (metadata: no model is built) and its config
   std::set<std::string> seen;
-  std::vector<bool> differentiable, rl;
+  std::vector<std::shared_ptr<const Env>> env_objects;
+  std::vector<std::shared_ptr<const ResolvedConfig>> env_configs;
   for (const auto& name : envs) {
     if (!seen.insert("env:" + name).second) throw UsageError("env '" + name + "' given twice");
     const auto options = env_options.find(name);
-    const auto env = make_env(name, options == env_options.end() ? EnvOptions{} : options->second);
-    differentiable.push_back(env->differentiable());
-    rl.push_back(env->supports_rl());
+    env_objects.push_back(shared_env(name, options == env_options.end() ? EnvOptions{} : options->second));
+    env_configs.push_back(resolved_config(env_objects.back()->config()));
   }
   if (!(req.ext_timeout_s > 0.0 && req.ext_timeout_s <= 86400.0))
     throw UsageError("--ext-timeout must be from 0 to 86400 seconds, got " + std::to_string(req.ext_timeout_s));
   std::map<std::string, ExtOptimizerSpec> ext;  // by optimizer name, probed
+  std::map<std::string, const OptimizerEntry*> entries;  // by optimizer name, the registry's
   for (const auto& name : optimizers) {
     if (!seen.insert("opt:" + name).second) throw UsageError("optimizer '" + name + "' given twice");
     if (const std::string ext_name = ext_name_of(name); !ext_name.empty()) {
@@ -59,48 +70,65 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
       ext.emplace(name, ExtOptimizerSpec{ext_name, command->second, req.ext_timeout_s, "", ""});
       continue;
     }
-    optimizer_entry(name);
+    entries[name] = &optimizer_entry(name);
   }
   for (const auto& [name, command] : req.ext)
     if (!ext.count("ext:" + name))
       throw UsageError("--ext names 'ext:" + name + "', which is not in the grid's --optimizer list");
+  std::map<std::string, std::shared_ptr<const ResolvedConfig>> opt_configs;  // by optimizer name
   for (const auto& [name, settings] : knobs) {
     if (!seen.count("opt:" + name))
       throw UsageError("--set names '" + name + "', which is neither an env nor an optimizer of the grid "
                        "(--set ENV.KEY=VALUE, --set OPTIMIZER.KNOB=VALUE)");
     if (ext.count(name)) throw UsageError("optimizer '" + name + "' has no knobs to --set");
-    make_optimizer(name, settings);  // unknown knob, malformed or out-of-range value: UsageError
+    // unknown knob, malformed or out-of-range value: UsageError
+    opt_configs[name] = resolved_config(make_optimizer(name, settings)->config());
   }
   // the programs say who they are once, before anything runs (UsageError when one cannot)
-  for (auto& [name, spec] : ext) spec = ext_probe(std::move(spec));
+  for (auto& [name, spec] : ext) {
+    spec = ext_probe(std::move(spec));
+    opt_configs[name] = resolved_config(make_ext_optimizer(spec)->config());
+  }
+  for (const auto& [name, entry] : entries)
+    if (!opt_configs.count(name)) opt_configs[name] = resolved_config(entry->make()->config());
 
   std::vector<RunSpec> grid;
-  for (std::size_t e = 0; e < envs.size(); ++e) {
+  const auto add_seeds = [&](std::size_t e, const std::string& opt, const KnobSettings& settings,
+                             const std::optional<ExtOptimizerSpec>& program, const OptimizerEntry* entry) {
     const auto options = env_options.find(envs[e]);
-    const EnvOptions& env_opts = options == env_options.end() ? EnvOptions{} : options->second;
+    const ResultsVersions versions = current_results_versions(envs[e], opt);
+    for (int s = 0; s < req.seeds; ++s) {
+      RunSpec spec{envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s), settings, program,
+                   options == env_options.end() ? EnvOptions{} : options->second};
+      spec.resolved_env = env_objects[e];
+      spec.entry = entry;
+      spec.env_config = env_configs[e];
+      spec.opt_config = opt_configs.at(opt);
+      spec.versions = versions;
+      grid.push_back(std::move(spec));
+    }
+  };
+  for (std::size_t e = 0; e < envs.size(); ++e) {
     for (const auto& opt : optimizers) {
       if (const auto x = ext.find(opt); x != ext.end()) {
-        for (int s = 0; s < req.seeds; ++s)
-          grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s), {}, x->second, env_opts});
+        add_seeds(e, opt, {}, x->second, nullptr);
         continue;
       }
-      if (optimizer_entry(opt).needs_gradient && !differentiable[e]) {
+      const OptimizerEntry& entry = *entries.at(opt);
+      if (entry.needs_gradient && !env_objects[e]->differentiable()) {
         if (envs_explicit && opts_explicit)
           throw UsageError("optimizer '" + opt + "' needs gradients; env '" + envs[e] +
                            "' is not differentiable");
         continue;
       }
-      if (optimizer_entry(opt).needs_rl && !rl[e]) {
+      if (entry.needs_rl && !env_objects[e]->supports_rl()) {
         if (envs_explicit && opts_explicit)
           throw UsageError("optimizer '" + opt + "' needs an RL view; env '" + envs[e] +
                            "' has none (see `harness list`)");
         continue;
       }
-      for (int s = 0; s < req.seeds; ++s) {
-        const auto k = knobs.find(opt);
-        grid.push_back({envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s),
-                        k == knobs.end() ? KnobSettings{} : k->second, std::nullopt, env_opts});
-      }
+      const auto k = knobs.find(opt);
+      add_seeds(e, opt, k == knobs.end() ? KnobSettings{} : k->second, std::nullopt, &entry);
     }
   }
   return grid;

@@ -1,6 +1,6 @@
 #pragma once
-// What a grid will do before it does it: each run's key (configs resolved once per distinct env
-// and optimizer name, from metadata: no env model is built), the shard's runs, and which of them
+// What a grid will do before it does it: each run's key (from its spec, resolved when the grid
+// expanded: plan/grid.hpp), the shard's runs, and which of them
 // are already done in the store (their costs: harness/plan/cost_model.hpp). Used by grid runs and by
 // `harness plan`, which writes nothing.
 #include <cstdint>
@@ -21,7 +21,6 @@ struct GridPlan {
   std::vector<PlannedRun> pending;  // grid order, runs not done yet
   std::int64_t skipped = 0;         // runs already done
   std::int64_t pending_episodes = 0;
-  std::map<std::string, ResolvedConfig> env_configs, opt_configs;  // by name
   // per pending run: the share of its episodes expected to come from another seed's run
   // (estimate_sharing); empty when nothing is shared
   std::vector<double> shared_share;
@@ -44,7 +43,7 @@ struct Shard {
 // the seed is left out (an empty string) for optimizers that share across seeds, so that a
 // group's seeds share a shard and its later seeds replay the first one's seed-free episodes;
 // with group_seeds false (nothing is shared: --no-sharing) every run hashes its own seed
-int shard_of(const RunKey& key, int count, bool group_seeds = true);
+int shard_of(const PlannedRun& run, int count, bool group_seeds = true);
 
 GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done,
                    const std::string& harness_version, Shard shard = {});

@@ -10,7 +10,6 @@
 
 #include "harness/core/output_path.hpp"
 #include "harness/plan/run_order.hpp"
-#include "optimizers/registry.hpp"
 
 namespace dsb {
 namespace {
@@ -19,9 +18,9 @@ namespace {
 // common partition limits and for a lost node to cost little
 constexpr double kShardTargetSeconds = 6.0 * 3600.0;
 
-std::string family_of(const std::string& optimizer) {
-  if (optimizer.rfind("ext:", 0) == 0) return "external (gradient episodes; own time unknown)";
-  const OptimizerEntry& e = optimizer_entry(optimizer);
+std::string family_of(const RunSpec& spec) {
+  if (!spec.entry) return "external (gradient episodes; own time unknown)";
+  const OptimizerEntry& e = *spec.entry;
   if (!e.costs.family.empty()) return e.costs.family;
   if (e.needs_gradient) return "gradient episodes";
   return "forward episodes";
@@ -87,14 +86,14 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
   double total = 0.0, longest = 0.0;
   for (std::size_t i = 0; i < plan.pending.size(); ++i) {
     const auto& p = plan.pending[i];
-    for (Tally* t : {&by_env[p.spec.env], &by_family[family_of(p.spec.optimizer)]}) {
+    for (Tally* t : {&by_env[p.spec.env], &by_family[family_of(p.spec)]}) {
       ++t->runs;
       t->seconds += cost[i];
       t->longest = std::max(t->longest, cost[i]);
       t->names.insert(p.spec.optimizer);
     }
-    (costs.episode(p.spec.env, p.key.env_config_hash).measured ? measured : hinted).insert(p.spec.env);
-    if (!costs.episode(p.spec.env, p.key.env_config_hash).measured &&
+    (costs.episode(p.spec).measured ? measured : hinted).insert(p.spec.env);
+    if (!costs.episode(p.spec).measured &&
         costs.measured_by_other_build(p.spec.env, p.key.env_config_hash))
       other_build.insert(p.spec.env);
     total += cost[i];

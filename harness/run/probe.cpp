@@ -38,7 +38,7 @@ ProbeTiming time_probe(const RunSpec& spec, const Env& env) {
   const std::atomic<bool> stop{false};
   ProbeListener listener;
   RunControl control{&listener, &stop, {}, 0, 0};
-  RunResult r = execute_run(spec, env, *make_run_optimizer(spec), nullptr, nullptr, &control);
+  RunResult r = execute_run(spec, env, *spec.new_optimizer(), nullptr, nullptr, &control);
   listener.keep(std::move(r.journal_tail));
   ProbeTiming t{std::max<std::int64_t>(r.episodes, 1), r.wall_s, 0.0, r.wall_s};
   if (r.seed_free.drew && r.seed_free.episodes == 0) return t;
@@ -47,7 +47,7 @@ ProbeTiming time_probe(const RunSpec& spec, const Env& env) {
   // what simulating it does)
   ProbeListener again;
   RunControl replay{&again, &stop, std::move(listener.journal), r.episodes, 0};
-  const RunResult rr = execute_run(spec, env, *make_run_optimizer(spec), nullptr, nullptr, &replay);
+  const RunResult rr = execute_run(spec, env, *spec.new_optimizer(), nullptr, nullptr, &replay);
   if (rr.replayed_episodes > 0) t.replay_s_per_episode = rr.wall_s / static_cast<double>(rr.replayed_episodes);
   t.total_s += rr.wall_s;
   return t;

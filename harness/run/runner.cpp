@@ -7,12 +7,10 @@
 #include <optional>
 #include <thread>
 
-#include "envs/registry.hpp"
 #include "harness/run/budget.hpp"
 #include "harness/run/fault_injection.hpp"
 #include "harness/run/interrupt.hpp"
 #include "harness/run/progress.hpp"
-#include "optimizers/registry.hpp"
 
 namespace dsb {
 
@@ -156,25 +154,25 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
       const std::size_t i = *next_run;
       const PlannedRun& p = pending[i];
       try {
-        RunStart start = store.begin_run(p.key, p.spec.rng_seed, p.env_config->config, p.opt_config->config,
-                                         share && may_share_seeds(p.spec));
+        RunStart start = store.begin_run(p.key, p.spec.rng_seed, p.spec.env_config->config,
+                                         p.spec.opt_config->config, share && p.spec.may_share_seeds());
         if (start.committed_episodes > 0 && start.journal.empty()) {
           // episodes without the journal that regenerates them (e.g. left by an older harness):
           // nothing to replay, so the run starts over
           store.reset_progress(start.run_id);
           start.committed_episodes = 0;
         }
-        const auto env = shared_env(p.spec.env, p.spec.env_options);
+        const Env& env = *p.spec.resolved_env;
         progress.run_started(w, run_cost_s[i] / static_cast<double>(p.spec.budget));
         RunResult r;
         const std::int64_t shared_episodes = start.shared_episodes;
         for (int attempt = 0;; ++attempt) {
           // a resumed run replays its journal, a run of a later seed the seed-free episodes of an
           // earlier one; one that diverged from it starts over without
-          const auto opt = make_run_optimizer(p.spec);
+          const auto opt = p.spec.new_optimizer();
           CommitListener listener(store, start.run_id, start.committed_episodes);
           RunControl control{&listener, &stop, std::move(start.journal), start.journal_episodes, tape_memory_bytes};
-          r = execute_run(p.spec, *env, *opt, &progress.episodes_of(w), &team, &control);
+          r = execute_run(p.spec, env, *opt, &progress.episodes_of(w), &team, &control);
           if (r.status != RunStatus::diverged || attempt > 0) break;
           if (progress_out)
             std::fprintf(progress_out, "\nharness: %s: %s; running it again from the start\n", p.key.text().c_str(),
