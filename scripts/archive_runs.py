@@ -4,6 +4,7 @@ per-episode losses, checked against the runs the study published.
 
     /usr/bin/python3 scripts/archive_runs.py write DB OUT.runs.jsonl.gz [--against RUNS.csv ...]
     /usr/bin/python3 scripts/archive_runs.py check ARCHIVE [ARCHIVE ...] --against RUNS.csv [...]
+        [--allow-missing] [--update FILE | --agree FILE]
 
 `write` archives every 'done' run of DB (a new file only). With --against, DB must hold exactly
 the published runs of those CSVs that it has keys for, each with its final best loss the same
@@ -11,7 +12,11 @@ bits as published (a rerun on other code that gives other results is refused, ex
 runs), and the runs it has that no CSV publishes are left out; it says how many of the CSVs'
 runs it archived. `check` compares archive files (or folders of them) with the runs CSVs: every
 published run archived once, with the same final best loss bits, rebuilt from its losses; exit 1
-naming each difference. Exit 2: bad input, one line.
+naming each difference. With --allow-missing, a published run not archived (a study whose
+databases are gone and not yet rerun) is counted, not an error. --update FILE writes the table of
+what the archive holds, per study, between FILE's `<!-- archive: begin -->` and
+`<!-- archive: end -->` lines; --agree FILE exits 1 when that block is not the table this check
+makes. Exit 2: bad input, one line.
 """
 from __future__ import annotations
 
@@ -100,14 +105,57 @@ def write(a) -> int:
     return 0
 
 
+BEGIN, END = "<!-- archive: begin -->", "<!-- archive: end -->"
+
+
+def study_of(csv_path: str) -> str:
+    """The study a runs CSV publishes: its folder when it is one of a grid's pieces, else the file."""
+    d = os.path.dirname(os.path.normpath(csv_path))
+    return d + "/" if os.path.basename(d) != "study" else os.path.normpath(csv_path)
+
+
+def table(pub, seen, sizes) -> str:
+    """Markdown: per study, its published runs, those archived with their losses, the bytes."""
+    rows = {}
+    for k, (_, path) in pub.items():
+        r = rows.setdefault(study_of(path), {"runs": 0, "archived": 0, "files": set()})
+        r["runs"] += 1
+        if k in seen:
+            r["archived"] += 1
+            r["files"].add(seen[k])
+    lines = ["| study (runs CSV) | published runs | archived with losses | archive files | bytes |",
+             "|---|---:|---:|---:|---:|"]
+    total = 0
+    for study in sorted(rows):
+        r = rows[study]
+        b = sum(sizes[f] for f in r["files"])
+        total += b
+        note = "" if r["archived"] == r["runs"] else " (curves missing: not rerun yet)"
+        lines.append(f"| `{study}` | {r['runs']} | {r['archived']}{note} | {len(r['files'])} | {b:,} |")
+    lines.append(f"| all | {len(pub)} | {len(seen)} | {len(sizes)} | {total:,} ({total / 1e6:.2f} MB) |")
+    return "\n".join(lines)
+
+
+def with_block(text: str, block: str, path: str) -> str:
+    if text.count(BEGIN) != 1 or text.count(END) != 1 or text.index(BEGIN) > text.index(END):
+        raise ValueError(f"'{path}' has no single '{BEGIN}' ... '{END}' block")
+    head, rest = text.split(BEGIN)
+    return head + BEGIN + "\n" + block + "\n" + END + rest.split(END, 1)[1]
+
+
 def check(a) -> int:
     from dsb_report import archive
     try:
         pub = published(a.against)
-        runs = []
+        runs, sizes = [], {}
         for path in a.archives:
             for f in archive.files_under(path):
                 runs += [(r, f) for r in archive.read(f)]
+                sizes[f] = os.path.getsize(f)
+        doc = a.update or a.agree
+        text = open(doc, encoding="utf-8").read() if doc else None
+    except OSError as e:
+        return fail(f"cannot read '{e.filename}': {e.strerror}")
     except (ValueError, archive.ArchiveError) as e:
         return fail(str(e))
     problems, seen = [], {}
@@ -124,12 +172,25 @@ def check(a) -> int:
         if not same_bits(want, final_best(r)):
             problems.append(f"{'/'.join(k[:4])}: published {want!r}, archived {final_best(r)!r}")
     missing = [k for k in pub if k not in seen]
-    for k in missing:
-        problems.append(f"{'/'.join(k[:4])} published in '{pub[k][1]}' but not archived")
+    if not a.allow_missing:
+        for k in missing:
+            problems.append(f"{'/'.join(k[:4])} published in '{pub[k][1]}' but not archived")
     print(f"archive_runs: {len(pub) - len(missing)} of {len(pub)} published runs archived"
           f"{'' if not problems else f'; {len(problems)} problems'}")
     for p in problems:
         print(f"archive_runs: {p}")
+    if text is not None:
+        try:
+            want = with_block(text, table(pub, {k: f for k, f in seen.items() if k in pub}, sizes), doc)
+        except ValueError as e:
+            return fail(str(e))
+        if a.update and want != text:
+            with open(doc, "w", encoding="utf-8") as f:
+                f.write(want)
+            print(f"archive_runs: updated the archive table in '{doc}'")
+        if a.agree and want != text:
+            problems.append(f"the archive table in '{doc}' is not this archive's; run with --update {doc}")
+            print(f"archive_runs: {problems[-1]}")
     return 1 if problems else 0
 
 
@@ -143,6 +204,11 @@ def main(argv=None) -> int:
     c = sub.add_parser("check", help="compare archive files with the published runs")
     c.add_argument("archives", nargs="+")
     c.add_argument("--against", nargs="+", required=True)
+    c.add_argument("--allow-missing", action="store_true",
+                   help="count published runs not archived instead of failing on them")
+    doc = c.add_mutually_exclusive_group()
+    doc.add_argument("--update", metavar="FILE", help="write the archive table into FILE's block")
+    doc.add_argument("--agree", metavar="FILE", help="fail when FILE's archive table is not this one")
     a = ap.parse_args(argv)
     try:
         import numpy  # noqa: F401
