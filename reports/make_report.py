@@ -23,7 +23,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 REQUIRED = ("pandas", "matplotlib", "scipy", "scipy.stats")
 OWN_FILES = re.compile(r"^(curves_.+\.png|final_.+\.(png|csv)|landscape_.+\.png|render_.+\.png|"
-                       r"gradient_quality\.csv|gallery\.html|stale_runs\.csv)$")
+                       r"gradient_quality\.csv|gallery\.html|stale_runs\.csv|sources\.csv)$")
 DEFAULT_GRADIENT_QUALITY = os.path.join(os.path.dirname(HERE), "data", "gradient_quality.csv")
 
 
@@ -79,6 +79,9 @@ def parse_args(argv):
                         "(default: data/gradient_quality.csv, the section says so when it is absent)")
     p.add_argument("--renders", help="folder of render_<env>.png from scripts/render-best.sh, shown "
                                      "in each env's section")
+    p.add_argument("--with", dest="with_archive", metavar="DIR",
+                   help="a folder of the published archive (data/study): its runs join the database's, marked "
+                        "archived, so yours are ranked and tested beside them (docs/results.md)")
     p.add_argument("--harness", help="harness binary whose `list` says which envs exist and which "
                                      "optimizers --all runs on each (default: $DSB_HARNESS, else "
                                      "build/bin/harness of this source tree if it exists); its "
@@ -121,6 +124,8 @@ def main(argv=None) -> int:
         problem = path is not None and not_regular(option, path)
         if problem:
             return fail(problem.encode("unicode_escape").decode("ascii") if not problem.isprintable() else problem)
+    if args.with_archive is not None and not os.path.isdir(args.with_archive):
+        return fail(f"--with: '{args.with_archive}' is not a folder of archive files (*.runs.jsonl.gz)")
     try:
         claim_list = claims.load(args.claims)
     except claims.ClaimsError as e:
@@ -137,7 +142,7 @@ def main(argv=None) -> int:
     except registry.RegistryError as e:
         return fail(str(e))
     try:
-        data = load(args.db, env_registry, args.include_stale)   # stale runs judged by its versions
+        data = load(args.db, env_registry, args.include_stale, args.with_archive)   # stale runs judged by its versions
     except DataError as e:
         return fail(str(e))
     if args.landscapes is not None and not os.path.isdir(args.landscapes):

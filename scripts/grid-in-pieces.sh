@@ -15,8 +15,9 @@
 # group whole, and says so). A piece runs into OUTDIR/pieces/ENV__OPT@IofN.sqlite (ENV__OPT.sqlite
 # when whole) and resumes there when interrupted; once its runs are done (or failed, which are
 # results) they are written in the runs CSV format (scripts/study_results.py export,
-# reports/dsb_report/runs_csv.py) and copied into DEST under the same name, never over a file
-# there. A piece DEST already holds is taken as done without running if its runs carry this
+# reports/dsb_report/runs_csv.py), and with their per-episode losses as NAME.runs.jsonl.gz (the
+# published archive: scripts/archive_runs.py), and copied into DEST under the same names, never
+# over a file there. A piece DEST already holds is taken as done without running if its runs carry this
 # binary's results versions (its results_versions column: pieces belong together when their
 # versions agree, whatever commit made them), or, for a piece written before versions, if this
 # very binary made it (its git_sha column); any other is refused (exit 2, naming the file). At the end
@@ -163,6 +164,11 @@ run_piece() {
   rm -f "$out/pieces/$name.csv.tmp"
   /usr/bin/python3 "$root/scripts/study_results.py" export "$db" "$out/pieces/$name.csv.tmp" >/dev/null
   mv "$out/pieces/$name.csv.tmp" "$out/pieces/$name.csv"
+  # the piece's runs with their per-episode losses, for the published archive (archive_runs.py)
+  rm -f "$out/pieces/$name.runs.jsonl.gz"
+  /usr/bin/python3 "$root/scripts/archive_runs.py" write "$db" "$out/pieces/$name.runs.jsonl.gz" >/dev/null
+  [[ -e $dest/$name.runs.jsonl.gz ]] ||
+    { cp "$out/pieces/$name.runs.jsonl.gz" "$dest/.$name.runs.jsonl.gz.tmp" && mv "$dest/.$name.runs.jsonl.gz.tmp" "$dest/$name.runs.jsonl.gz"; }
   [[ -e $dest/$name.csv ]] || { cp "$out/pieces/$name.csv" "$dest/$name.csv.tmp" && mv "$dest/$name.csv.tmp" "$dest/$name.csv"; }
   echo "  done: $name"
 }

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # scripts/grid-in-pieces.sh end to end on a cheap grid (sphere-10 x random, gd, cmaes x 3 seeds,
 # 50 episodes, a knob of cmaes set): the pieces hold one run each (gd's seeds share episodes: one
-# piece), their runs CSV equals the one exported from the same grid run directly (every column
+# piece) and each lands with its archive file (per-episode losses: 9 of 9 runs), their runs CSV equals the one exported from the same grid run directly (every column
 # but the wall time), a second run with the pieces landed runs nothing and writes the same file,
 # a piece of other results versions is refused (one of another commit with the same versions is
 # taken), and --split-groups-over cuts gd's group into one-run
@@ -42,6 +42,12 @@ cfg = {o: json.loads(j) for o, j in con.execute(
 assert cfg["cmaes"]["sigma0"] == 0.5, cfg["cmaes"]
 print("pieces: 3 + 3 one-run pieces and gd whole; the runs CSV equals the direct grid's but for wall time")
 PY
+# every piece landed with its archive file, which repeats the published runs bit for bit
+for f in "$work"/dest/*.csv; do
+  [[ -f ${f%.csv}.runs.jsonl.gz ]] || { echo "no archive file beside $f" >&2; exit 1; }
+done
+/usr/bin/python3 "$src/scripts/archive_runs.py" check "$work/dest" --against "$work"/dest/*.csv |
+  grep -q "^archive_runs: 9 of 9 published runs archived$" || { echo "the pieces' archive does not hold the 9 runs" >&2; exit 1; }
 # landed pieces are taken as done: nothing runs, the same runs CSV
 "$src/scripts/grid-in-pieces.sh" "$work/again" "$work/dest" --jobs 2 "$build" -- "${grid[@]}" >"$work/again.log" 2>&1
 grep -q "0 pieces to run" "$work/again.log" || { cat "$work/again.log" >&2; exit 1; }

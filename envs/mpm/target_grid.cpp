@@ -1,7 +1,5 @@
 #include "envs/mpm/target_grid.hpp"
 
-#include <zlib.h>
-
 #include <charconv>
 #include <climits>
 #include <cmath>
@@ -14,6 +12,7 @@
 #include <string_view>
 
 #include "common/error.hpp"
+#include "common/gzip_text.hpp"
 #include "common/number_text.hpp"
 #include "common/regular_file.hpp"
 
@@ -153,49 +152,19 @@ bool split(std::string_view line, std::vector<std::string_view>& fields) {
 }
 
 std::string gzip(const std::string& path, const std::string& text) {
-  if (text.size() > UINT_MAX) fail(path, "grid too large to write");
-  z_stream zs{};
-  // level 9, windowBits 15 + 16 = gzip wrapper with a default header: no name, mtime 0
-  if (deflateInit2(&zs, 9, Z_DEFLATED, 31, 8, Z_DEFAULT_STRATEGY) != Z_OK) throw std::bad_alloc();
-  std::string out(deflateBound(&zs, static_cast<uLong>(text.size())), '\0');
-  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(text.data()));
-  zs.avail_in = static_cast<uInt>(text.size());
-  zs.next_out = reinterpret_cast<Bytef*>(out.data());
-  zs.avail_out = static_cast<uInt>(out.size());
-  const int ret = deflate(&zs, Z_FINISH);
-  out.resize(zs.total_out);
-  deflateEnd(&zs);
-  if (ret != Z_STREAM_END) fail(path, "zlib deflate failed");
-  return out;
+  try {
+    return dsb::gzip(text);
+  } catch (const GzipError& e) {
+    fail(path, e.what());
+  }
 }
 
 std::string gunzip(const std::string& path, const std::string& raw) {
-  if (raw.empty()) fail(path, "empty file (not a gzip stream)");
-  if (raw.size() > UINT_MAX) fail(path, "file too large");
-  z_stream zs{};
-  if (inflateInit2(&zs, 31) != Z_OK) throw std::bad_alloc();  // gzip wrapper only
-  struct End {
-    z_stream* z;
-    ~End() { inflateEnd(z); }
-  } end{&zs};
-  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(raw.data()));
-  zs.avail_in = static_cast<uInt>(raw.size());
-  std::string text;
-  for (;;) {
-    char buf[1 << 16];
-    zs.next_out = reinterpret_cast<Bytef*>(buf);
-    zs.avail_out = sizeof buf;
-    const int ret = inflate(&zs, Z_NO_FLUSH);
-    text.append(buf, sizeof buf - zs.avail_out);
-    if (text.size() > kMaxText) fail(path, "decompresses to more than 1 GiB");
-    if (ret == Z_STREAM_END) break;
-    if (ret == Z_OK) continue;
-    if (ret == Z_BUF_ERROR) fail(path, "truncated gzip stream");
-    if (ret == Z_MEM_ERROR) throw std::bad_alloc();
-    fail(path, std::string("not a valid gzip stream (") + (zs.msg ? zs.msg : "zlib error") + ")");
+  try {
+    return dsb::gunzip(raw, kMaxText);
+  } catch (const GzipError& e) {
+    fail(path, e.what());
   }
-  if (zs.avail_in != 0) fail(path, "data after the end of the gzip stream");
-  return text;
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 
 #include "common/error.hpp"
 #include "common/regular_file.hpp"
+#include "common/shown_value.hpp"
 #include "harness/commands/command.hpp"
 #include "harness/store/export_ioh.hpp"
 #include "harness/core/output_path.hpp"
@@ -40,7 +41,7 @@ void check_report_folder(const std::string& dir, bool force, const std::string& 
 
 int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
                    bool quiet, const std::string& gradient_quality, const std::string& renders,
-                   bool include_stale) {
+                   bool include_stale, const std::string& with) {
   check_database_path("--db", db_path, true);
   // Debian's pandas/matplotlib/scipy import only in Debian's interpreter; DSB_PYTHON overrides
   const char* python_env = std::getenv("DSB_PYTHON");
@@ -71,6 +72,12 @@ int command_report(const std::string& db_path, const std::string& out_dir, const
     args.push_back(renders);
   }
   if (include_stale) args.push_back("--include-stale");
+  if (!with.empty()) {
+    if (!std::filesystem::is_directory(with))
+      throw UsageError("--with: '" + shown_value(with) + "' is not a folder of archive files (NAME.runs.jsonl.gz)");
+    args.push_back("--with");
+    args.push_back(with);
+  }
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -101,7 +108,7 @@ int command_report(const std::string& db_path, const std::string& out_dir, const
 Command report_command() {
   return {"report", "comparison report (index.html, figures, tables) from a database", [](CLI::App& app) {
             struct Args {
-              std::string db = "results.sqlite", out = "report", landscapes, gradient_quality, renders;
+              std::string db = "results.sqlite", out = "report", landscapes, gradient_quality, renders, with;
               bool force = false, include_stale = false;
             };
             auto a = std::make_shared<Args>();
@@ -116,10 +123,13 @@ Command report_command() {
             app.add_flag("--include-stale", a->include_stale,
                          "also the runs made by other results versions (stale), each marked as an optimizer of "
                          "its own (OPT-stale-eEoOrR); the claims still judge current runs only");
+            app.add_option("--with", a->with,
+                           "a folder of the published archive (data/study): its runs beside yours, marked archived "
+                           "(docs/results.md)");
             return [a] {
               check_report_folder(a->out, a->force);
               return command_report(a->db, a->out, a->landscapes, false, a->gradient_quality, a->renders,
-                                    a->include_stale);
+                                    a->include_stale, a->with);
             };
           }};
 }

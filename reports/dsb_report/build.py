@@ -11,7 +11,7 @@ import pandas as pd
 import scipy
 
 from . import (captions, claims, grid, html, landscape, metric_counts, optima, plots, renders, stats, style,
-               summary)
+               summary, with_archive)
 from .data import current_view, main_panels, slugify
 from .tables import FINAL_COLUMNS, SIGNIFICANCE_COLUMNS, failures, mark, overview, write_csv
 
@@ -78,6 +78,8 @@ def _provenance(data, build_type, made, stored_episodes, registry=None) -> list:
         ["git sha(s)", _counts(r["git_sha"])],
         ["build type", build_type],
         ["env registry", _registry_text(registry)],
+        ["archive", "none (make_report.py --with DIR puts the published runs beside these)" if data.archive is None
+         else f"{os.path.abspath(data.archive.folder)}: {data.archive.files} files, {data.archive.runs} runs"],
         ["host(s)", _counts(r["host"])],
         ["envs", f"{r['env'].nunique()}: " + ", ".join(sorted(r["env"].unique()))],
         ["optimizers", f"{len(data.optimizers)}: " + ", ".join(data.optimizers)],
@@ -175,7 +177,9 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
 
     rends = renders.collect(current_runs, render_dir, out, written)   # as render --best-of picks
 
-    notes = [n for n in [data.stale.note(len(data.runs))] if n]
+    notes = [n for n in [data.archive.note() if data.archive else "", data.stale.note(len(data.runs))] if n]
+    if data.archive is not None:
+        write_csv(with_archive.sources(data.runs), path("sources.csv"))
     if not data.panels:
         notes.append("No run of this harness's results versions is done: there is nothing to compare yet."
                      if data.stale.count and not data.stale.shown else

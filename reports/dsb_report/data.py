@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from . import staleness
+from . import archive, staleness, with_archive
 
 RUN_COLUMNS = ["run_id", "env", "optimizer", "seed", "budget", "env_config_hash",
                "opt_config_hash", "status", "episodes", "failed_episodes", "best_loss",
@@ -86,6 +86,8 @@ class Data:
     optimizers: list          # sorted names of every optimizer in the database
     # the runs made by other results versions, and what was done with them (staleness.py)
     stale: staleness.Staleness = field(default_factory=lambda: staleness.Staleness(judged=False))
+    # the published archive's runs joined to the database's (with_archive.py), None without --with
+    archive: object = None
 
 
 def slugify(text: str) -> str:
@@ -180,10 +182,11 @@ def _metric_at_best(runs: pd.DataFrame, ev: pd.DataFrame, budget: int) -> np.nda
     return out
 
 
-def load(path: str, registry=None, include_stale: bool = False) -> Data:
+def load(path: str, registry=None, include_stale: bool = False, archive_dir=None) -> Data:
     """The database at path. registry: `harness list` of the harness whose results versions make a
     run current (None: staleness not judged, every run kept); include_stale: analyse stale runs as
-    optimizers of their own instead of leaving them out."""
+    optimizers of their own instead of leaving them out; archive_dir: a folder of the published
+    archive whose runs join the database's (with_archive.py)."""
     con = connect_ro(path)
     try:
         meta = dict(con.execute("SELECT key, value FROM meta").fetchall())
@@ -223,6 +226,12 @@ def load(path: str, registry=None, include_stale: bool = False) -> Data:
     runs["failed_episodes"] = pd.to_numeric(runs["failed_episodes"], errors="coerce").fillna(0)
     runs.loc[done, "failed_episodes"] = runs.loc[done, "run_id"].map(nan_eps).fillna(0)
     runs["failed_episodes"] = runs["failed_episodes"].astype(int)
+    use = None
+    if archive_dir is not None:
+        try:
+            runs, ev, use = with_archive.join(runs, ev, archive_dir)
+        except archive.ArchiveError as e:
+            raise DataError(str(e)) from None
     runs, stale = staleness.judge(runs, registry, include_stale)
     runs = runs.sort_values(["env", "optimizer", "seed", "budget", "run_id"]).reset_index(drop=True)
 
@@ -239,7 +248,7 @@ def load(path: str, registry=None, include_stale: bool = False) -> Data:
                             _metric_at_best(g, gev, int(budget))))
     return Data(db_path=path, db_size=os.path.getsize(path), meta=meta, runs=runs,
                 selected=selected, ignored=ignored, panels=panels,
-                optimizers=sorted(runs["optimizer"].unique()), stale=stale)
+                optimizers=sorted(runs["optimizer"].unique()), stale=stale, archive=use)
 
 
 def main_panels(data: Data, panels=None) -> list:

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from . import stats
+from . import stats, with_archive
 from .style import plt, save
 
 WIDE = (7.6, 4.4)
@@ -63,7 +63,7 @@ def curves(panel, pal: dict, ys, path: str, marks: dict | None = None):
         at = [e - 1 for e in marker_episodes(panel.budget, k, n)]
         mk = marks.get(o, "o")
         ax.plot(x, y, color=color, ls=ls, lw=1.8, drawstyle="steps-post", marker=mk, ms=6,
-                markevery=at, mec="black", mew=0.6, label=f"{o} (n={panel.rows(o).size})")
+                markevery=at, mec="black", mew=0.6, label=with_archive.label(panel, o))
         # the markers again above every line, so a curve hidden under another keeps its marks
         ax.plot(x[at], y[at], ls="none", marker=mk, ms=6, color=color, mec="black", mew=0.6,
                 zorder=5)

@@ -1,0 +1,222 @@
+#!/usr/bin/python3
+"""The published archive's files (reports/dsb_report/archive.py): a study's runs with their
+per-episode losses, checked against the runs the study published.
+
+    /usr/bin/python3 scripts/archive_runs.py write DB OUT.runs.jsonl.gz [--against RUNS.csv ...]
+    /usr/bin/python3 scripts/archive_runs.py check ARCHIVE [ARCHIVE ...] --against RUNS.csv [...]
+        [--allow-missing] [--update FILE | --agree FILE]
+
+`write` archives every 'done' run of DB (a new file only). With --against, DB must hold exactly
+the published runs of those CSVs that it has keys for, each with its final best loss the same
+bits as published (a rerun on other code that gives other results is refused, exit 2, naming the
+runs), and the runs it has that no CSV publishes are left out; it says how many of the CSVs'
+runs it archived. `check` compares archive files (or folders of them) with the runs CSVs: every
+published run archived once, with the same final best loss bits, rebuilt from its losses; exit 1
+naming each difference. With --allow-missing, a published run not archived (a study whose
+databases are gone and not yet rerun) is counted, not an error. --update FILE writes the table of
+what the archive holds, per study, between FILE's `<!-- archive: begin -->` and
+`<!-- archive: end -->` lines; --agree FILE exits 1 when that block is not the table this check
+makes. Exit 2: bad input, one line.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "reports"))
+
+RUN_KEY = ["env", "optimizer", "seed", "budget", "env_config_hash", "opt_config_hash"]
+
+
+def fail(msg: str) -> int:
+    print(f"archive_runs: {msg}", file=sys.stderr)
+    return 2
+
+
+def published(paths):
+    """key -> (row, file) of the runs CSVs' runs, their best_loss as a float (NaN when empty)."""
+    import csv
+    out = {}
+    for path in paths:
+        try:
+            with open(path, newline="", encoding="utf-8") as f:
+                for row in csv.DictReader(f):
+                    key = tuple(str(row[c]) for c in RUN_KEY)
+                    if key in out:
+                        raise ValueError(f"run {'/'.join(key[:4])} is in both '{out[key][1]}' and '{path}'")
+                    out[key] = (row, path)
+        except OSError as e:
+            raise ValueError(f"cannot read '{path}': {e.strerror}") from None
+    return out
+
+
+def final_best(run) -> float:
+    from dsb_report import archive
+    best = archive.best_so_far(run["loss"])
+    finite = best[best < float("inf")]
+    return float(finite[-1]) if finite.size else float("nan")
+
+
+def same_bits(a: float, b: float) -> bool:
+    return (a != a and b != b) or (a == b and a.hex() == b.hex())
+
+
+def key_of(run) -> tuple:
+    return tuple(str(run[c]) for c in RUN_KEY)
+
+
+def write(a) -> int:
+    from dsb_report import archive, data as data_mod
+    try:
+        con = data_mod.connect_ro(a.db)
+        try:
+            runs = archive.runs_of_db(con)
+        finally:
+            con.close()
+    except (data_mod.DataError, archive.ArchiveError) as e:
+        return fail(str(e))
+    if a.against:
+        try:
+            pub = published(a.against)
+        except ValueError as e:
+            return fail(str(e))
+        kept, differ = [], []
+        for r in runs:
+            p = pub.get(key_of(r))
+            if p is None:
+                continue
+            want = float(p[0]["best_loss"]) if p[0]["best_loss"] else float("nan")
+            got = final_best(r)
+            if not same_bits(want, got):
+                differ.append(f"{'/'.join(key_of(r)[:4])}: published {want!r}, here {got!r}")
+            kept.append(r)
+        if differ:
+            return fail(f"{len(differ)} runs differ from the published ones, nothing written: " + "; ".join(differ))
+        print(f"archive_runs: {len(kept)} of the {len(pub)} published runs found in {a.db}, each the same final "
+              f"best loss bit for bit")
+        runs = kept
+    try:
+        n = archive.write(runs, a.out)
+    except archive.ArchiveError as e:
+        return fail(str(e))
+    print(f"archive_runs: {n} runs -> {a.out} ({os.path.getsize(a.out)} bytes)")
+    return 0
+
+
+BEGIN, END = "<!-- archive: begin -->", "<!-- archive: end -->"
+
+
+def study_of(csv_path: str) -> str:
+    """The study a runs CSV publishes: its folder when it is one of a grid's pieces, else the file."""
+    d = os.path.dirname(os.path.normpath(csv_path))
+    return d + "/" if os.path.basename(d) != "study" else os.path.normpath(csv_path)
+
+
+def table(pub, seen, sizes) -> str:
+    """Markdown: per study, its published runs, those archived with their losses, the bytes."""
+    rows = {}
+    for k, (_, path) in pub.items():
+        r = rows.setdefault(study_of(path), {"runs": 0, "archived": 0, "files": set()})
+        r["runs"] += 1
+        if k in seen:
+            r["archived"] += 1
+            r["files"].add(seen[k])
+    lines = ["| study (runs CSV) | published runs | archived with losses | archive files | bytes |",
+             "|---|---:|---:|---:|---:|"]
+    total = 0
+    for study in sorted(rows):
+        r = rows[study]
+        b = sum(sizes[f] for f in r["files"])
+        total += b
+        note = "" if r["archived"] == r["runs"] else " (curves missing: not rerun yet)"
+        lines.append(f"| `{study}` | {r['runs']} | {r['archived']}{note} | {len(r['files'])} | {b:,} |")
+    lines.append(f"| all | {len(pub)} | {len(seen)} | {len(sizes)} | {total:,} ({total / 1e6:.2f} MB) |")
+    return "\n".join(lines)
+
+
+def with_block(text: str, block: str, path: str) -> str:
+    if text.count(BEGIN) != 1 or text.count(END) != 1 or text.index(BEGIN) > text.index(END):
+        raise ValueError(f"'{path}' has no single '{BEGIN}' ... '{END}' block")
+    head, rest = text.split(BEGIN)
+    return head + BEGIN + "\n" + block + "\n" + END + rest.split(END, 1)[1]
+
+
+def check(a) -> int:
+    from dsb_report import archive
+    try:
+        pub = published(a.against)
+        runs, sizes = [], {}
+        for path in a.archives:
+            for f in archive.files_under(path):
+                runs += [(r, f) for r in archive.read(f)]
+                sizes[f] = os.path.getsize(f)
+        doc = a.update or a.agree
+        text = open(doc, encoding="utf-8").read() if doc else None
+    except OSError as e:
+        return fail(f"cannot read '{e.filename}': {e.strerror}")
+    except (ValueError, archive.ArchiveError) as e:
+        return fail(str(e))
+    problems, seen = [], {}
+    for r, f in runs:
+        k = key_of(r)
+        if k in seen:
+            problems.append(f"{'/'.join(k[:4])} archived twice ('{seen[k]}', '{f}')")
+            continue
+        seen[k] = f
+        p = pub.get(k)
+        if p is None:
+            continue
+        want = float(p[0]["best_loss"]) if p[0]["best_loss"] else float("nan")
+        if not same_bits(want, final_best(r)):
+            problems.append(f"{'/'.join(k[:4])}: published {want!r}, archived {final_best(r)!r}")
+    missing = [k for k in pub if k not in seen]
+    if not a.allow_missing:
+        for k in missing:
+            problems.append(f"{'/'.join(k[:4])} published in '{pub[k][1]}' but not archived")
+    print(f"archive_runs: {len(pub) - len(missing)} of {len(pub)} published runs archived"
+          f"{'' if not problems else f'; {len(problems)} problems'}")
+    for p in problems:
+        print(f"archive_runs: {p}")
+    if text is not None:
+        try:
+            want = with_block(text, table(pub, {k: f for k, f in seen.items() if k in pub}, sizes), doc)
+        except ValueError as e:
+            return fail(str(e))
+        if a.update and want != text:
+            with open(doc, "w", encoding="utf-8") as f:
+                f.write(want)
+            print(f"archive_runs: updated the archive table in '{doc}'")
+        if a.agree and want != text:
+            problems.append(f"the archive table in '{doc}' is not this archive's; run with --update {doc}")
+            print(f"archive_runs: {problems[-1]}")
+    return 1 if problems else 0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    w = sub.add_parser("write", help="archive a database's done runs")
+    w.add_argument("db")
+    w.add_argument("out")
+    w.add_argument("--against", nargs="+", help="the runs CSVs the archive must repeat")
+    c = sub.add_parser("check", help="compare archive files with the published runs")
+    c.add_argument("archives", nargs="+")
+    c.add_argument("--against", nargs="+", required=True)
+    c.add_argument("--allow-missing", action="store_true",
+                   help="count published runs not archived instead of failing on them")
+    doc = c.add_mutually_exclusive_group()
+    doc.add_argument("--update", metavar="FILE", help="write the archive table into FILE's block")
+    doc.add_argument("--agree", metavar="FILE", help="fail when FILE's archive table is not this one")
+    a = ap.parse_args(argv)
+    try:
+        import numpy  # noqa: F401
+        import pandas  # noqa: F401
+    except ImportError as err:
+        return fail(f"{sys.executable} cannot import {err.name}; use /usr/bin/python3")
+    return {"write": write, "check": check}[a.command](a)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
