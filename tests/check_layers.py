@@ -8,7 +8,10 @@ with (an include under no row, such as the generated git_sha.hpp, is not checked
 each one as FILE:LINE, when
   - a file includes a folder its row does not allow (up a layer, or across to a sibling);
   - a source file, or an include, lies in a folder that has rooms in the table but in none of them
-    (harness/x.hpp beside harness/store/, ...).
+    (harness/x.hpp beside harness/store/, ...);
+  - a file of harness/ outside harness/store/ holds SQL: a string literal that starts a statement
+    (SELECT, INSERT, UPDATE, DELETE, CREATE, DROP, ALTER, PRAGMA, ATTACH, BEGIN, COMMIT). All SQL
+    lives in the store.
 
   tests/check_layers.py SOURCE_DIR
 Exit 0: every include is allowed; 1: not (each offence listed); 2: no table in docs/layout.md.
@@ -21,6 +24,8 @@ BEGIN, END = '<!-- layers: begin -->', '<!-- layers: end -->'
 ROW = re.compile(r'^\|\s*`([^`]+)`\s*\|(.*)\|\s*$')
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 SOURCES = ('.cpp', '.hpp', '.cpp.in')
+SQL = re.compile(r'"\s*(SELECT|INSERT|UPDATE|DELETE|CREATE|DROP|ALTER|PRAGMA|ATTACH|BEGIN|COMMIT)\b')
+SQL_HOME = 'harness/store/'
 
 
 def read_table(layout_md):
@@ -70,6 +75,8 @@ def check(root):
                     continue
                 with open(os.path.join(root, rel), encoding='utf-8', errors='replace') as f:
                     for number, line in enumerate(f, 1):
+                        if rel.startswith('harness/') and not rel.startswith(SQL_HOME) and SQL.search(line):
+                            problems.append(f'{rel}:{number}: SQL outside {SQL_HOME} (docs/layout.md, "Layers")')
                         m = INCLUDE.match(line)
                         if not m:
                             continue
@@ -85,7 +92,7 @@ def check(root):
     for p in problems:
         print(p)
     if problems:
-        print(f'check_layers: {len(problems)} includes against the layers')
+        print(f'check_layers: {len(problems)} includes against the layers, or SQL outside the store')
         return 1
     print(f'check_layers: every include of {", ".join(sorted({f.split("/")[0] for f in table}))} runs as '
           f'docs/layout.md allows ({len(table)} rows)')

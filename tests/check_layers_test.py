@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """tests/check_layers.py on the real tree, then on copies of it with one include broken: an
-upward include, an include across to a sibling room, a file outside every room, and an env that
-includes an optimizer must each fail naming the file and line; a tree without the table exits 2.
+upward include, an include across to a sibling room, a file outside every room, an env that
+includes an optimizer, and a SQL statement in a command must each fail naming the file and line;
+a tree without the table exits 2.
 
   tests/check_layers_test.py SOURCE_DIR
 """
@@ -79,6 +80,14 @@ def main(source):
         code, out = run(tmp)
         expect(code == 1 and 'harness/helper.hpp: in no room' in out and f'harness/commands/cli.cpp:{line}:' in out,
                f'a file beside the rooms and its include: exit {code}, both named')
+
+    with tempfile.TemporaryDirectory() as tmp:
+        copy_tree(source, tmp)
+        line = append(tmp, 'harness/commands/export_command.cpp',
+                      'static const char* kCount = "SELECT COUNT(*) FROM runs";\n')
+        code, out = run(tmp)
+        expect(code == 1 and f'harness/commands/export_command.cpp:{line}: SQL outside harness/store/' in out,
+               f'a SELECT in a command: exit {code}, names harness/commands/export_command.cpp:{line}')
 
     with tempfile.TemporaryDirectory() as tmp:
         copy_tree(source, tmp)

@@ -3,6 +3,8 @@
 #include <cstdint>
 #include <string>
 
+#include "harness/store/best_run.hpp"
+
 namespace dsb {
 
 struct RenderArgs {
@@ -16,17 +18,6 @@ struct RenderArgs {
   bool force = false;   // write over an existing --out (never over a database: output_path.hpp)
   bool target = false;  // draw the env's target alone (Env::target_frames), no rollout: no --x, --best-of, --frames
 };
-
-// The best done run of an env in a harness database (read-only): the smallest best_loss, ties to
-// the smallest run_id (reports/dsb_report/renders.py picks the same run). UsageError naming the
-// file when it cannot be read or holds no done run of the env with a best_x.
-struct BestRun {
-  std::string optimizer;
-  std::int64_t seed = 0;
-  double best_loss = 0.0;
-  std::string best_x;  // comma-separated
-};
-BestRun best_run_of(const std::string& db_path, const std::string& env);
 
 // Checks every argument before any rollout (one-line UsageError naming the bad value: unknown or
 // synthetic env, --x of the wrong dimension or outside the box, an extension other than .png or
