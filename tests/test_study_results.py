@@ -144,11 +144,11 @@ class StudyResults(unittest.TestCase):
         self.assertIn("dup.csv", r.stderr)
         self.assertIn("sphere-2/", r.stderr)
 
-    def test_the_readme_block_is_the_published_data(self):
-        # the README's results block is what the script makes of data/study/ now: a run landed
+    def test_the_results_block_is_the_published_data(self):
+        # docs/results.md's results block is what the script makes of data/study/ now: a run landed
         # without regenerating it (or an edit by hand) fails here
         import glob
-        with open(os.path.join(SOURCE, "README.md"), encoding="utf-8") as f:
+        with open(os.path.join(SOURCE, "docs", "results.md"), encoding="utf-8") as f:
             readme = f.read()
         begin, end = "<!-- study_results.py: begin -->\n", "<!-- study_results.py: end -->"
         block = readme[readme.index(begin) + len(begin):readme.index(end)]
@@ -156,8 +156,8 @@ class StudyResults(unittest.TestCase):
             glob.glob(os.path.join(SOURCE, "data", "study", "fluid", "*.csv")))
         r = study("tables", *files, "--harness", HARNESS)
         self.assertEqual(r.returncode, 0, r.stderr)
-        self.assertEqual(block, r.stdout, "README's block is stale: rerun scripts/study_results.py tables "
-                         "data/study/runs.csv data/study/fluid/*.csv --harness build/bin/harness --update README.md")
+        self.assertEqual(block, r.stdout, "docs/results.md's block is stale: rerun scripts/study_results.py tables "
+                         "data/study/runs.csv data/study/fluid/*.csv --harness build/bin/harness --update docs/results.md")
 
     def test_update_replaces_its_block_only(self):
         readme = os.path.join(self.tmp, "README.md")
