@@ -28,6 +28,20 @@ def study(*args):
     return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True)
 
 
+def write_claims(path, mode, rows):
+    """Claims rows in paper_claims.csv's columns, appended to `path` ("a") or as a new file ("w")."""
+    with open(path, mode, newline="", encoding="utf-8") as f:
+        csv.writer(f, lineterminator="\n").writerows(rows)
+
+
+def exported(tmp, db):
+    """The runs CSV of `db`, written by `study_results.py export` into `tmp`."""
+    out = os.path.join(tmp, "runs.csv")
+    r = study("export", db, out)
+    assert r.returncode == 0, r.stderr
+    return out
+
+
 class StudyResults(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -45,13 +59,10 @@ class StudyResults(unittest.TestCase):
         con.close()
         cls.claims = os.path.join(cls.tmp, "claims.csv")
         shutil.copy(os.path.join(SOURCE, "reports", "paper_claims.csv"), cls.claims)
-        with open(cls.claims, "a", newline="", encoding="utf-8") as f:
-            w = csv.writer(f, lineterminator="\n")
-            w.writerow(["lifts", "cartpole1", "metric_most", "cmaes", "", "0.5", "cmaes lifts", "t", ""])
-            w.writerow(["sphere", "sphere-2", "a_below_b", "cmaes", "random bo", "", "cmaes first", "t", ""])
-        cls.csv = os.path.join(cls.tmp, "runs.csv")
-        r = study("export", cls.db, cls.csv)
-        assert r.returncode == 0, r.stderr
+        write_claims(cls.claims, "a", [
+            ["lifts", "cartpole1", "metric_most", "cmaes", "", "0.5", "cmaes lifts", "t", ""],
+            ["sphere", "sphere-2", "a_below_b", "cmaes", "random bo", "", "cmaes first", "t", ""]])
+        cls.csv = exported(cls.tmp, cls.db)
 
     @classmethod
     def tearDownClass(cls):
@@ -212,16 +223,13 @@ class SeedsThatAreOneRun(unittest.TestCase):
         subprocess.run([HARNESS, "--env", "sphere-2", "--optimizer", "gd,nlopt-direct-l,nlopt-lbfgs,nlopt-bobyqa,random",
                         "--seeds", "5", "--budget", "200", "--quiet", "--db", cls.db], check=True)
         cls.claims = os.path.join(cls.tmp, "claims.csv")
-        with open(cls.claims, "w", newline="", encoding="utf-8") as f:
-            w = csv.writer(f, lineterminator="\n")
-            w.writerow(["id", "env", "kind", "a", "b", "threshold", "statement", "source", "note"])
-            w.writerow(["gd-first", "sphere-2", "a_below_b", "gd", "random", "", "s", "t", ""])
-            w.writerow(["both-first", "sphere-2", "a_below_b", "gd nlopt-direct-l", "random", "", "s", "t", ""])
-            w.writerow(["order", "sphere-2", "a_below_b", "gd", "nlopt-direct-l", "", "s", "t", ""])
-            w.writerow(["tie", "sphere-2", "not_significant", "nlopt-lbfgs", "nlopt-bobyqa", "", "s", "t", ""])
-        cls.csv = os.path.join(cls.tmp, "runs.csv")
-        r = study("export", cls.db, cls.csv)
-        assert r.returncode == 0, r.stderr
+        write_claims(cls.claims, "w", [
+            ["id", "env", "kind", "a", "b", "threshold", "statement", "source", "note"],
+            ["gd-first", "sphere-2", "a_below_b", "gd", "random", "", "s", "t", ""],
+            ["both-first", "sphere-2", "a_below_b", "gd nlopt-direct-l", "random", "", "s", "t", ""],
+            ["order", "sphere-2", "a_below_b", "gd", "nlopt-direct-l", "", "s", "t", ""],
+            ["tie", "sphere-2", "not_significant", "nlopt-lbfgs", "nlopt-bobyqa", "", "s", "t", ""]])
+        cls.csv = exported(cls.tmp, cls.db)
 
     @classmethod
     def tearDownClass(cls):
