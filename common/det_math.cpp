@@ -86,7 +86,12 @@ void log_batch(const double* x, double* out, std::size_t n, SimdPath path) {
   (path == SimdPath::avx ? log_avx : log_sse2)(x, out, n);
 }
 
-void exp_batch(const double* x, double* out, std::size_t n) { exp_batch(x, out, n, simd_path()); }
-void log_batch(const double* x, double* out, std::size_t n) { log_batch(x, out, n, simd_path()); }
+// the batches offer SSE2 and AVX (common/simd_path.hpp)
+void exp_batch(const double* x, double* out, std::size_t n) {
+  exp_batch(x, out, n, simd_path({SimdPath::sse2, SimdPath::avx}));
+}
+void log_batch(const double* x, double* out, std::size_t n) {
+  log_batch(x, out, n, simd_path({SimdPath::sse2, SimdPath::avx}));
+}
 
 }  // namespace dsb::detmath

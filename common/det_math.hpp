@@ -62,8 +62,8 @@ double lgamma(double x);  // log |Gamma(x)|; 1 ulp for x > 0
 // n = 192: exp 9.4 ns scalar, 2.9 ns SSE2, 1.6 ns AVX (1.8x SSE2); log 13.8, 7.1 and 3.8 ns (1.9x).
 void exp_batch(const double* x, double* out, std::size_t n);
 void log_batch(const double* x, double* out, std::size_t n);
-// The same through the given path, for tests and benchmarks. SimdPath::avx requires
-// cpu_has_avx().
+// The same through the given path, for tests and benchmarks: SimdPath::avx (which requires
+// cpu_supports(SimdPath::avx)), any other SSE2.
 void exp_batch(const double* x, double* out, std::size_t n, SimdPath path);
 void log_batch(const double* x, double* out, std::size_t n, SimdPath path);
 

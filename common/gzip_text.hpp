@@ -1,6 +1,6 @@
 #pragma once
 // Text in and out of gzip (zlib, Debian's zlib1g-dev): the target grids' files
-// (envs/mpm/target_grid.hpp) and the published archive's (harness/archive_reader.hpp). gzip()
+// (envs/mpm/target_grid.hpp) and the published archive's (harness/store/archive_reader.hpp). gzip()
 // writes the same bytes for the same text (level 9, a header without name or time stamp).
 #include <cstddef>
 #include <stdexcept>

@@ -35,7 +35,7 @@ class Rng {
   std::uint64_t skip_u64() { return advance(); }
 
   // values drawn so far (next_u64 and everything built on it, skip_u64 not counted): a run's
-  // episodes before its first draw are the same for every seed (harness/budget.hpp)
+  // episodes before its first draw are the same for every seed (harness/run/budget.hpp)
   std::uint64_t draws() const { return draws_; }
 
  private:

@@ -239,7 +239,7 @@ void NloptOptimizer::minimize(Objective& f, Rng& rng) {
     // thread-local generator, stream continues across calls: re-seed before every optimize. An
     // algorithm that never draws from it does not use the seed, so that draw is not counted as a
     // use of the run's seed (the stream advances the same: the same bits either way), and its
-    // episodes up to its first random restart are shared across seeds (harness/budget.hpp)
+    // episodes up to its first random restart are shared across seeds (harness/run/budget.hpp)
     const std::uint64_t nlopt_seed = algo.random ? rng.next_u64() : rng.skip_u64();
     nlopt::srand(static_cast<unsigned long>(nlopt_seed));
 

@@ -368,7 +368,7 @@ class TestReport(ReportCase):
         self.assertEqual([r[0].split(" (as ")[0] for r in rows], envs)
 
     def test_the_harness_runs_are_current(self):
-        # the versions the harness stored (harness/results_versions.cpp) are the ones its `harness
+        # the versions the harness stored (harness/core/results_versions.cpp) are the ones its `harness
         # list` gives (dsb_report.staleness): no run left out, no stale file, no note
         need_harness()
         con = sqlite3.connect(self.db)
@@ -1052,7 +1052,7 @@ class TestStaleNotJudged(unittest.TestCase):
 
 class TestStaleReasons(unittest.TestCase):
     """dsb_report.staleness reads stored versions and says why a run is stale in the harness's
-    words (harness/results_versions.cpp, stale_reason)."""
+    words (harness/core/results_versions.cpp, stale_reason)."""
 
     def test_reasons(self):
         reg = registry_of_harness() if harness_path() else None

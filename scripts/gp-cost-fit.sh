@@ -7,7 +7,7 @@
 # A run's own time is its wall seconds less its episodes' (evals.wall_s: the simulation alone);
 # what the plan's model must give is the own time of the 1,000-episode run beyond the 200-episode
 # run's (a plan carries a probe's 200 measured episodes to the budget by the model's growth:
-# harness/cost_model.cpp). scripts/gp_cost_fit.py fits the three constants to those six numbers
+# harness/plan/cost_model.cpp). scripts/gp_cost_fit.py fits the three constants to those six numbers
 # (least squares in log, the model's schedules of optimizers/bo/gp_cost.cpp) and writes
 # OUT.csv: env,optimizer,dim,fits (the 1,000-episode run's GP fits, its diagnostics),model_fits (the
 # model's schedule),own_200_s,own_1000_s,growth_s,model_s,ratio.

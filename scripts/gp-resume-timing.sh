@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # What resuming an interrupted run costs (docs/performance.md "Resuming a GP optimizer"): one
 # run of OPTIMIZER on ENV at BUDGET episodes, uninterrupted and stopped by SIGTERM after episode
-# AT (the fault injection of a build with DSB_FAULT_INJECTION, harness/fault_injection.hpp),
+# AT (the fault injection of a build with DSB_FAULT_INJECTION, harness/run/fault_injection.hpp),
 # then resumed three ways from copies of the stopped database:
 #   resume     the resume as it is (the journal's episodes and the optimizer's own work recalled),
 #   replay     the same resume stopped after episode AT + 1: the replay alone,

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Does `harness plan` tell the truth? Runs a sample grid and compares each (env, optimizer) pair's
 # planned seconds with the wall seconds its runs took (the table: docs/running.md, "Does the plan
-# tell the truth?", and the README).
+# tell the truth?" and "The main job at a glance").
 #   scripts/plan-check.sh BUILD_DIR WORK_DIR OUT.csv
 # The sample: the 12 light envs of the claims grid x every optimizer x 2 seeds at 200 episodes,
 # and fluid-h10 and plb-pinch-h5 with cmaes, gd and boleap. The envs are calibrated first (the

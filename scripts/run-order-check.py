@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """How a grid's start order plays out, from `harness plan --runs-csv` (planned seconds, start_rank,
-lead_seed): the runner's rule (harness/runner.hpp) replayed on the planned costs with JOBS workers,
+lead_seed): the runner's rule (harness/run/runner.hpp) replayed on the planned costs with JOBS workers,
 each free worker taking the first run in start order whose lead has ended. Prints when the first
 env and the last light env (all but fluid and the PlasticineLab tasks) have every run done, when
 fluid has, the whole grid's end, and the core-hours workers spent waiting for a lead.

@@ -17,7 +17,7 @@ they had (empty: not recorded). `tables`
 prints the three tables as Markdown, from one runs CSV or several (a study's grids published apart,
 such as data/study/runs.csv and the fluid grid's pieces data/study/fluid/*.csv; a run found in two
 of them is refused); with --update it also replaces the text between the lines
-`<!-- study_results.py: begin -->` and `<!-- study_results.py: end -->` of FILE (the README) with
+`<!-- study_results.py: begin -->` and `<!-- study_results.py: end -->` of FILE (docs/results.md) with
 them. The verdicts are the report's (reports/dsb_report/claims.py) on the same runs: from the CSV
 or from the database they are the same; an (env, optimizer) whose seeds are one run (the runs
 CSV's seed_free_episodes covers every run's episodes: reports/dsb_report/stats.py seed_free) counts

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Same bits on every x86-64 CPU: a grid of every env x every optimizer, run twice, once as is and
 # once as a CPU without AVX2 would run it: glibc told to ignore AVX2, FMA and AVX-512 (so libm
-# would pick its other exp/log/pow/sin variants), the MPM engine on its SSE2 lanes
-# (DSB_MPM_LANES=sse2; envs/mpm/lane_path.hpp) and the batched exp/log and the GP's pairwise
-# kernels on SSE2 (DSB_SIMD=sse2; common/simd_path.hpp), must give one digest (sha256 of `harness export`).
+# would pick its other exp/log/pow/sin variants) and every batched kernel on SSE2 (DSB_SIMD=sse2,
+# common/simd_path.hpp: the MPM engine's lanes, the batched exp/log and the GP's pairwise loops),
+# must give one digest (sha256 of `harness export`).
 # Prints both digests. The
 # particle envs (seconds per episode) run at a short horizon (fluid-h5, plb-pinch-h5) with a few
 # episodes; the others with 30.
@@ -52,13 +52,13 @@ run() {  # run NAME [env assignments...]: grid into NAME.sqlite, export to NAME.
   "$harness" export --db "$work/$name.sqlite" --out "$work/$name.csv" >/dev/null
 }
 run plain
-run masked GLIBC_TUNABLES=$mask DSB_MPM_LANES=sse2 DSB_SIMD=sse2
+run masked GLIBC_TUNABLES=$mask DSB_SIMD=sse2
 
 plain=$(sha256sum <"$work/plain.csv" | cut -d' ' -f1)
 masked=$(sha256sum <"$work/masked.csv" | cut -d' ' -f1)
 echo "check_cpu_features: $(($(wc -l <"$work/plain.csv") - 1)) episodes"
 echo "  digest as is                     ($plain_levels): $plain"
-echo "  digest with $mask, DSB_MPM_LANES=sse2 and DSB_SIMD=sse2 ($masked_levels): $masked"
+echo "  digest with $mask and DSB_SIMD=sse2 ($masked_levels): $masked"
 if [[ "$plain" != "$masked" ]]; then
   echo "check_cpu_features: FAILED, results depend on the CPU's features; differing env,optimizer:"
   diff "$work/plain.csv" "$work/masked.csv" | sed -n 's/^< \([^,]*,[^,]*\),.*/    \1/p' | sort | uniq -c

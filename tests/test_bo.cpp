@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "envs/registry.hpp"
-#include "harness/runner.hpp"
+#include "harness/run/runner.hpp"
 #include "optimizers/bo/acquisition.hpp"
 #include "optimizers/bo/bo.hpp"
 #include "optimizers/bo/gp_cost.hpp"
@@ -181,7 +181,7 @@ TEST(BoCost, ThePlansFitScheduleIsTheOneARunFollowsAndItsWorkIsCounted) {
 }
 
 // A memo that remembers results in order and serves the first `serve` of them back in that order
-// (a resumed run's journal does the same: harness/replay_journal.hpp); it checks every key.
+// (a resumed run's journal does the same: harness/run/replay_journal.hpp); it checks every key.
 class ListMemo : public WorkMemo {
  public:
   std::vector<std::pair<std::uint64_t, std::vector<double>>> entries;

@@ -9,9 +9,9 @@
 #include "common/rng.hpp"
 #include "envs/registry.hpp"
 #include "envs/synthetic/synthetic.hpp"
-#include "harness/budget.hpp"
-#include "harness/grid.hpp"
-#include "harness/runner.hpp"
+#include "harness/run/budget.hpp"
+#include "harness/plan/grid.hpp"
+#include "harness/run/runner.hpp"
 #include "optimizers/registry.hpp"
 #include "tests/support/reach_env.hpp"
 

@@ -1,4 +1,4 @@
-// The claims grid (`harness --claims`, harness/claims_grid.hpp): the claims file compiled in is
+// The claims grid (`harness --claims`, harness/plan/claims_grid.hpp): the claims file compiled in is
 // the repository's; it gives each env the optimizers its claims compare (every --all optimizer
 // for an "is best" claim) and nothing for a claim the database cannot test; plan and slurm take
 // it, and bad combinations exit 2 naming the value.
@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "common/error.hpp"
-#include "harness/claims_grid.hpp"
+#include "harness/plan/claims_grid.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
 

@@ -10,7 +10,7 @@
 #include "common/rng.hpp"
 #include "envs/core/lazy_model.hpp"
 #include "envs/registry.hpp"
-#include "harness/grid.hpp"
+#include "harness/plan/grid.hpp"
 
 namespace dsb {
 namespace {

@@ -22,7 +22,7 @@
 #include <nlohmann/json.hpp>
 #include <sqlite3.h>
 
-#include "harness/result_table.hpp"
+#include "harness/store/result_table.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
 

@@ -36,20 +36,20 @@ std::vector<double> transposed(const std::vector<double>& xs, int n, int d) {
   return xt;  // Xt (n x d), column-major
 }
 
-std::vector<gpp::Path> lane_paths() {
-  std::vector<gpp::Path> paths{gpp::Path::sse2};
-  if (dsb::cpu_has_avx()) paths.push_back(gpp::Path::avx);
+std::vector<dsb::SimdPath> lane_paths() {
+  std::vector<dsb::SimdPath> paths{dsb::SimdPath::sse2};
+  if (dsb::cpu_supports(dsb::SimdPath::avx)) paths.push_back(dsb::SimdPath::avx);
   return paths;
 }
 
-const char* name(gpp::Path p) { return p == gpp::Path::avx ? "avx" : p == gpp::Path::sse2 ? "sse2" : "scalar"; }
+const char* name(dsb::SimdPath p) { return dsb::simd_path_name(p); }
 
 TEST(GpPairs, SquaredDistancesAndGradientOfTwoPointsHaveTheirClosedForms) {
   // points (0, 0, 1) and (3, 4, 1): r^2 = 25; with C = 2: gl = (2 * 9, 2 * 16, 0) added to (1, 1, 1)
   const std::vector<double> xs{0, 0, 1, 3, 4, 1};
   const std::vector<double> xt = transposed(xs, 2, 3);
   const std::vector<double> C{0, 2, 0, 0};
-  for (gpp::Path p : {gpp::Path::scalar, gpp::Path::sse2}) {
+  for (dsb::SimdPath p : {dsb::SimdPath::scalar, dsb::SimdPath::sse2}) {
     std::vector<double> R(4, -1.0);
     gpp::squared_distances(xt.data(), 2, 3, R.data(), p);
     EXPECT_EQ(R[1], 25.0) << name(p);
@@ -69,9 +69,9 @@ void expect_lanes_match_scalar(int n, int d, std::uint64_t seed) {
   std::vector<double> C(static_cast<std::size_t>(n) * n);
   for (double& c : C) c = 2.0 * rng.uniform() - 1.0;
   std::vector<double> R_ref(C.size(), 0.0), gl_ref(d, 0.5);
-  gpp::squared_distances(xt.data(), n, d, R_ref.data(), gpp::Path::scalar);
-  gpp::ard_gradient(xs.data(), n, d, C.data(), gl_ref.data(), gpp::Path::scalar);
-  for (gpp::Path p : lane_paths()) {
+  gpp::squared_distances(xt.data(), n, d, R_ref.data(), dsb::SimdPath::scalar);
+  gpp::ard_gradient(xs.data(), n, d, C.data(), gl_ref.data(), dsb::SimdPath::scalar);
+  for (dsb::SimdPath p : lane_paths()) {
     std::vector<double> R(C.size(), 0.0), gl(d, 0.5);
     gpp::squared_distances(xt.data(), n, d, R.data(), p);
     gpp::ard_gradient(xs.data(), n, d, C.data(), gl.data(), p);
@@ -99,19 +99,22 @@ TEST(GpPairs, ScalarDistancesSumTheDimensionsInOrder) {
   const int d = 3;
   const std::vector<double> xs{0, 0, 0, 1e8, 1, 1};
   const std::vector<double> xt = transposed(xs, 2, d);
-  for (gpp::Path p : {gpp::Path::scalar, gpp::Path::sse2}) {
+  for (dsb::SimdPath p : {dsb::SimdPath::scalar, dsb::SimdPath::sse2}) {
     std::vector<double> R(4, 0.0);
     gpp::squared_distances(xt.data(), 2, d, R.data(), p);
     EXPECT_EQ(R[1], 1e16) << name(p);
   }
 }
 
-TEST(GpPairs, DefaultPathIsTheBatchedKernelsPath) {
-  // AVX exactly where the CPU has it, unless DSB_SIMD=sse2 asked for SSE2
-  EXPECT_EQ(gpp::default_path(), dsb::simd_path() == dsb::SimdPath::avx ? gpp::Path::avx : gpp::Path::sse2);
+TEST(GpPairs, DefaultPathIsTheWidestItOffersUnderTheCeiling) {
+  // the one dispatch of common/simd_path.hpp: AVX exactly where the CPU has it (the widest these
+  // loops offer), unless DSB_SIMD asked for a narrower path; the batched exp/log take the same
+  EXPECT_EQ(gpp::default_path(), dsb::simd_path({dsb::SimdPath::scalar, dsb::SimdPath::sse2, dsb::SimdPath::avx}));
   const char* forced = std::getenv("DSB_SIMD");
   if (!forced || !*forced) {
-    EXPECT_EQ(gpp::default_path(), dsb::cpu_has_avx() ? gpp::Path::avx : gpp::Path::sse2);
+    EXPECT_EQ(gpp::default_path(), dsb::cpu_supports(dsb::SimdPath::avx) ? dsb::SimdPath::avx : dsb::SimdPath::sse2);
+  } else {
+    EXPECT_LE(gpp::default_path(), dsb::simd_ceiling());
   }
 }
 

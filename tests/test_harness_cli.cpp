@@ -22,7 +22,7 @@
 
 #include "envs/core/gradient_check.hpp"
 #include "envs/registry.hpp"
-#include "harness/grid.hpp"
+#include "harness/plan/grid.hpp"
 #include "optimizers/registry.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
@@ -396,7 +396,7 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
   }
   // a kernel path forced from the environment that does not exist: refused before any run
   for (const auto& [prefix, bad] : std::vector<std::pair<std::string, std::string>>{
-           {"DSB_SIMD=avx512", "avx512"}, {"DSB_MPM_LANES=neon", "neon"}}) {
+           {"DSB_SIMD=avx512", "avx512"}, {"DSB_SIMD=neon", "neon"}}) {
     const auto r = harness("--env sphere-2 --optimizer random --seeds 1 --db " + db("keep.sqlite"), prefix);
     EXPECT_EQ(r.code, 2) << prefix;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << prefix << ": " << r.err;

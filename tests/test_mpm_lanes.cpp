@@ -4,6 +4,7 @@
 // respect to the actions, the initial state and the poses); and the scalar path still gives the
 // bits recorded before the lanes existed.
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <string_view>
@@ -21,7 +22,6 @@
 namespace dsb {
 namespace {
 
-using mpm::LanePath;
 using mpm::Mat3;
 using mpm::Vec3;
 
@@ -97,7 +97,7 @@ std::vector<double> actions(const mpm::MpmModel& m, int env_steps) {
   return a;
 }
 
-EpisodeBits run(const mpm::MpmModel& m, int env_steps, LanePath path, int threads) {
+EpisodeBits run(const mpm::MpmModel& m, int env_steps, SimdPath path, int threads) {
   const testing::SmoothObjective objective;
   ThreadTeam team(threads);
   mpm::MpmWorkspace ws(m);
@@ -113,7 +113,7 @@ EpisodeBits run(const mpm::MpmModel& m, int env_steps, LanePath path, int thread
   return r;
 }
 
-EpisodeBits run(LanePath path, int threads) { return run(every_primitive(), kEnvSteps, path, threads); }
+EpisodeBits run(SimdPath path, int threads) { return run(every_primitive(), kEnvSteps, path, threads); }
 
 template <class T>
 std::string_view bytes(const std::vector<T>& v) {
@@ -147,7 +147,7 @@ void expect_same_bits(const EpisodeBits& got, const EpisodeBits& want, const cha
 }
 
 const EpisodeBits& scalar_bits() {
-  static const EpisodeBits r = run(LanePath::scalar, 1);
+  static const EpisodeBits r = run(SimdPath::scalar, 1);
   return r;
 }
 
@@ -162,33 +162,40 @@ TEST(MpmLanes, ScalarPathGivesTheRecordedBits) {
 }
 
 TEST(MpmLanes, Sse2PathGivesTheScalarBits) {
-  expect_same_bits(run(LanePath::sse2, 1), scalar_bits(), "sse2, 1 thread");
-  expect_same_bits(run(LanePath::sse2, 2), scalar_bits(), "sse2, 2 threads");
+  expect_same_bits(run(SimdPath::sse2, 1), scalar_bits(), "sse2, 1 thread");
+  expect_same_bits(run(SimdPath::sse2, 2), scalar_bits(), "sse2, 2 threads");
 }
 
 TEST(MpmLanes, Avx2PathGivesTheScalarBits) {
-  if (!mpm::lane_path_available(LanePath::avx2)) GTEST_SKIP() << "this CPU has no AVX2: only the SSE2 lanes run here";
-  expect_same_bits(run(LanePath::avx2, 1), scalar_bits(), "avx2, 1 thread");
-  expect_same_bits(run(LanePath::avx2, 2), scalar_bits(), "avx2, 2 threads");
+  if (!cpu_supports(SimdPath::avx2)) GTEST_SKIP() << "this CPU has no AVX2: only the SSE2 lanes run here";
+  expect_same_bits(run(SimdPath::avx2, 1), scalar_bits(), "avx2, 1 thread");
+  expect_same_bits(run(SimdPath::avx2, 2), scalar_bits(), "avx2, 2 threads");
 }
 
 // Each path from random states: one env step of two substeps, forward and gradient.
 TEST(MpmLanes, EveryPathGivesTheScalarBitsFromRandomStates) {
-  const EpisodeBits want = run(random_model(), 1, LanePath::scalar, 1);
+  const EpisodeBits want = run(random_model(), 1, SimdPath::scalar, 1);
   ASSERT_TRUE(std::isfinite(want.loss));
   ASSERT_TRUE(std::isfinite(want.grad_loss));
-  expect_same_bits(run(random_model(), 1, LanePath::sse2, 1), want, "sse2");
-  if (mpm::lane_path_available(LanePath::avx2)) expect_same_bits(run(random_model(), 1, LanePath::avx2, 1), want, "avx2");
+  expect_same_bits(run(random_model(), 1, SimdPath::sse2, 1), want, "sse2");
+  if (cpu_supports(SimdPath::avx2)) expect_same_bits(run(random_model(), 1, SimdPath::avx2, 1), want, "avx2");
 }
 
-TEST(MpmLanes, PathsByName) {
-  for (LanePath p : {LanePath::scalar, LanePath::sse2, LanePath::avx2})
-    EXPECT_EQ(mpm::parse_lane_path(mpm::lane_path_name(p)), p);
-  EXPECT_FALSE(mpm::parse_lane_path("avx512").has_value());
-  EXPECT_TRUE(mpm::lane_path_available(LanePath::scalar));
-  EXPECT_TRUE(mpm::lane_path_available(LanePath::sse2));
-  EXPECT_TRUE(mpm::lane_path_available(mpm::best_lane_path()));
-  EXPECT_TRUE(mpm::lane_path_available(mpm::default_lane_path()));
+TEST(MpmLanes, PathsComeFromTheOneDispatch) {
+  // common/simd_path.hpp: names round-trip; the engine's default is the widest of scalar, sse2
+  // and avx2 under the ceiling, available on this CPU, and avx2 exactly where the CPU has it
+  // unless DSB_SIMD says narrower
+  for (SimdPath p : {SimdPath::scalar, SimdPath::sse2, SimdPath::avx, SimdPath::avx2})
+    EXPECT_EQ(parse_simd_path(simd_path_name(p)), p);
+  EXPECT_FALSE(parse_simd_path("avx512").has_value());
+  EXPECT_TRUE(cpu_supports(SimdPath::scalar));
+  EXPECT_TRUE(cpu_supports(SimdPath::sse2));
+  EXPECT_TRUE(cpu_supports(mpm::default_lane_path()));
+  EXPECT_NE(mpm::default_lane_path(), SimdPath::avx);  // the engine has no AVX (without AVX2) lanes
+  EXPECT_LE(mpm::default_lane_path(), simd_ceiling());
+  const char* forced = std::getenv("DSB_SIMD");
+  if (!forced || !*forced)
+    EXPECT_EQ(mpm::default_lane_path(), cpu_supports(SimdPath::avx2) ? SimdPath::avx2 : SimdPath::sse2);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// random, gd, rand-descents: exact budget use, box respected, determinism, descent behaviour on
-// functions with known minima.
+// random, gd, rand-descents: descent behaviour on functions with known minima (the contract every
+// optimizer keeps: test_optimizer_contract.cpp).
 #include <cmath>
 #include <numeric>
 #include <vector>
@@ -36,32 +36,17 @@ std::vector<double> run(const std::string& name, FunctionObjective& f, std::uint
   return f.losses();
 }
 
-class EveryOptimizer : public ::testing::TestWithParam<std::string> {};
+// budget, box, seeds, hostile losses and resume: the contract of every optimizer
+// (test_optimizer_contract.cpp); here, that the simple ones descend
+class Descends : public ::testing::TestWithParam<std::string> {};
 
-TEST_P(EveryOptimizer, UsesExactlyTheBudgetInsideTheBox) {
-  auto f = sphere_objective(5, 137);
-  run(GetParam(), f, 1);
-  EXPECT_EQ(f.used(), 137);
-  for (const auto& p : f.points())
-    for (double xi : p) {
-      EXPECT_GE(xi, -1.0);
-      EXPECT_LE(xi, 1.0);
-    }
-}
-
-TEST_P(EveryOptimizer, SameSeedGivesBitIdenticalLosses) {
-  auto a = sphere_objective(4, 200), b = sphere_objective(4, 200);
-  EXPECT_EQ(run(GetParam(), a, 9), run(GetParam(), b, 9));
-}
-
-TEST_P(EveryOptimizer, ImprovesOnTheStartingLoss) {
+TEST_P(Descends, BelowHalfTheStartingLoss) {
   auto f = sphere_objective(6, 400);
   const auto losses = run(GetParam(), f, 2);
   EXPECT_LT(f.best(), 0.5 * losses.front()) << GetParam();
 }
 
-INSTANTIATE_TEST_SUITE_P(Optimizers, EveryOptimizer,
-                         ::testing::Values("random", "gd", "rand-descents", "cmaes"));
+INSTANTIATE_TEST_SUITE_P(Optimizers, Descends, ::testing::Values("random", "gd", "rand-descents", "cmaes"));
 
 TEST(Random, DifferentSeedsDifferentPointsUniformMean) {
   auto a = sphere_objective(3, 3000), b = sphere_objective(3, 100);

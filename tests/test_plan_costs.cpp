@@ -21,12 +21,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include "harness/cost_model.hpp"
-#include "harness/plan.hpp"
-#include "harness/plan_report.hpp"
-#include "harness/progress.hpp"
-#include "harness/run_order.hpp"
-#include "harness/slurm_command.hpp"
+#include "harness/plan/cost_model.hpp"
+#include "harness/plan/grid.hpp"
+#include "harness/plan/plan.hpp"
+#include "harness/plan/plan_report.hpp"
+#include "harness/run/probe.hpp"
+#include "harness/run/progress.hpp"
+#include "harness/plan/run_order.hpp"
+#include "harness/commands/slurm_command.hpp"
 #include "optimizers/bo/gp_cost.hpp"
 #include "optimizers/registry.hpp"
 #include "support/harness_process.hpp"
@@ -109,10 +111,17 @@ std::vector<double> simulate_runner(const std::vector<std::size_t>& order, const
   return end;
 }
 
+// a planned run of a made-up env with a registered optimizer (its registration resolved, as the
+// grid's expansion resolves it)
+PlannedRun planned(const std::string& env, const std::string& opt, int seed, std::int64_t budget = 100) {
+  PlannedRun run{RunSpec{env, opt, seed, budget}, RunKey{env, opt, seed, budget, "e", "o", "0.1.0"}};
+  run.spec.entry = &optimizer_entry(opt);
+  return run;
+}
+
 std::vector<PlannedRun> runs_of(const std::vector<std::tuple<std::string, std::string, int>>& specs) {
   std::vector<PlannedRun> runs;
-  for (const auto& [env, opt, seed] : specs)
-    runs.push_back({RunSpec{env, opt, seed, 100}, RunKey{env, opt, seed, 100, "e", "o", "0.1.0"}, nullptr, nullptr});
+  for (const auto& [env, opt, seed] : specs) runs.push_back(planned(env, opt, seed));
   return runs;
 }
 
@@ -162,18 +171,17 @@ TEST(PlanOrder, LightRunsReportFirstAndAnExpensiveLeadEndsAsItsFollowersAreDue) 
 }
 
 TEST(Shards, AShardIsAFunctionOfTheRunKeyAlone) {
-  const RunKey a{"fluid", "cmaes", 3, 1000, "e", "o", "0.1.0"};
-  RunKey other_version = a;
-  other_version.harness_version = "9.9.9";
-  RunKey other_seed = a;
-  other_seed.seed = 4;
+  const PlannedRun a = planned("fluid", "cmaes", 3, 1000);
+  PlannedRun other_version = a;
+  other_version.key.harness_version = "9.9.9";
+  PlannedRun other_seed = a;
   EXPECT_EQ(shard_of(a, 7), shard_of(a, 7));
   EXPECT_EQ(shard_of(a, 7), shard_of(other_version, 7));  // a new version keeps the cut
   EXPECT_EQ(shard_of(a, 1), 0);
   // spread: 1,000 seeds over 10 shards, each shard between 70 and 130 runs
   std::vector<int> count(10, 0);
   for (int s = 0; s < 1000; ++s) {
-    other_seed.seed = s;
+    other_seed.key.seed = s;
     ++count[static_cast<std::size_t>(shard_of(other_seed, 10))];
   }
   for (int c : count) {
@@ -185,11 +193,11 @@ TEST(Shards, AShardIsAFunctionOfTheRunKeyAlone) {
 TEST(Shards, ASharingGroupIsOneSliceUnlessNothingIsShared) {
   // gd never draws: its seeds share, so they fall in one shard; with --no-sharing (group_seeds
   // false) each run hashes its own seed and 1,000 seeds spread over 10 shards like cmaes's
-  RunKey gd{"fluid", "gd", 0, 1000, "e", "o", "0.1.0"};
+  PlannedRun gd = planned("fluid", "gd", 0, 1000);
   const int group_shard = shard_of(gd, 10);
   std::vector<int> grouped(10, 0), alone(10, 0);
   for (int s = 0; s < 1000; ++s) {
-    gd.seed = s;
+    gd.key.seed = s;
     ++grouped[static_cast<std::size_t>(shard_of(gd, 10))];
     ++alone[static_cast<std::size_t>(shard_of(gd, 10, false))];
   }
@@ -199,9 +207,9 @@ TEST(Shards, ASharingGroupIsOneSliceUnlessNothingIsShared) {
     EXPECT_LT(c, 130);
   }
   // an optimizer that draws at its start never groups: group_seeds changes nothing for it
-  RunKey cmaes{"fluid", "cmaes", 0, 1000, "e", "o", "0.1.0"};
+  PlannedRun cmaes = planned("fluid", "cmaes", 0, 1000);
   for (int s = 0; s < 50; ++s) {
-    cmaes.seed = s;
+    cmaes.key.seed = s;
     EXPECT_EQ(shard_of(cmaes, 10), shard_of(cmaes, 10, false));
   }
 }
@@ -339,17 +347,22 @@ TEST_F(PlanFromDatabase, CalibrationTimesShortRunsInRoundsAcrossThePairsAsAGridR
   const std::string cache = path("rounds.json");
   ASSERT_EQ(setenv("DSB_COST_CACHE", cache.c_str(), 1), 0);
   std::vector<RunSpec> grid;
-  for (const auto& [env, opt] : {std::pair<std::string, std::string>{"sphere-10", "random"}, {"branin", "gd"}})
-    grid.push_back(RunSpec{env, opt, 0, 50, per_run_seed(env, opt, 0)});
+  for (const auto& [env, opt] : {std::pair<std::string, std::string>{"sphere-10", "random"}, {"branin", "gd"}}) {
+    GridRequest one;
+    one.envs = {env};
+    one.optimizers = {opt};
+    one.budget = 50;
+    for (RunSpec& spec : expand_grid(one)) grid.push_back(std::move(spec));
+  }
   const GridPlan plan = plan_grid(grid, {}, "0.1.0");
   ASSERT_EQ(plan.pending.size(), 2u);
   CostModel costs;
-  for (const PlannedRun& run : plan.pending) costs.calibrate(run.spec.env, run.key.env_config_hash);
+  for (const PlannedRun& run : plan.pending) costs.calibrate(run.spec);
   for (const PlannedRun& run : plan.pending) ASSERT_TRUE(costs.probes(run)) << run.spec.env;
   std::vector<std::string> started;
   int rounds = 0;
   costs.calibrate_runs(
-      plan.pending, [&](const PlannedRun& run) { started.push_back(run.spec.env); },
+      plan.pending, time_probe, [&](const PlannedRun& run) { started.push_back(run.spec.env); },
       [&] {
         // after the first round every pair has been timed once: a pair's repeats come after the
         // other pairs' runs, not back to back
@@ -447,7 +460,8 @@ TEST(PlanCosts, BoLeapsGpIsFittedOnItsDesignAndAfterEveryLeapThatLeavesBudget) {
 
 TEST(PlanCosts, NoOptimizerIsNamedInTheHarness) {
   // their costs, families and seed use come from the registry: harness/ code names none of them
-  for (const auto& entry : std::filesystem::directory_iterator(std::string(DSB_SOURCE_DIR) + "/harness")) {
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(std::string(DSB_SOURCE_DIR) + "/harness")) {
+    if (!entry.is_regular_file()) continue;
     // the code without its comments (a comment may give an example)
     std::string text;
     std::istringstream lines(testing::read_file(entry.path()));

@@ -17,7 +17,7 @@
 #include "common/error.hpp"
 #include "common/rng.hpp"
 #include "envs/registry.hpp"
-#include "harness/budget.hpp"
+#include "harness/run/budget.hpp"
 #include "optimizers/registry.hpp"
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/ppo.hpp"

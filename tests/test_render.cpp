@@ -19,7 +19,7 @@
 #include "envs/mpm/fluid_env.hpp"
 #include "envs/mpm/plb_env.hpp"
 #include "envs/registry.hpp"
-#include "harness/render_command.hpp"
+#include "harness/commands/render_command.hpp"
 #include "render/camera.hpp"
 #include "render/encode.hpp"
 #include "render/palette.hpp"

@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "harness/result_table.hpp"
+#include "harness/store/result_table.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
 

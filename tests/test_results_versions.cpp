@@ -1,4 +1,4 @@
-// Results versions (harness/results_versions.hpp, docs/database.md "Results versions"): every stored
+// Results versions (harness/core/results_versions.hpp, docs/database.md "Results versions"): every stored
 // run names the versions of the code that made it, and a binary never resumes, counts as done,
 // exports or checks as its own a run of other versions. The database is rewritten the way an
 // older binary would have left it (its runs' versions set to other numbers, or to none as a
@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "harness/result_table.hpp"
-#include "harness/results_versions.hpp"
+#include "harness/store/result_table.hpp"
+#include "harness/core/results_versions.hpp"
 #include "support/harness_process.hpp"
 #include "support/sqlite_rows.hpp"
 #include "support/temp_dir_test.hpp"

@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "common/rng.hpp"
-#include "harness/run_spec.hpp"
+#include "harness/core/run_spec.hpp"
 
 namespace dsb {
 namespace {

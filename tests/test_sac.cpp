@@ -15,7 +15,7 @@
 #include "common/error.hpp"
 #include "common/rng.hpp"
 #include "envs/core/env.hpp"
-#include "harness/budget.hpp"
+#include "harness/run/budget.hpp"
 #include "optimizers/registry.hpp"
 #include "optimizers/rl/network_adam.hpp"
 #include "optimizers/rl/replay_buffer.hpp"

@@ -1,4 +1,4 @@
-// Sharing across seeds (harness/store.hpp, Store::begin_run): a run replays the episodes an
+// Sharing across seeds (harness/store/store.hpp, Store::begin_run): a run replays the episodes an
 // earlier seed's run of its group simulated before its optimizer's first draw. Checked through
 // the real `harness` program on real databases: a grid gives the same database with and without
 // --no-sharing, bit for bit; the database says which episodes were shared and from which seed;
@@ -14,7 +14,7 @@
 
 #include "common/rng.hpp"
 #include "envs/registry.hpp"
-#include "harness/budget.hpp"
+#include "harness/run/budget.hpp"
 #include "support/harness_process.hpp"
 #include "support/sqlite_rows.hpp"
 #include "support/temp_dir_test.hpp"

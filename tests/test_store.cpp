@@ -16,7 +16,7 @@
 
 #include "common/config_hash.hpp"
 #include "common/error.hpp"
-#include "harness/store.hpp"
+#include "harness/store/store.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
 
@@ -152,7 +152,7 @@ TEST_F(StoreTest, StoresTheRunDiagnosticsAsJsonAndTheMetricAsNull) {
 // ---------------------------------------------------------------------------------------------
 // version 1 files
 
-// Version 1's schema, frozen: harness/store.cpp as of commit 7ec3474 (the first release). A
+// Version 1's schema, frozen: harness/store/store.cpp as of commit 7ec3474 (the first release). A
 // version-1 database is this SQL plus meta.schema_version = '1'.
 const char* kSchemaV1 = R"sql(
 CREATE TABLE IF NOT EXISTS meta(

@@ -28,6 +28,20 @@ def study(*args):
     return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True)
 
 
+def write_claims(path, mode, rows):
+    """Claims rows in paper_claims.csv's columns, appended to `path` ("a") or as a new file ("w")."""
+    with open(path, mode, newline="", encoding="utf-8") as f:
+        csv.writer(f, lineterminator="\n").writerows(rows)
+
+
+def exported(tmp, db):
+    """The runs CSV of `db`, written by `study_results.py export` into `tmp`."""
+    out = os.path.join(tmp, "runs.csv")
+    r = study("export", db, out)
+    assert r.returncode == 0, r.stderr
+    return out
+
+
 class StudyResults(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -45,13 +59,10 @@ class StudyResults(unittest.TestCase):
         con.close()
         cls.claims = os.path.join(cls.tmp, "claims.csv")
         shutil.copy(os.path.join(SOURCE, "reports", "paper_claims.csv"), cls.claims)
-        with open(cls.claims, "a", newline="", encoding="utf-8") as f:
-            w = csv.writer(f, lineterminator="\n")
-            w.writerow(["lifts", "cartpole1", "metric_most", "cmaes", "", "0.5", "cmaes lifts", "t", ""])
-            w.writerow(["sphere", "sphere-2", "a_below_b", "cmaes", "random bo", "", "cmaes first", "t", ""])
-        cls.csv = os.path.join(cls.tmp, "runs.csv")
-        r = study("export", cls.db, cls.csv)
-        assert r.returncode == 0, r.stderr
+        write_claims(cls.claims, "a", [
+            ["lifts", "cartpole1", "metric_most", "cmaes", "", "0.5", "cmaes lifts", "t", ""],
+            ["sphere", "sphere-2", "a_below_b", "cmaes", "random bo", "", "cmaes first", "t", ""]])
+        cls.csv = exported(cls.tmp, cls.db)
 
     @classmethod
     def tearDownClass(cls):
@@ -144,11 +155,11 @@ class StudyResults(unittest.TestCase):
         self.assertIn("dup.csv", r.stderr)
         self.assertIn("sphere-2/", r.stderr)
 
-    def test_the_readme_block_is_the_published_data(self):
-        # the README's results block is what the script makes of data/study/ now: a run landed
+    def test_the_results_block_is_the_published_data(self):
+        # docs/results.md's results block is what the script makes of data/study/ now: a run landed
         # without regenerating it (or an edit by hand) fails here
         import glob
-        with open(os.path.join(SOURCE, "README.md"), encoding="utf-8") as f:
+        with open(os.path.join(SOURCE, "docs", "results.md"), encoding="utf-8") as f:
             readme = f.read()
         begin, end = "<!-- study_results.py: begin -->\n", "<!-- study_results.py: end -->"
         block = readme[readme.index(begin) + len(begin):readme.index(end)]
@@ -156,8 +167,8 @@ class StudyResults(unittest.TestCase):
             glob.glob(os.path.join(SOURCE, "data", "study", "fluid", "*.csv")))
         r = study("tables", *files, "--harness", HARNESS)
         self.assertEqual(r.returncode, 0, r.stderr)
-        self.assertEqual(block, r.stdout, "README's block is stale: rerun scripts/study_results.py tables "
-                         "data/study/runs.csv data/study/fluid/*.csv --harness build/bin/harness --update README.md")
+        self.assertEqual(block, r.stdout, "docs/results.md's block is stale: rerun scripts/study_results.py tables "
+                         "data/study/runs.csv data/study/fluid/*.csv --harness build/bin/harness --update docs/results.md")
 
     def test_update_replaces_its_block_only(self):
         readme = os.path.join(self.tmp, "README.md")
@@ -212,16 +223,13 @@ class SeedsThatAreOneRun(unittest.TestCase):
         subprocess.run([HARNESS, "--env", "sphere-2", "--optimizer", "gd,nlopt-direct-l,nlopt-lbfgs,nlopt-bobyqa,random",
                         "--seeds", "5", "--budget", "200", "--quiet", "--db", cls.db], check=True)
         cls.claims = os.path.join(cls.tmp, "claims.csv")
-        with open(cls.claims, "w", newline="", encoding="utf-8") as f:
-            w = csv.writer(f, lineterminator="\n")
-            w.writerow(["id", "env", "kind", "a", "b", "threshold", "statement", "source", "note"])
-            w.writerow(["gd-first", "sphere-2", "a_below_b", "gd", "random", "", "s", "t", ""])
-            w.writerow(["both-first", "sphere-2", "a_below_b", "gd nlopt-direct-l", "random", "", "s", "t", ""])
-            w.writerow(["order", "sphere-2", "a_below_b", "gd", "nlopt-direct-l", "", "s", "t", ""])
-            w.writerow(["tie", "sphere-2", "not_significant", "nlopt-lbfgs", "nlopt-bobyqa", "", "s", "t", ""])
-        cls.csv = os.path.join(cls.tmp, "runs.csv")
-        r = study("export", cls.db, cls.csv)
-        assert r.returncode == 0, r.stderr
+        write_claims(cls.claims, "w", [
+            ["id", "env", "kind", "a", "b", "threshold", "statement", "source", "note"],
+            ["gd-first", "sphere-2", "a_below_b", "gd", "random", "", "s", "t", ""],
+            ["both-first", "sphere-2", "a_below_b", "gd nlopt-direct-l", "random", "", "s", "t", ""],
+            ["order", "sphere-2", "a_below_b", "gd", "nlopt-direct-l", "", "s", "t", ""],
+            ["tie", "sphere-2", "not_significant", "nlopt-lbfgs", "nlopt-bobyqa", "", "s", "t", ""]])
+        cls.csv = exported(cls.tmp, cls.db)
 
     @classmethod
     def tearDownClass(cls):

@@ -117,8 +117,8 @@ struct LaneKernels {
   void (*solid_adjoint)(SolidAdjointChunk& chunk, const TransferGrid& grid, const double* qm_bar, const double* v);
 };
 
-// the table of an instruction set; LanePath::scalar has none (nullptr)
-const LaneKernels* lane_kernels(LanePath path);
+// the table of an instruction set; scalar (and avx: the engine offers no such lanes) has none (nullptr)
+const LaneKernels* lane_kernels(SimdPath path);
 const LaneKernels& sse2_lane_kernels();  // lanes_sse2.cpp
 const LaneKernels& avx2_lane_kernels();  // lanes_avx2.cpp
 

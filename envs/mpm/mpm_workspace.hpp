@@ -86,7 +86,7 @@ struct MpmWorkspace {
   std::vector<AdvectionAdjoint> advection;  // per particle, within one substep's reverse
   std::vector<PoseAdjoint> pose_adj;
   GridAdjoint grid_adj;
-  LanePath lanes = default_lane_path();  // the code of the per-particle phases (same bits on every path)
+  SimdPath lanes = default_lane_path();  // the code of the per-particle phases (same bits on every path)
   std::vector<TransferChunk> lane_chunks;  // the lanes path's P2G chunks, one per thread
   PhaseTimes* phase_times = nullptr;  // not owned
   EpisodeObserver* observer = nullptr;  // not owned; run_episode calls it when set (render only)

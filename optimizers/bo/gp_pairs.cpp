@@ -3,7 +3,6 @@
 
 #include <cstddef>
 
-#include "common/simd_path.hpp"
 
 namespace dsb::gp_pairs {
 
@@ -42,21 +41,23 @@ void ard_gradient_scalar(const double* Xs, int n, int d, const double* C, double
 
 }  // namespace
 
-Path default_path() { return simd_path() == SimdPath::avx ? Path::avx : Path::sse2; }
+SimdPath default_path() { return simd_path({SimdPath::scalar, SimdPath::sse2, SimdPath::avx}); }
 
-void squared_distances(const double* Xt, int n, int d, double* R, Path path) {
+void squared_distances(const double* Xt, int n, int d, double* R, SimdPath path) {
   switch (path) {
-    case Path::scalar: return squared_distances_scalar(Xt, n, d, R);
-    case Path::sse2: return squared_distances_sse2(Xt, n, d, R);
-    case Path::avx: return squared_distances_avx(Xt, n, d, R);
+    case SimdPath::scalar: return squared_distances_scalar(Xt, n, d, R);
+    case SimdPath::sse2: return squared_distances_sse2(Xt, n, d, R);
+    case SimdPath::avx:
+    case SimdPath::avx2: return squared_distances_avx(Xt, n, d, R);
   }
 }
 
-void ard_gradient(const double* Xs, int n, int d, const double* C, double* gl, Path path) {
+void ard_gradient(const double* Xs, int n, int d, const double* C, double* gl, SimdPath path) {
   switch (path) {
-    case Path::scalar: return ard_gradient_scalar(Xs, n, d, C, gl);
-    case Path::sse2: return ard_gradient_sse2(Xs, n, d, C, gl);
-    case Path::avx: return ard_gradient_avx(Xs, n, d, C, gl);
+    case SimdPath::scalar: return ard_gradient_scalar(Xs, n, d, C, gl);
+    case SimdPath::sse2: return ard_gradient_sse2(Xs, n, d, C, gl);
+    case SimdPath::avx:
+    case SimdPath::avx2: return ard_gradient_avx(Xs, n, d, C, gl);
   }
 }
 

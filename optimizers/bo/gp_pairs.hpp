@@ -14,22 +14,24 @@
 // a = b + 1, ... . Every operation is one IEEE 754 + - or *, rounding in a lane exactly as the
 // scalar instruction (no FMA: -ffp-contract=off, and the AVX code is compiled for AVX, not FMA).
 // test_gp_pairs compares the three paths bit for bit.
+#include "common/simd_path.hpp"
+
 namespace dsb::gp_pairs {
 
-enum class Path { scalar, sse2, avx };
-
-// the path of common/simd_path.hpp: avx where the CPU has it, else sse2 (DSB_SIMD=sse2 forces sse2).
-// Path::avx must not be asked for on a CPU without AVX (cpu_has_avx()).
-Path default_path();
+// The paths these loops offer: scalar, sse2 and avx (SimdPath::avx2 runs the AVX code). The
+// default is the widest at or below the process's ceiling (common/simd_path.hpp): avx where the
+// CPU has it, unless DSB_SIMD says narrower. SimdPath::avx must not be asked for on a CPU without
+// AVX (cpu_supports).
+SimdPath default_path();
 
 // R(a, b) = sum_{i < d} (Xt(a, i) - Xt(b, i))^2 for every a > b, in the order above.
 // Xt (n x d, column-major): the points' coordinates divided by the lengthscales, one column per
 // dimension. R (n x n, column-major): only the strict lower part is written.
-void squared_distances(const double* Xt, int n, int d, double* R, Path path);
+void squared_distances(const double* Xt, int n, int d, double* R, SimdPath path);
 
 // For each dimension i: gl[i] += (C(a, b) t) t, t = Xs(i, a) - Xs(i, b), over the pairs a > b in
 // the order b = 0 .. n - 1, a = b + 1 .. n - 1. Xs (d x n, column-major): one scaled point per
 // column; C (n x n, column-major): only the strict lower part is read; gl (d).
-void ard_gradient(const double* Xs, int n, int d, const double* C, double* gl, Path path);
+void ard_gradient(const double* Xs, int n, int d, const double* C, double* gl, SimdPath path);
 
 }  // namespace dsb::gp_pairs

@@ -1,7 +1,7 @@
 #pragma once
 // A memo of an optimizer's own costly work (a GP's hyperparameter fit, an acquisition's argmin),
 // so that a resumed run skips what its interrupted attempt already computed. The harness keeps it
-// in the run's journal beside the objective's answers (harness/replay.hpp): a resumed run recalls
+// in the run's journal beside the objective's answers (harness/core/replay.hpp): a resumed run recalls
 // the results in the order they were remembered, then computes live. An optimizer may only put
 // through it a result that is a pure function of what its key digests, and must then do exactly
 // what it does with a result it computed (draw the same values from its Rng, count the same

@@ -104,7 +104,7 @@ def _wal_has_frames(path: str) -> bool:
 def connect_ro(path: str) -> sqlite3.Connection:
     """Opens a harness database read-only. A WAL database whose -shm file cannot be made (a
     read-only folder or mount, a file the user may not write) and that has no -wal frames is
-    opened as immutable, as the harness does (harness/sqlite_db.hpp)."""
+    opened as immutable, as the harness does (harness/store/sqlite_db.hpp)."""
     if not os.path.isfile(path):
         raise DataError(f"cannot read database '{path}': no such file")
     base = "file:" + os.path.abspath(path).replace("%", "%25").replace("?", "%3f").replace("#", "%23")

@@ -1,5 +1,5 @@
 """Which stored runs are stale: made by other results versions than the harness's the report asks
-(docs/database.md "Results versions"; harness/results_versions.cpp, whose rules this mirrors).
+(docs/database.md "Results versions"; harness/core/results_versions.cpp, whose rules this mirrors).
 
 A run stores `runs.results_versions` = 'env E, optimizer O, run R' ('' in a database of schema 4
 or older, which has no such column: made before versions). It is current when the three equal the

@@ -8,6 +8,14 @@ from .html import settle_text
 from .tables import final_md_rows, fmt, md_table, overview_text, rank_md_rows
 
 
+def _run_list(title: str, runs, headers: list, columns: list) -> list:
+    """A section of runs: its title with their count, then their table (`columns` of `runs`
+    under `headers`), or "None." when there are none."""
+    out = [f"## {title} ({len(runs)})", ""]
+    return out + (["None."] if runs.empty else [md_table(
+        headers, [[str(v) for v in r] for r in runs[columns].itertuples(index=False, name=None)])])
+
+
 def render(ctx) -> str:
     out = ["# diffsim-bench comparison report", "", ctx["headline"], ""]
     c = ctx["claims"]
@@ -47,22 +55,10 @@ def render(ctx) -> str:
         captions.GRADIENT_QUALITY.format(settings=gq.settings(g)), "",
         md_table(gq.HEADERS, gq.rows(g)), ""]
     m = ctx["missing"]
-    out += [f"## Missing runs ({len(m)})", ""]
-    out += ["None."] if m.empty else [md_table(
-        ["env", "optimizer", "seed", "budget", "reason", "error"],
-        [[str(v) for v in r] for r in m[["env", "optimizer", "seed", "budget", "reason", "error"]]
-         .itertuples(index=False, name=None)])]
-    f = ctx["failed"]
-    out += ["", f"## Failed runs ({len(f)})", ""]
-    out += ["None."] if f.empty else [md_table(
-        ["env", "optimizer", "seed", "budget", "error"],
-        [[str(v) for v in r] for r in f[["env", "optimizer", "seed", "budget", "error"]]
-         .itertuples(index=False, name=None)])]
-    r = ctx["running"]
-    out += ["", f"## Incomplete runs, status running ({len(r)})", ""]
-    out += ["None."] if r.empty else [md_table(
-        ["env", "optimizer", "seed", "budget", "started"],
-        [[str(v) for v in x] for x in r[["env", "optimizer", "seed", "budget", "started_at"]]
-         .itertuples(index=False, name=None)])]
+    key = ["env", "optimizer", "seed", "budget"]
+    out += _run_list("Missing runs", m, key + ["reason", "error"], key + ["reason", "error"])
+    out += [""] + _run_list("Failed runs", ctx["failed"], key + ["error"], key + ["error"])
+    out += [""] + _run_list("Incomplete runs, status running", ctx["running"], key + ["started"],
+                            key + ["started_at"])
     out += ["", "## Provenance", "", md_table(["item", "value"], ctx["provenance"])]
     return "\n".join(out) + "\n"

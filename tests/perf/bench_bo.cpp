@@ -13,7 +13,7 @@
 #include <benchmark/benchmark.h>
 
 #include "envs/registry.hpp"
-#include "harness/runner.hpp"
+#include "harness/run/runner.hpp"
 #include "optimizers/bo/acquisition.hpp"
 #include "optimizers/bo/gp.hpp"
 #include "optimizers/bo/gp_pairs.hpp"
@@ -116,9 +116,9 @@ const ScaledPoints& scaled_points() {
 }
 
 // range(0): 0 scalar, 1 sse2, 2 avx (skipped where the CPU has no AVX)
-bool pairs_path(benchmark::State& state, dsb::gp_pairs::Path* path) {
-  *path = static_cast<dsb::gp_pairs::Path>(state.range(0));
-  if (*path == dsb::gp_pairs::Path::avx && !dsb::cpu_has_avx()) {
+bool pairs_path(benchmark::State& state, dsb::SimdPath* path) {
+  *path = static_cast<dsb::SimdPath>(state.range(0));
+  if (*path == dsb::SimdPath::avx && !dsb::cpu_supports(dsb::SimdPath::avx)) {
     state.SkipWithError("no AVX on this CPU");
     return false;
   }
@@ -126,7 +126,7 @@ bool pairs_path(benchmark::State& state, dsb::gp_pairs::Path* path) {
 }
 
 void BM_GpPairDistances(benchmark::State& state) {
-  dsb::gp_pairs::Path path;
+  dsb::SimdPath path;
   if (!pairs_path(state, &path)) return;
   const auto& p = scaled_points();
   std::vector<double> R(kPairsN * kPairsN);
@@ -138,7 +138,7 @@ void BM_GpPairDistances(benchmark::State& state) {
 BENCHMARK(BM_GpPairDistances)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 void BM_GpArdGradient(benchmark::State& state) {
-  dsb::gp_pairs::Path path;
+  dsb::SimdPath path;
   if (!pairs_path(state, &path)) return;
   const auto& p = scaled_points();
   std::vector<double> gl(kPairsD, 0.0);

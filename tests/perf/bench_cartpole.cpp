@@ -15,7 +15,7 @@
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
 #include "envs/registry.hpp"
-#include "harness/runner.hpp"
+#include "harness/run/runner.hpp"
 #include "optimizers/registry.hpp"
 #include "tests/perf/allocation_counter.hpp"
 #include "tests/perf/timing_reporter.hpp"

@@ -15,7 +15,7 @@
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
 #include "envs/registry.hpp"
-#include "harness/budget.hpp"
+#include "harness/run/budget.hpp"
 #include "optimizers/ext/ext_optimizer.hpp"
 #include "tests/perf/timing_reporter.hpp"
 

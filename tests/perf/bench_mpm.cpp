@@ -7,7 +7,7 @@
 //   - peak resident memory of a process that runs one gradient episode, against the full
 //     history's size (950 states of every particle).
 //   - heap allocations per `fluid` rollout with a reused workspace (fluid-h5, forward and gradient).
-//   - the lanes path (envs/mpm/lane_path.hpp: the best the CPU has, or DSB_MPM_LANES) against the
+//   - the lanes path (envs/mpm/lane_path.hpp: the best the CPU has, or DSB_SIMD) against the
 //     scalar path, measured in the same run (*Scalar* benchmarks force it), 1 thread; and within
 //     one forward episode whose env steps alternate between the paths, and gradient episodes of
 //     5 env steps taking turns (both paths under the same load: the machine is shared).
@@ -87,7 +87,7 @@ PhaseTimes forward_phases, gradient_phases, gradient_taped_phases, forward_scala
 // tape: the bytes of substep tapes the forward pass may keep (episode.hpp; 0 recomputes every env
 // step in the reverse pass, kTapeEverything keeps them all)
 void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phases,
-         LanePath path = default_lane_path(), std::size_t tape = 0) {
+         SimdPath path = default_lane_path(), std::size_t tape = 0) {
   const MpmModel& m = plb_sized_model();
   const testing::SmoothObjective objective;
   ThreadTeam team(static_cast<int>(state.range(0)));
@@ -120,17 +120,17 @@ void BM_GradientEpisodeTapedFull(benchmark::State& s) {
   run(s, kEnvSteps, true, &gradient_taped_phases, default_lane_path(), kTapeEverything);
 }
 void BM_ForwardEpisodeScalarFull(benchmark::State& s) {
-  run(s, kEnvSteps, false, &forward_scalar_phases, LanePath::scalar);
+  run(s, kEnvSteps, false, &forward_scalar_phases, SimdPath::scalar);
 }
 void BM_GradientEpisodeScalarFull(benchmark::State& s) {
-  run(s, kEnvSteps, true, &gradient_scalar_phases, LanePath::scalar);
+  run(s, kEnvSteps, true, &gradient_scalar_phases, SimdPath::scalar);
 }
 // Alternates the lanes and the scalar path env step by env step within forward episodes (the paths
 // give the same bits, so the trajectory is the one of either) and times each env step: both paths
 // then run under the same load, which matters on a shared machine. Seconds per path in `seconds`.
 class AlternatingPaths : public EpisodeObserver {
  public:
-  AlternatingPaths(MpmWorkspace& ws, LanePath lanes) : ws_(ws), paths_{lanes, LanePath::scalar} {}
+  AlternatingPaths(MpmWorkspace& ws, SimdPath lanes) : ws_(ws), paths_{lanes, SimdPath::scalar} {}
   void at_step(int step, const std::vector<Particle>&, const std::vector<Pose>&) override {
     const auto now = std::chrono::steady_clock::now();
     if (step > 0) seconds[current_] += std::chrono::duration<double>(now - last_).count();
@@ -142,7 +142,7 @@ class AlternatingPaths : public EpisodeObserver {
 
  private:
   MpmWorkspace& ws_;
-  LanePath paths_[2];
+  SimdPath paths_[2];
   int current_ = 0;
   std::chrono::steady_clock::time_point last_;
 };
@@ -177,7 +177,7 @@ void BM_GradientAlternatingPathsFull(benchmark::State& state) {
   double seconds[2] = {0.0, 0.0};
   for (auto _ : state)
     for (int r = 0; r < 2 * kRounds; ++r) {
-      ws.lanes = r % 2 == 0 ? default_lane_path() : LanePath::scalar;
+      ws.lanes = r % 2 == 0 ? default_lane_path() : SimdPath::scalar;
       const auto start = std::chrono::steady_clock::now();
       benchmark::DoNotOptimize(run_episode_with_grad(m, ws, serial_team(), a, kSteps, objective, g));
       seconds[r % 2] += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -189,9 +189,9 @@ void BM_GradientAlternatingPathsFull(benchmark::State& state) {
 BENCHMARK(BM_GradientAlternatingPathsFull)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
 void BM_ForwardOneEnvStep(benchmark::State& s) { run(s, 1, false, nullptr); }
-void BM_ForwardOneEnvStepScalar(benchmark::State& s) { run(s, 1, false, nullptr, LanePath::scalar); }
+void BM_ForwardOneEnvStepScalar(benchmark::State& s) { run(s, 1, false, nullptr, SimdPath::scalar); }
 void BM_GradientOneEnvStep(benchmark::State& s) { run(s, 1, true, nullptr); }
-void BM_GradientOneEnvStepScalar(benchmark::State& s) { run(s, 1, true, nullptr, LanePath::scalar); }
+void BM_GradientOneEnvStepScalar(benchmark::State& s) { run(s, 1, true, nullptr, SimdPath::scalar); }
 BENCHMARK(BM_ForwardEpisodeFull)->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_GradientEpisodeFull)->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_GradientEpisodeTapedFull)->Arg(1)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
@@ -283,7 +283,7 @@ int main(int argc, char** argv) {
     const double gstep = reporter.seconds("BM_GradientOneEnvStep/1/real_time");
     const double gstep_scalar = reporter.seconds("BM_GradientOneEnvStepScalar/1/real_time");
     const double substeps = static_cast<double>(kEnvSteps) * plb_sized_model().config.substeps;
-    const char* lanes = lane_path_name(default_lane_path());
+    const char* lanes = simd_path_name(default_lane_path());
     std::printf("\nCPU: %s; lanes path: %s (scalar forced by the *Scalar* benchmarks)\n", cpu_model().c_str(), lanes);
     if (alternating_lanes_seconds > 0.0)
       std::printf("forward episode alternating the paths env step by env step (25 each, same load): %s %.2f s, "

@@ -19,7 +19,7 @@
 
 #include "common/rng.hpp"
 #include "envs/registry.hpp"
-#include "harness/budget.hpp"
+#include "harness/run/budget.hpp"
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/network_adam.hpp"
 #include "optimizers/rl/ppo.hpp"

@@ -1,0 +1,367 @@
+#include "harness/store/store.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <stdexcept>
+
+#include <unistd.h>
+
+#include "common/config_hash.hpp"
+#include "common/shown_value.hpp"
+
+namespace dsb {
+
+std::string utc_now() {
+  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+Store::Store(const std::string& path, Provenance provenance)
+    : path_(path), lock_(path), db_(path), provenance_(std::move(provenance)) {
+  prepare_schema(db_);
+}
+
+void Store::check_path() {
+  std::lock_guard lock(mutex_);
+  refuse_if_moved();
+}
+
+void Store::refuse_if_moved() {
+  if (lock_.names_locked_file(path_)) return;
+  // What this process committed may still sit in the write-ahead log, which keeps the old name:
+  // a checkpoint through the open descriptors copies it into the file itself, wherever it is now.
+  bool complete = false;
+  try {
+    Statement cp(db_.handle(), "PRAGMA wal_checkpoint(TRUNCATE)");
+    complete = cp.step() && cp.column_int(0) == 0;  // busy = 0: every frame copied
+  } catch (const StoreError&) {
+  }
+  const std::string now = lock_.current_path();
+  const std::string was = "database '" + shown_value(path_) + "' was ";
+  if (!now.empty() && complete)
+    throw StoreError(was + "moved or replaced while this harness wrote it: everything it committed is in '" +
+                     shown_value(now) + "' (the file it opened), and it stopped writing; resume with --db '" +
+                     shown_value(now) + "'");
+  // deleted, or the log could not be emptied: a complete copy beside the old name, made now
+  const std::string rescue = path_ + ".rescued-" + std::to_string(::getpid()) + ".sqlite";
+  try {
+    Statement copy(db_.handle(), "VACUUM INTO ?");
+    copy.bind(1, rescue).run();
+  } catch (const StoreError& e) {
+    throw StoreError(was + (now.empty() ? "deleted" : "moved or replaced") +
+                     " while this harness wrote it, and it stopped writing; a copy of what it committed could not be "
+                     "made (" + e.what() + ")");
+  }
+  throw StoreError(was + (now.empty() ? "deleted" : "moved or replaced") +
+                   " while this harness wrote it, and it stopped writing: a copy of everything it committed is in '" +
+                   shown_value(rescue) + "'; resume with --db naming it");
+}
+
+std::set<RunKey> Store::done_keys() {
+  std::lock_guard lock(mutex_);
+  std::set<RunKey> keys;
+  Statement q(db_.handle(),
+              "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, results_versions "
+              "FROM runs WHERE status='done'");
+  while (q.step())
+    keys.insert({q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
+                 q.column_text(4), q.column_text(5), q.column_text(6), stored_results_versions(q.column_text(7))});
+  return keys;
+}
+
+namespace {
+
+// the group of a run: its key but the seed, as SQL over runs (7 parameters from `first`)
+const char* kGroupSql =
+    "env=? AND optimizer=? AND budget=? AND env_config_hash=? AND opt_config_hash=? AND harness_version=? AND "
+    "results_versions=?";
+
+void bind_group(Statement& st, int first, const RunKey& key) {
+  st.bind(first, key.env).bind(first + 1, key.optimizer).bind(first + 2, key.budget)
+      .bind(first + 3, key.env_config_hash).bind(first + 4, key.opt_config_hash).bind(first + 5, key.harness_version)
+      .bind(first + 6, key.versions.text());
+}
+
+std::vector<ReplayEntry> read_journal(Database& db, const std::string& table, std::int64_t run_id, std::int64_t calls) {
+  std::vector<ReplayEntry> journal;
+  Statement j(db.handle(),
+              "SELECT seq, kind, input_hash, payload FROM " + table + " WHERE run_id=? AND seq<? ORDER BY seq");
+  j.bind(1, run_id).bind(2, calls);
+  while (j.step()) {
+    if (j.column_int(0) != static_cast<std::int64_t>(journal.size())) break;  // a gap: keep the prefix
+    journal.push_back({static_cast<ReplayKind>(j.column_int(1)), static_cast<std::uint64_t>(j.column_int(2)),
+                       replay_payload_from_bytes(j.column_blob(3))});
+  }
+  return journal;
+}
+
+// The longest seed-free prefix another seed's run of the group holds: a done run's kept prefix,
+// or what a running one committed (all of it while its optimizer has not drawn). Ties go to the
+// smallest seed. Nothing (episodes 0) when there is none.
+struct Donor {
+  std::int64_t run_id = 0, episodes = 0, calls = 0;
+  int seed = -1;
+  std::string table;
+};
+
+Donor find_donor(Database& db, const RunKey& key) {
+  Donor best;
+  Statement q(db.handle(), std::string("SELECT run_id, seed, status, seed_free_episodes, seed_free_calls, "
+                                       "(SELECT count(*) FROM evals e WHERE e.run_id=r.run_id), "
+                                       "(SELECT count(*) FROM replay j WHERE j.run_id=r.run_id), "
+                                       "(SELECT count(*) FROM prefix p WHERE p.run_id=r.run_id) "
+                                       "FROM runs r WHERE ") +
+                               kGroupSql + " AND seed<>? AND status IN ('done', 'running') ORDER BY seed");
+  bind_group(q, 1, key);
+  q.bind(8, static_cast<std::int64_t>(key.seed));
+  while (q.step()) {
+    Donor d{q.column_int(0), 0, 0, static_cast<int>(q.column_int(1)), ""};
+    const bool known = !q.column_is_null(3);
+    if (q.column_text(2) == "done") {
+      if (!known || q.column_int(7) < q.column_int(4)) continue;  // no kept prefix
+      d.episodes = q.column_int(3);
+      d.calls = q.column_int(4);
+      d.table = "prefix";
+    } else {
+      const bool drew_before = known && q.column_int(3) <= q.column_int(5);
+      d.episodes = drew_before ? q.column_int(3) : q.column_int(5);
+      d.calls = drew_before ? q.column_int(4) : q.column_int(6);
+      d.table = "replay";
+    }
+    if (d.episodes > best.episodes) best = d;
+  }
+  return best;
+}
+
+}  // namespace
+
+RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohmann::json& env_config,
+                          const nlohmann::json& opt_config, bool share) {
+  std::lock_guard lock(mutex_);
+  refuse_if_moved();  // before a commit: the path must still name the file this store opened
+  Transaction tx(db_);
+  Statement cfg(db_.handle(), "INSERT OR IGNORE INTO configs(hash, kind, json) VALUES (?, ?, ?)");
+  cfg.bind(1, key.env_config_hash).bind(2, std::string("env")).bind(3, canonical_json(env_config)).run();
+  cfg.bind(1, key.opt_config_hash).bind(2, std::string("optimizer")).bind(3, canonical_json(opt_config)).run();
+
+  RunStart start;
+  // an earlier attempt of this run left 'running': keep what it committed (resume by replay)
+  Statement find(db_.handle(),
+                 "SELECT run_id, status FROM runs WHERE env=? AND optimizer=? AND seed=? AND budget=? AND "
+                 "env_config_hash=? AND opt_config_hash=? AND harness_version=? AND results_versions=?");
+  find.bind(1, key.env).bind(2, key.optimizer).bind(3, static_cast<std::int64_t>(key.seed)).bind(4, key.budget)
+      .bind(5, key.env_config_hash).bind(6, key.opt_config_hash).bind(7, key.harness_version)
+      .bind(8, key.versions.text());
+  const bool resumable = find.step() && find.column_text(1) == "running";
+  if (resumable) {
+    start.run_id = find.column_int(0);
+    Statement n(db_.handle(), "SELECT count(*) FROM evals WHERE run_id=?");
+    n.bind(1, start.run_id);
+    n.step();
+    start.committed_episodes = n.column_int(0);
+    Statement j(db_.handle(), "SELECT seq, kind, input_hash, payload FROM replay WHERE run_id=? ORDER BY seq");
+    j.bind(1, start.run_id);
+    while (j.step()) {
+      if (j.column_int(0) != static_cast<std::int64_t>(start.journal.size())) break;  // a gap: keep the prefix
+      start.journal.push_back({static_cast<ReplayKind>(j.column_int(1)), static_cast<std::uint64_t>(j.column_int(2)),
+                               replay_payload_from_bytes(j.column_blob(3))});
+    }
+    start.journal_episodes = start.committed_episodes;
+    Statement shared(db_.handle(), "SELECT shared_episodes, COALESCE(shared_from_seed, -1) FROM runs WHERE run_id=?");
+    shared.bind(1, start.run_id);
+    if (shared.step()) {
+      start.shared_episodes = shared.column_int(0);
+      start.shared_from_seed = static_cast<int>(shared.column_int(1));
+    }
+    Statement host(db_.handle(), "UPDATE runs SET host=?, git_sha=? WHERE run_id=?");
+    host.bind(1, provenance_.host).bind(2, provenance_.git_sha).bind(3, start.run_id).run();
+    tx.commit();
+    return start;
+  }
+  find.reset();
+
+  char seed_hex[17];
+  std::snprintf(seed_hex, sizeof seed_hex, "%016llx", static_cast<unsigned long long>(rng_seed));
+  Statement up(db_.handle(), R"sql(
+    INSERT INTO runs(env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed,
+                     status, started_at, harness_version, git_sha, host, results_versions)
+    VALUES (?, ?, ?, ?, ?, ?, ?, 'running', ?, ?, ?, ?, ?)
+    ON CONFLICT(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, results_versions)
+    DO UPDATE SET
+      status='running', episodes=0, failed_episodes=0, best_loss=NULL, best_x=NULL, wall_s=NULL,
+      error=NULL, diagnostics=NULL, started_at=excluded.started_at, finished_at=NULL,
+      git_sha=excluded.git_sha, host=excluded.host, seed_free_episodes=NULL, seed_free_calls=NULL,
+      shared_episodes=0, shared_from_seed=NULL
+    RETURNING run_id)sql");
+  up.bind(1, key.env).bind(2, key.optimizer).bind(3, static_cast<std::int64_t>(key.seed))
+      .bind(4, key.budget).bind(5, key.env_config_hash).bind(6, key.opt_config_hash)
+      .bind(7, std::string(seed_hex)).bind(8, utc_now()).bind(9, key.harness_version)
+      .bind(10, provenance_.git_sha).bind(11, provenance_.host).bind(12, key.versions.text());
+  if (!up.step()) throw StoreError("sqlite: no run_id returned");
+  start.run_id = up.column_int(0);
+  up.reset();
+  // a failed earlier attempt starts over
+  Statement del_evals(db_.handle(), "DELETE FROM evals WHERE run_id=?");
+  del_evals.bind(1, start.run_id).run();
+  Statement del_journal(db_.handle(), "DELETE FROM replay WHERE run_id=?");
+  del_journal.bind(1, start.run_id).run();
+  if (share) {
+    // the seed-free prefix of another seed's run, copied into this run's journal (so that an
+    // interruption resumes from it as from the run's own) and replayed
+    const Donor donor = find_donor(db_, key);
+    if (donor.episodes > 0) {
+      start.journal = read_journal(db_, donor.table, donor.run_id, donor.calls);
+      if (static_cast<std::int64_t>(start.journal.size()) == donor.calls) {
+        Statement copy(db_.handle(), "INSERT INTO replay(run_id, seq, kind, input_hash, payload) SELECT ?, seq, kind, "
+                                     "input_hash, payload FROM " + donor.table + " WHERE run_id=? AND seq<?");
+        copy.bind(1, start.run_id).bind(2, donor.run_id).bind(3, donor.calls).run();
+        Statement mark(db_.handle(), "UPDATE runs SET shared_episodes=?, shared_from_seed=? WHERE run_id=?");
+        mark.bind(1, donor.episodes).bind(2, static_cast<std::int64_t>(donor.seed)).bind(3, start.run_id).run();
+        start.journal_episodes = start.shared_episodes = donor.episodes;
+        start.shared_from_seed = donor.seed;
+      } else {
+        start.journal.clear();  // a prefix with a gap is not used
+      }
+    }
+  }
+  tx.commit();
+  return start;
+}
+
+namespace {
+
+void insert_evals(Database& db, std::int64_t run_id, std::span<const EvalRecord> evals) {
+  Statement ins(db.handle(),
+                "INSERT OR REPLACE INTO evals(run_id, episode, loss, best_loss, used_grad, wall_s, failed, metric) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+  for (const auto& e : evals) {
+    ins.bind(1, run_id).bind(2, e.episode).bind(3, e.loss).bind(4, e.best_loss)
+        .bind(5, static_cast<std::int64_t>(e.used_grad)).bind(6, e.wall_s)
+        .bind(7, static_cast<std::int64_t>(std::isnan(e.loss))).bind(8, e.metric);
+    ins.run();
+  }
+}
+
+}  // namespace
+
+void Store::append_progress(std::int64_t run_id, std::span<const EvalRecord> evals, std::int64_t first_seq,
+                            const std::vector<ReplayEntry>& journal, const SeedFreePrefix& seed_free) {
+  std::lock_guard lock(mutex_);
+  refuse_if_moved();  // before a commit: the path must still name the file this store opened
+  Transaction tx(db_);
+  insert_evals(db_, run_id, evals);
+  Statement ins(db_.handle(),
+                "INSERT OR REPLACE INTO replay(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
+  std::int64_t seq = first_seq;
+  for (const auto& e : journal) {
+    ins.bind(1, run_id).bind(2, seq++).bind(3, static_cast<std::int64_t>(e.kind))
+        .bind(4, static_cast<std::int64_t>(e.input_hash)).bind_blob(5, replay_payload_bytes(e.payload));
+    ins.run();
+  }
+  Statement upd(db_.handle(), "UPDATE runs SET episodes=(SELECT count(*) FROM evals WHERE run_id=?) WHERE run_id=?");
+  upd.bind(1, run_id).bind(2, run_id).run();
+  if (seed_free.drew) {
+    Statement mark(db_.handle(), "UPDATE runs SET seed_free_episodes=?, seed_free_calls=? WHERE run_id=?");
+    mark.bind(1, seed_free.episodes).bind(2, seed_free.calls).bind(3, run_id).run();
+  }
+  tx.commit();
+}
+
+void Store::reset_progress(std::int64_t run_id) {
+  std::lock_guard lock(mutex_);
+  refuse_if_moved();  // before a commit: the path must still name the file this store opened
+  Transaction tx(db_);
+  Statement del_evals(db_.handle(), "DELETE FROM evals WHERE run_id=?");
+  del_evals.bind(1, run_id).run();
+  Statement del_journal(db_.handle(), "DELETE FROM replay WHERE run_id=?");
+  del_journal.bind(1, run_id).run();
+  Statement upd(db_.handle(),
+                "UPDATE runs SET episodes=0, seed_free_episodes=NULL, seed_free_calls=NULL, shared_episodes=0, "
+                "shared_from_seed=NULL WHERE run_id=?");
+  upd.bind(1, run_id).run();
+  tx.commit();
+}
+
+void Store::keep_seed_free_prefix(std::int64_t run_id, const RunResult& r) {
+  const std::int64_t calls = r.seed_free.calls;
+  if (r.seed_free.episodes <= 0 || calls <= 0) return;
+  // the other done runs of the group that keep a prefix
+  const std::string others =
+      "SELECT o.run_id FROM runs o JOIN runs me ON me.run_id=? AND o.run_id<>me.run_id AND o.env=me.env AND "
+      "o.optimizer=me.optimizer AND o.budget=me.budget AND o.env_config_hash=me.env_config_hash AND "
+      "o.opt_config_hash=me.opt_config_hash AND o.harness_version=me.harness_version AND "
+      "o.results_versions=me.results_versions AND o.status='done' "
+      "WHERE EXISTS (SELECT 1 FROM prefix p WHERE p.run_id=o.run_id)";
+  Statement longest(db_.handle(), "SELECT COALESCE(max(seed_free_calls), 0) FROM runs WHERE run_id IN (" + others + ")");
+  longest.bind(1, run_id);
+  if (longest.step() && longest.column_int(0) >= calls) return;
+  // the committed journal's entries of the prefix, then those not committed yet
+  Statement copy(db_.handle(), "INSERT OR REPLACE INTO prefix(run_id, seq, kind, input_hash, payload) SELECT run_id, "
+                               "seq, kind, input_hash, payload FROM replay WHERE run_id=? AND seq<?");
+  copy.bind(1, run_id).bind(2, calls).run();
+  Statement ins(db_.handle(),
+                "INSERT OR REPLACE INTO prefix(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
+  std::int64_t seq = r.journal_tail_first_seq;
+  for (const auto& e : r.journal_tail) {
+    if (seq >= calls) break;
+    ins.bind(1, run_id).bind(2, seq++).bind(3, static_cast<std::int64_t>(e.kind))
+        .bind(4, static_cast<std::int64_t>(e.input_hash)).bind_blob(5, replay_payload_bytes(e.payload));
+    ins.run();
+  }
+  Statement count(db_.handle(), "SELECT count(*) FROM prefix WHERE run_id=?");
+  count.bind(1, run_id);
+  count.step();
+  const bool whole = count.column_int(0) == calls;
+  count.reset();
+  // a prefix with a gap (a journal lost to an older harness) is not kept; a whole one replaces
+  // the group's shorter ones
+  Statement drop(db_.handle(), whole ? "DELETE FROM prefix WHERE run_id IN (" + others + ")"
+                                     : std::string("DELETE FROM prefix WHERE run_id=?"));
+  drop.bind(1, run_id).run();
+}
+
+void Store::finish_run(std::int64_t run_id, const RunResult& r) {
+  std::lock_guard lock(mutex_);
+  refuse_if_moved();  // before a commit: the path must still name the file this store opened
+  Transaction tx(db_);
+  Statement del(db_.handle(), "DELETE FROM evals WHERE run_id=?");
+  del.bind(1, run_id).run();
+  insert_evals(db_, run_id, r.evals);
+  if (r.status != RunStatus::done && r.status != RunStatus::failed)
+    throw std::logic_error("finish_run: a run ends done or failed");
+  if (r.status == RunStatus::done) keep_seed_free_prefix(run_id, r);
+  // what only a resume needs goes with the run's end
+  Statement del_journal(db_.handle(), "DELETE FROM replay WHERE run_id=?");
+  del_journal.bind(1, run_id).run();
+  Statement upd(db_.handle(), R"sql(
+    UPDATE runs SET status=?, episodes=?, failed_episodes=?, best_loss=?, best_x=?, wall_s=?,
+                    error=?, finished_at=?, diagnostics=?, seed_free_episodes=?, seed_free_calls=?
+                WHERE run_id=?)sql");
+  upd.bind(1, std::string(stored_text(r.status))).bind(2, r.episodes).bind(3, r.failed_episodes).bind(4, r.best_loss);
+  if (r.best_x.empty())
+    upd.bind_null(5);
+  else
+    upd.bind(5, nlohmann::json(r.best_x).dump());
+  upd.bind(6, r.wall_s);
+  if (r.error.empty())
+    upd.bind_null(7);
+  else
+    upd.bind(7, r.error);
+  upd.bind(8, utc_now());
+  if (r.diagnostics.is_null())
+    upd.bind_null(9);
+  else
+    upd.bind(9, r.diagnostics.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  upd.bind(10, r.seed_free.episodes).bind(11, r.seed_free.calls);
+  upd.bind(12, run_id);
+  upd.run();
+  tx.commit();
+}
+
+}  // namespace dsb
