@@ -164,11 +164,11 @@ class StudyResults(unittest.TestCase):
         begin, end = "<!-- study_results.py: begin -->\n", "<!-- study_results.py: end -->"
         block = readme[readme.index(begin) + len(begin):readme.index(end)]
         files = [os.path.join(SOURCE, "data", "study", "runs.csv")] + sorted(
-            glob.glob(os.path.join(SOURCE, "data", "study", "fluid", "*.csv")))
+            glob.glob(os.path.join(SOURCE, "data", "study", "*", "*.csv")))
         r = study("tables", *files, "--harness", HARNESS)
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertEqual(block, r.stdout, "docs/results.md's block is stale: rerun scripts/study_results.py tables "
-                         "data/study/runs.csv data/study/fluid/*.csv --harness build/bin/harness --update docs/results.md")
+                         "data/study/runs.csv data/study/*/*.csv --harness build/bin/harness --update docs/results.md")
 
     def test_update_replaces_its_block_only(self):
         readme = os.path.join(self.tmp, "README.md")
