@@ -36,6 +36,16 @@ namespace fs = std::filesystem;
 constexpr int kTermLeadSeconds = 120;
 constexpr int kMinTimeSeconds = 300;
 
+// the one rule by which both scripts give a file its name: never over anything already there
+const char* kPlaceNew = R"SH(# place_new FILE NAME: FILE takes NAME only where nothing is there (a hard link refuses any existing
+# name, a link or a folder included, atomically; mv -n where the filesystem has no hard links)
+place_new() {
+  if ln -T -- "$1" "$2" 2>/dev/null; then rm -f -- "$1"; return 0; fi
+  [[ -e $2 || -L $2 ]] && return 1
+  mv -n -T -- "$1" "$2" 2>/dev/null || true
+  [[ ! -e $1 ]]
+})SH";
+
 const char* kArrayTemplate = R"SH(#!/bin/bash
 #SBATCH --job-name=dsb-shards
 #SBATCH --array=0-@LAST@
@@ -61,14 +71,7 @@ local_db=$scratch/shard-$id.sqlite
 # a file's identity: device, inode and change time (any write, rename or new link changes it)
 identity() { stat -c '%d:%i:%z' -- "$1" 2>/dev/null || echo none; }
 
-# place_new FILE NAME: FILE takes NAME only where nothing is there (a hard link refuses any existing
-# name, a link or a folder included, atomically; mv -n where the filesystem has no hard links)
-place_new() {
-  if ln -T -- "$1" "$2" 2>/dev/null; then rm -f -- "$1"; return 0; fi
-  [[ -e $2 || -L $2 ]] && return 1
-  mv -n -T -- "$1" "$2" 2>/dev/null || true
-  [[ ! -e $1 ]]
-}
+@PLACE_NEW@
 
 # 2. resume: a previous attempt's database (a task stopped by a time limit) is where this one starts;
 #    its identity now is what the copy back checks: it replaces only the file it resumed from
@@ -154,14 +157,7 @@ harness=@HARNESS@
 dir=@DIR_Q@
 shards=@SHARDS@
 
-# place_new FILE NAME: FILE takes NAME only where nothing is there (a hard link refuses any existing
-# name, a link or a folder included, atomically; mv -n where the filesystem has no hard links)
-place_new() {
-  if ln -T -- "$1" "$2" 2>/dev/null; then rm -f -- "$1"; return 0; fi
-  [[ -e $2 || -L $2 ]] && return 1
-  mv -n -T -- "$1" "$2" 2>/dev/null || true
-  [[ ! -e $1 ]]
-}
+@PLACE_NEW@
 
 # 1. every shard's database must be there
 inputs=()
@@ -315,6 +311,7 @@ int command_slurm(const SlurmGridFlags& grid, std::size_t grid_runs, const std::
       {"LEAD", std::to_string(kTermLeadSeconds)},
       {"OPTIONAL", optional},
       {"DIR", dir.string()},                                 // in comments
+      {"PLACE_NEW", kPlaceNew},                              // the naming rule both scripts use
       {"DIR_SBATCH", slurm_pattern_literal(dir.string())},  // in #SBATCH lines: '%' is '%%' there
       {"DIR_Q", shell_word(dir.string())},  // in assignments
       {"HARNESS", shell_word(harness_path)},
