@@ -20,8 +20,7 @@ inline std::string canonical_json(const nlohmann::json& j) { return j.dump(); }
 
 inline std::string config_hash(const nlohmann::json& j) {
   char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx",
-                static_cast<unsigned long long>(fnv1a64(canonical_json(j))));
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(fnv1a64(canonical_json(j))));
   return buf;
 }
 

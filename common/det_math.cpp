@@ -66,14 +66,12 @@ void log_sse2(const double* x, double* out, std::size_t n) {
 
 [[gnu::target("avx")]] void exp_avx(const double* x, double* out, std::size_t n) {
   std::size_t i = 0;
-  for (; i + 4 <= n; i += 4)
-    _mm256_storeu_pd(out + i, Sleef_cinz_expd4_u10avx(_mm256_loadu_pd(x + i)));
+  for (; i + 4 <= n; i += 4) _mm256_storeu_pd(out + i, Sleef_cinz_expd4_u10avx(_mm256_loadu_pd(x + i)));
   exp_sse2(x + i, out + i, n - i);
 }
 [[gnu::target("avx")]] void log_avx(const double* x, double* out, std::size_t n) {
   std::size_t i = 0;
-  for (; i + 4 <= n; i += 4)
-    _mm256_storeu_pd(out + i, Sleef_cinz_logd4_u10avx(_mm256_loadu_pd(x + i)));
+  for (; i + 4 <= n; i += 4) _mm256_storeu_pd(out + i, Sleef_cinz_logd4_u10avx(_mm256_loadu_pd(x + i)));
   log_sse2(x + i, out + i, n - i);
 }
 

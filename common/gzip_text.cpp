@@ -43,9 +43,9 @@ std::string gunzip(const std::string& raw, std::size_t max_bytes) {
     const int ret = inflate(&zs, Z_NO_FLUSH);
     text.append(buf, sizeof buf - zs.avail_out);
     if (text.size() > max_bytes)
-      throw GzipError("decompresses to more than " + (max_bytes % (std::size_t{1} << 30) == 0
-                                                          ? std::to_string(max_bytes >> 30) + " GiB"
-                                                          : std::to_string(max_bytes) + " bytes"));
+      throw GzipError("decompresses to more than " +
+                      (max_bytes % (std::size_t{1} << 30) == 0 ? std::to_string(max_bytes >> 30) + " GiB"
+                                                               : std::to_string(max_bytes) + " bytes"));
     if (ret == Z_STREAM_END) break;
     if (ret == Z_OK) continue;
     if (ret == Z_BUF_ERROR) throw GzipError("truncated gzip stream");

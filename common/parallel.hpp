@@ -68,9 +68,7 @@ double parallel_sum(ThreadTeam& team, std::int64_t n, std::int64_t grain, double
 template <class Body>
 void parallel_for_per_thread(ThreadTeam& team, std::int64_t n, Body&& body) {
   const int parts = team.size();
-  team.run_per_thread([&](int t) {
-    body(n * t / parts, n * (t + 1) / parts);
-  });
+  team.run_per_thread([&](int t) { body(n * t / parts, n * (t + 1) / parts); });
 }
 
 // dst = src (same size), each thread copying its part

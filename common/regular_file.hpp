@@ -37,7 +37,8 @@ inline std::string labelled_path(const std::string& label, const std::string& pa
 // "LABEL: 'PATH' is a FIFO (named pipe), not a regular file"
 inline std::string not_regular_message(const std::string& label, const std::string& path, mode_t mode) {
   const std::string kind = special_file_kind(mode);
-  return labelled_path(label, path) + (kind == "not a regular file" ? " is " + kind : " is " + kind + ", not a regular file");
+  return labelled_path(label, path) +
+      (kind == "not a regular file" ? " is " + kind : " is " + kind + ", not a regular file");
 }
 
 // An open descriptor of a regular file, closed when destroyed.
@@ -121,7 +122,8 @@ inline void refuse_special_file(const std::string& label, const std::string& pat
 inline void require_regular_file(const std::string& label, const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0)
-    throw UsageError(labelled_path(label, path) + ": no such file" + (errno == ENOENT ? "" : std::string(" (") + std::strerror(errno) + ")"));
+    throw UsageError(labelled_path(label, path) + ": no such file" +
+                     (errno == ENOENT ? "" : std::string(" (") + std::strerror(errno) + ")"));
   if (!S_ISREG(st.st_mode)) throw UsageError(not_regular_message(label, path, st.st_mode));
 }
 

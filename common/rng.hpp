@@ -52,7 +52,6 @@ class Rng {
   }
 
  public:
-
   // uniform in [0, 1) with 53 random bits
   double uniform() { return static_cast<double>(next_u64() >> 11) * 0x1.0p-53; }
 

@@ -60,7 +60,9 @@ inline SimdPath simd_ceiling() {
   static const SimdPath ceiling = [] {
     const char* value = std::getenv("DSB_SIMD");
     if (!value || !*value)
-      return cpu_supports(SimdPath::avx2) ? SimdPath::avx2 : cpu_supports(SimdPath::avx) ? SimdPath::avx : SimdPath::sse2;
+      return cpu_supports(SimdPath::avx2) ? SimdPath::avx2
+          : cpu_supports(SimdPath::avx)   ? SimdPath::avx
+                                          : SimdPath::sse2;
     const auto path = parse_simd_path(value);
     if (!path) throw std::runtime_error(std::string("DSB_SIMD must be scalar, sse2, avx or avx2, got '") + value + "'");
     if (!cpu_supports(*path)) throw std::runtime_error(std::string("DSB_SIMD=") + value + ": this CPU has no " + value);

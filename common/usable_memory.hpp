@@ -29,8 +29,8 @@ inline std::uint64_t cgroup_limit(const std::string& file) {
 
 inline std::uint64_t usable_memory_bytes() {
   const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
-  std::uint64_t limit = pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page)
-                                              : UINT64_MAX;
+  std::uint64_t limit =
+      pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page) : UINT64_MAX;
   // /proc/self/cgroup: "0::PATH" (v2) or "N:memory:PATH" (v1)
   std::ifstream groups("/proc/self/cgroup");
   for (std::string line; std::getline(groups, line);) {

@@ -20,9 +20,11 @@ void BoLeapConfig::validate() const {
   if (patience < 1) throw ConfigError("boleap", "patience", "must be >= 1");
   if (episodes_per_leap < 1) throw ConfigError("boleap", "episodes_per_leap", "must be >= 1");
   if (leap_iterations < 0) throw ConfigError("boleap", "leap_iterations", "must be >= 0 (0: the leap counts episodes)");
-  if (!(step_size > 0.0 && std::isfinite(step_size))) throw ConfigError("boleap", "step_size", "must be finite and > 0");
+  if (!(step_size > 0.0 && std::isfinite(step_size)))
+    throw ConfigError("boleap", "step_size", "must be finite and > 0");
   if (elite < 0 || elite > population)
-    throw ConfigError("boleap", "elite", "must be in [0, population] (0 = population / 2), got " + std::to_string(elite));
+    throw ConfigError("boleap", "elite",
+                      "must be in [0, population] (0 = population / 2), got " + std::to_string(elite));
   adam.validate("boleap");
   bo.validate();
 }
@@ -46,8 +48,7 @@ nlohmann::json BoLeapConfig::to_json() const {
 BoLeap::BoLeap(const BoLeapConfig& cfg) : cfg_(cfg) { cfg_.validate(); }
 
 void BoLeap::minimize(Objective& f, Rng& rng) {
-  if (!f.has_gradient())
-    throw std::invalid_argument("boleap needs gradients, and this env is not differentiable");
+  if (!f.has_gradient()) throw std::invalid_argument("boleap needs gradients, and this env is not differentiable");
   stats_ = {};
   const int d = f.dim();
   BoSurrogate model(d, cfg_.bo, &f);
@@ -69,8 +70,7 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
 
   // initial space-filling design, as `bo`
   SobolSequence sobol(d, &rng);
-  for (int i = 0; i < cfg_.bo.initial_points_for(d); ++i)
-    simulate((2.0 * sobol.next().array() - 1.0).matrix());
+  for (int i = 0; i < cfg_.bo.initial_points_for(d); ++i) simulate((2.0 * sobol.next().array() - 1.0).matrix());
 
   const int K = cfg_.population;
   // one descent from s, at most J gradient episodes within the leap's episode cap; a step is Adam's
@@ -133,8 +133,8 @@ void BoLeap::minimize(Objective& f, Rng& rng) {
     CmaState cma(start, cfg_.sigma0, K, cma_cfg);
     // a local iteration needs room for K samples and at least one descent step within the leap's
     // cap (in episodes), or the leap has its count of local iterations
-    for (int iteration = 0; cfg_.leap_iterations > 0 ? iteration < cfg_.leap_iterations
-                                                     : spent + K < cfg_.episodes_per_leap;
+    for (int iteration = 0;
+         cfg_.leap_iterations > 0 ? iteration < cfg_.leap_iterations : spent + K < cfg_.episodes_per_leap;
          ++iteration) {
       // 1. K candidates from N(mu, sigma^2 C), simulated
       std::vector<Eigen::VectorXd> xs(K);
@@ -213,20 +213,22 @@ nlohmann::json BoLeap::diagnostics() const {
     std::string ended = "budget";
     if (l < s.leap_stops.size())
       ended = s.leap_stops[l] != CmaStop::none ? std::string("cma:") + to_string(s.leap_stops[l])
-              : cfg_.population == 1     ? "descent"
-              : cfg_.leap_iterations > 0 ? "iterations"
-                                         : "episode_cap";
-    return nlohmann::json{{"episodes", s.leap_episodes[l]}, {"descents", descents},
-                          {"descent_steps", steps},         {"stale_stops", stale_in_leap},
-                          {"first_loss", first},            {"best_loss", best},
-                          {"end_loss", end},                {"ended", ended}};
+          : cfg_.population == 1               ? "descent"
+          : cfg_.leap_iterations > 0           ? "iterations"
+                                               : "episode_cap";
+    return nlohmann::json{{"episodes", s.leap_episodes[l]},
+                          {"descents", descents},
+                          {"descent_steps", steps},
+                          {"stale_stops", stale_in_leap},
+                          {"first_loss", first},
+                          {"best_loss", best},
+                          {"end_loss", end},
+                          {"ended", ended}};
   });
   return d;
 }
 
-std::unique_ptr<Optimizer> make_boleap(const BoLeapConfig& cfg) {
-  return std::make_unique<BoLeap>(cfg);
-}
+std::unique_ptr<Optimizer> make_boleap(const BoLeapConfig& cfg) { return std::make_unique<BoLeap>(cfg); }
 
 KnobTable boleap_knobs(BoLeapConfig& cfg) {
   KnobTable t("boleap");

@@ -27,7 +27,7 @@
 namespace dsb {
 
 struct BoLeapConfig {
-  int population = 10;          // K (paper); 1: the ablation above (no samples, sigma0 unused)
+  int population = 10;  // K (paper); 1: the ablation above (no samples, sigma0 unused)
   // sigma_1 in the normalized box (half-width 1); C_1 = I. The paper's sigma_1 = 1.0 is in its
   // parameters' own units, whose bounds it does not give; 1.0 here spans the whole box, so the
   // "semi-local" population is global (in 400-D most coordinates of a sample land near or beyond a
@@ -48,7 +48,7 @@ struct BoLeapConfig {
   // 100 of them are more than 1,000 episodes: one leap per run)
   int episodes_per_leap = 100;
   int leap_iterations = 0;
-  int elite = 0;                // candidates averaged into the descent's start; 0 = K / 2 (best half)
+  int elite = 0;  // candidates averaged into the descent's start; 0 = K / 2 (best half)
   // The descent's step. The paper takes plain gradient steps, clipped to stay in the box, with a
   // step size it does not give: plain_steps with step_size (default gd's lr). Adam (default)
   // at lr 0.03 (chosen here, knob study: better than 0.1 on cartpole1, cartpole3 and
@@ -57,7 +57,7 @@ struct BoLeapConfig {
   double step_size = 0.1;
   AdamConfig adam{.lr = 0.03};
   bool adam_per_leap = false;
-  BoConfig bo;                  // GP, LCB (beta 1), initial design
+  BoConfig bo;  // GP, LCB (beta 1), initial design
   int elite_count() const { return elite > 0 ? elite : std::max(1, population / 2); }
   void validate() const;
   nlohmann::json to_json() const;
@@ -66,18 +66,18 @@ struct BoLeapConfig {
 // What one run did, for tests and diagnostics.
 struct BoLeapStats {
   int leaps = 0;
-  std::vector<int> leap_episodes;      // episodes spent in each leap
-  std::vector<int> descent_lengths;    // steps of each descent
-  std::vector<int> stale_stops;        // 1 when a descent ended by patience, 0 by J or budget
-  std::vector<int> descent_leap;       // the leap (0-based) each descent belongs to
+  std::vector<int> leap_episodes;          // episodes spent in each leap
+  std::vector<int> descent_lengths;        // steps of each descent
+  std::vector<int> stale_stops;            // 1 when a descent ended by patience, 0 by J or budget
+  std::vector<int> descent_leap;           // the leap (0-based) each descent belongs to
   std::vector<double> descent_first_loss;  // loss at each descent's start (its first step)
   std::vector<double> descent_best_loss;   // best loss along each descent
-  std::vector<CmaStop> leap_stops;     // per finished leap: the CMA-ES stop that ended it, or
-                                       // none when its episode cap did (the last leap, still
-                                       // running when the budget ended, has no entry)
-  int gp_points = 0;                   // points in the GP at the last BO proposal
-  int episodes_seen = 0;               // episodes this optimizer asked for
-  nlohmann::json gp;                   // BoSurrogate::diagnostics() after the last refit
+  std::vector<CmaStop> leap_stops;         // per finished leap: the CMA-ES stop that ended it, or
+                                           // none when its episode cap did (the last leap, still
+                                           // running when the budget ended, has no entry)
+  int gp_points = 0;                       // points in the GP at the last BO proposal
+  int episodes_seen = 0;                   // episodes this optimizer asked for
+  nlohmann::json gp;                       // BoSurrogate::diagnostics() after the last refit
 };
 
 class BoLeap : public Optimizer {

@@ -19,13 +19,11 @@ namespace dsb {
 
 namespace {
 
-constexpr double kEps = 1e-8;         // library _EPS: eigenvalue floor, negative-weight denominator
-constexpr double kSigmaMax = 1e32;    // library _SIGMA_MAX
+constexpr double kEps = 1e-8;            // library _EPS: eigenvalue floor, negative-weight denominator
+constexpr double kSigmaMax = 1e32;       // library _SIGMA_MAX
 constexpr int kMaxPopulation = 1 << 28;  // IPOP growth stops here (int overflow guard only)
 
-[[noreturn]] void bad(const std::string& field, const std::string& why) {
-  throw ConfigError("cmaes", field, why);
-}
+[[noreturn]] void bad(const std::string& field, const std::string& why) { throw ConfigError("cmaes", field, why); }
 
 }  // namespace
 
@@ -33,13 +31,15 @@ constexpr int kMaxPopulation = 1 << 28;  // IPOP growth stops here (int overflow
 // config
 
 void CmaesConfig::validate() const {
-  if (!(sigma0 > 0.0) || !std::isfinite(sigma0)) bad("sigma0", "must be a finite number > 0 (got " + number_text(sigma0) + ")");
+  if (!(sigma0 > 0.0) || !std::isfinite(sigma0))
+    bad("sigma0", "must be a finite number > 0 (got " + number_text(sigma0) + ")");
   if (population != 0 && population < 2)
     bad("population", "must be 0 (default 4 + floor(3 ln n)) or >= 2 (got " + std::to_string(population) + ")");
   if (max_resampling < 0) bad("max_resampling", "must be >= 0 (got " + std::to_string(max_resampling) + ")");
   if (!(ipop_factor >= 1.0) || !std::isfinite(ipop_factor))
     bad("ipop_factor", "must be a finite number >= 1 (got " + number_text(ipop_factor) + ")");
-  if (!(tolfun >= 0.0) || !std::isfinite(tolfun)) bad("tolfun", "must be a finite number >= 0 (got " + number_text(tolfun) + ")");
+  if (!(tolfun >= 0.0) || !std::isfinite(tolfun))
+    bad("tolfun", "must be a finite number >= 0 (got " + number_text(tolfun) + ")");
   if (!(tolx_factor >= 0.0) || !std::isfinite(tolx_factor))
     bad("tolx_factor", "must be a finite number >= 0 (got " + number_text(tolx_factor) + ")");
   if (!(tolxup > 0.0)) bad("tolxup", "must be > 0 (got " + number_text(tolxup) + ")");
@@ -47,10 +47,14 @@ void CmaesConfig::validate() const {
 }
 
 nlohmann::json CmaesConfig::to_json() const {
-  return nlohmann::json{{"sigma0", sigma0},           {"population", population},
-                        {"max_resampling", max_resampling}, {"ipop", ipop},
-                        {"ipop_factor", ipop_factor}, {"tolfun", tolfun},
-                        {"tolx_factor", tolx_factor}, {"tolxup", tolxup},
+  return nlohmann::json{{"sigma0", sigma0},
+                        {"population", population},
+                        {"max_resampling", max_resampling},
+                        {"ipop", ipop},
+                        {"ipop_factor", ipop_factor},
+                        {"tolfun", tolfun},
+                        {"tolx_factor", tolx_factor},
+                        {"tolxup", tolxup},
                         {"condition_max", condition_max}};
 }
 
@@ -106,8 +110,9 @@ CmaesConstants cmaes_constants(int n, int lambda) {
   k.c1 = alpha_cov / ((nd + 1.3) * (nd + 1.3) + k.mu_eff);
   // cmu = min(1 - c1 - 1e-8, alpha_cov (mu_eff - 2 + 1/mu_eff) / ((n+2)^2 + alpha_cov mu_eff / 2))
   // (eq. 58; the -1e-8 is the library's large-lambda fix, PR #49)
-  k.cmu = std::min(1.0 - k.c1 - 1e-8, alpha_cov * (k.mu_eff - 2.0 + 1.0 / k.mu_eff) /
-                                          ((nd + 2.0) * (nd + 2.0) + alpha_cov * k.mu_eff / 2.0));
+  k.cmu =
+      std::min(1.0 - k.c1 - 1e-8,
+               alpha_cov * (k.mu_eff - 2.0 + 1.0 / k.mu_eff) / ((nd + 2.0) * (nd + 2.0) + alpha_cov * k.mu_eff / 2.0));
 
   // alpha_min = min(alpha_mu^-, alpha_mueff^-, alpha_posdef^-)   (eq. 50-52)
   const double alpha_mu = 1.0 + k.c1 / k.cmu;
@@ -119,8 +124,7 @@ CmaesConstants cmaes_constants(int n, int lambda) {
   double pos = 0.0, neg = 0.0;
   for (double w : wp) (w >= 0.0 ? pos : neg) += std::abs(w);
   k.weights.resize(lambda);
-  for (int i = 0; i < lambda; ++i)
-    k.weights[i] = wp[i] >= 0.0 ? wp[i] / pos : k.alpha_min * wp[i] / neg;
+  for (int i = 0; i < lambda; ++i) k.weights[i] = wp[i] >= 0.0 ? wp[i] / pos : k.alpha_min * wp[i] / neg;
 
   // c_sigma = (mu_eff + 2) / (n + mu_eff + 5); d_sigma = 1 + 2 max(0, sqrt((mu_eff-1)/(n+1)) - 1) + c_sigma   (eq. 55)
   k.c_sigma = (k.mu_eff + 2.0) / (nd + k.mu_eff + 5.0);
@@ -378,9 +382,8 @@ void Cmaes::minimize(Objective& f, Rng& rng) {
 }
 
 nlohmann::json Cmaes::diagnostics() const {
-  nlohmann::json d = {{"restarts", stats_.restarts()},
-                      {"generations", stats_.generations},
-                      {"final_sigma", stats_.final_sigma}};
+  nlohmann::json d = {
+      {"restarts", stats_.restarts()}, {"generations", stats_.generations}, {"final_sigma", stats_.final_sigma}};
   put_capped(d, "instances", stats_.populations, [&](int lambda, std::size_t i) {
     const bool stopped = i < stats_.stops.size();
     return nlohmann::json{{"population", lambda},

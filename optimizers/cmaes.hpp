@@ -47,14 +47,14 @@
 namespace dsb {
 
 struct CmaesConfig {
-  double sigma0 = 0.5;       // initial step size in the normalized box (chosen here)
-  int population = 0;        // 0 = 4 + floor(3 ln n) (eq. 48); otherwise >= 2
-  int max_resampling = 100;  // draws tried before the clip fallback (library default)
-  bool ipop = true;          // restart with a larger population when should_stop() fires
-  double ipop_factor = 2.0;  // population multiplier per restart
-  double tolfun = 1e-12;     // TolFun (history) threshold
-  double tolx_factor = 1e-12;  // tolx = tolx_factor * sigma0 (library: 1e-12 * sigma)
-  double tolxup = 1e4;       // TolXUp: sigma * max(D) above this stops (absolute)
+  double sigma0 = 0.5;          // initial step size in the normalized box (chosen here)
+  int population = 0;           // 0 = 4 + floor(3 ln n) (eq. 48); otherwise >= 2
+  int max_resampling = 100;     // draws tried before the clip fallback (library default)
+  bool ipop = true;             // restart with a larger population when should_stop() fires
+  double ipop_factor = 2.0;     // population multiplier per restart
+  double tolfun = 1e-12;        // TolFun (history) threshold
+  double tolx_factor = 1e-12;   // tolx = tolx_factor * sigma0 (library: 1e-12 * sigma)
+  double tolxup = 1e4;          // TolXUp: sigma * max(D) above this stops (absolute)
   double condition_max = 1e14;  // ConditionCov: max(D) / min(D) above this stops (D = sqrt eig)
   // throws ConfigError naming the field
   void validate() const;
@@ -132,11 +132,11 @@ class CmaState {
 
 // What the last minimize() did (kept when it ends by BudgetExhausted).
 struct CmaesRunStats {
-  std::vector<int> populations;  // lambda of each CMA-ES instance, in order (first = initial run)
-  std::vector<CmaStop> stops;    // why each finished instance stopped
-  std::int64_t generations = 0;  // generations told, over all instances
+  std::vector<int> populations;                    // lambda of each CMA-ES instance, in order (first = initial run)
+  std::vector<CmaStop> stops;                      // why each finished instance stopped
+  std::int64_t generations = 0;                    // generations told, over all instances
   std::vector<std::int64_t> instance_generations;  // generations told, per instance
-  double final_sigma = 0.0;      // sigma of the latest instance (sigma0 until its first tell)
+  double final_sigma = 0.0;                        // sigma of the latest instance (sigma0 until its first tell)
   int restarts() const { return populations.empty() ? 0 : static_cast<int>(populations.size()) - 1; }
 };
 

@@ -18,9 +18,8 @@ void DescentConfig::validate(const std::string& owner) const {
 }
 
 nlohmann::json DescentConfig::to_json() const {
-  return {{"adam", adam.to_json()},       {"random_starts", random_starts},
-          {"max_steps", max_steps},       {"patience", patience},
-          {"min_improvement", min_improvement}, {"start_scale", start_scale}};
+  return {{"adam", adam.to_json()}, {"random_starts", random_starts},     {"max_steps", max_steps},
+          {"patience", patience},   {"min_improvement", min_improvement}, {"start_scale", start_scale}};
 }
 
 DescentConfig gd_defaults() { return DescentConfig{}; }
@@ -59,9 +58,7 @@ struct DescentRecord {
 
 class Descents : public Optimizer {
  public:
-  Descents(std::string name, DescentConfig cfg) : name_(std::move(name)), cfg_(cfg) {
-    cfg_.validate(name_);
-  }
+  Descents(std::string name, DescentConfig cfg) : name_(std::move(name)), cfg_(cfg) { cfg_.validate(name_); }
   const std::string& name() const override { return name_; }
   bool needs_gradient() const override { return true; }
   nlohmann::json config() const override { return cfg_.to_json(); }
@@ -93,8 +90,10 @@ class Descents : public Optimizer {
       steps.push_back(d.steps);
       stops[to_string(d.stop)] = stops[to_string(d.stop)].get<int>() + 1;
     }
-    nlohmann::json out = {{"descents", ran.size()}, {"steps", summarize(steps)},
-                          {"stops", std::move(stops)}, {"recoveries", recoveries_}};
+    nlohmann::json out = {{"descents", ran.size()},
+                          {"steps", summarize(steps)},
+                          {"stops", std::move(stops)},
+                          {"recoveries", recoveries_}};
     put_capped(out, "descent_list", ran, [](const DescentRecord& d, std::size_t) {
       return nlohmann::json{{"steps", d.steps}, {"stop", to_string(d.stop)}};
     });
@@ -102,8 +101,8 @@ class Descents : public Optimizer {
   }
 
  private:
-  void descend(Objective& f, std::vector<double>& x, std::vector<double>& grad,
-               std::vector<double>& best_x, std::vector<double>& best_grad) {
+  void descend(Objective& f, std::vector<double>& x, std::vector<double>& grad, std::vector<double>& best_x,
+               std::vector<double>& best_grad) {
     AdamConfig adam_cfg = cfg_.adam;
     Adam adam(adam_cfg, f.dim());
     double best = std::numeric_limits<double>::infinity();
@@ -150,9 +149,7 @@ class Descents : public Optimizer {
 
 }  // namespace
 
-std::unique_ptr<Optimizer> make_gd(const DescentConfig& cfg) {
-  return std::make_unique<Descents>("gd", cfg);
-}
+std::unique_ptr<Optimizer> make_gd(const DescentConfig& cfg) { return std::make_unique<Descents>("gd", cfg); }
 
 std::unique_ptr<Optimizer> make_rand_descents(const DescentConfig& cfg) {
   return std::make_unique<Descents>("rand-descents", cfg);

@@ -16,10 +16,10 @@
 namespace dsb {
 
 struct DescentConfig {
-  AdamConfig adam;        // lr 0.1 (design)
+  AdamConfig adam;  // lr 0.1 (design)
   bool random_starts = false;
-  int max_steps = 0;      // episodes per descent; 0 = until the budget ends
-  int patience = 0;       // stop a descent after this many non-improving steps; 0 = never
+  int max_steps = 0;             // episodes per descent; 0 = until the budget ends
+  int patience = 0;              // stop a descent after this many non-improving steps; 0 = never
   double min_improvement = 0.0;  // relative improvement that counts as progress
   double start_scale = 1.0;      // random starts uniform in [-start_scale, start_scale]^d (1 = the box)
   void validate(const std::string& owner) const;

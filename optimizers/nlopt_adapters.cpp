@@ -19,9 +19,9 @@ namespace dsb {
 
 namespace {
 
-constexpr double kNoFinitePenalty = 1e10;   // penalty while no finite loss has been seen
-constexpr double kMaxPenalty = 1e300;       // the penalty never grows beyond this
-constexpr int kMaxIdleStarts = 3;           // starts in a row without an episode -> return
+constexpr double kNoFinitePenalty = 1e10;     // penalty while no finite loss has been seen
+constexpr double kMaxPenalty = 1e300;         // the penalty never grows beyond this
+constexpr int kMaxIdleStarts = 3;             // starts in a row without an episode -> return
 constexpr double kSubBoxMinHalfWidth = 0.25;  // DIRECT-L restart sub-box half-width in [0.25, 1)
 
 struct AlgoInfo {
@@ -50,18 +50,17 @@ const AlgoInfo& algo_or_throw(const std::string& algorithm) {
   const AlgoInfo* a = find_algo(algorithm);
   if (!a)
     throw ConfigError("nlopt", "algorithm",
-                      "must be one of LD_LBFGS, LN_BOBYQA, GN_DIRECT_L, GN_CRS2_LM (got '" +
-                          algorithm + "')");
+                      "must be one of LD_LBFGS, LN_BOBYQA, GN_DIRECT_L, GN_CRS2_LM (got '" + algorithm + "')");
   return *a;
 }
 
 // State shared with the NLopt callback for one minimize() call.
 struct CallbackState {
   Objective* f = nullptr;
-  std::vector<double> x;         // the clamped point handed to the Objective
-  std::exception_ptr error;      // what the Objective threw (BudgetExhausted or anything else)
-  bool stopping = false;         // this start was stopped: evaluate nothing more
-  double worst = 0.0;            // worst finite loss seen in this run
+  std::vector<double> x;     // the clamped point handed to the Objective
+  std::exception_ptr error;  // what the Objective threw (BudgetExhausted or anything else)
+  bool stopping = false;     // this start was stopped: evaluate nothing more
+  double worst = 0.0;        // worst finite loss seen in this run
   bool have_finite = false;
 
   double penalty() const {
@@ -112,9 +111,7 @@ double objective_callback(unsigned n, const double* x, double* grad, void* data)
 // ---------------------------------------------------------------------------------------------
 // config
 
-std::string nlopt_optimizer_name(const std::string& algorithm) {
-  return algo_or_throw(algorithm).name;
-}
+std::string nlopt_optimizer_name(const std::string& algorithm) { return algo_or_throw(algorithm).name; }
 
 void NloptConfig::validate() const {
   const AlgoInfo& a = algo_or_throw(algorithm);
@@ -131,21 +128,16 @@ void NloptConfig::validate() const {
                       "is used only by LN_BOBYQA and must be 0 here (got " + number_text(initial_step) + ")");
   if (population < 0)
     throw ConfigError(owner, "population",
-                      "must be 0 (NLopt default 10 (n + 1)) or >= n + 1 (got " +
-                          std::to_string(population) + ")");
+                      "must be 0 (NLopt default 10 (n + 1)) or >= n + 1 (got " + std::to_string(population) + ")");
   if (population != 0 && a.id != nlopt::GN_CRS2_LM)
     throw ConfigError(owner, "population",
-                      "is used only by GN_CRS2_LM and must be 0 here (got " +
-                          std::to_string(population) + ")");
+                      "is used only by GN_CRS2_LM and must be 0 here (got " + std::to_string(population) + ")");
 }
 
 nlohmann::json NloptConfig::to_json() const {
-  return nlohmann::json{{"algorithm", algorithm},
-                        {"ftol_rel", ftol_rel},
-                        {"xtol_rel", xtol_rel},
-                        {"initial_step", initial_step},
-                        {"population", population},
-                        {"restart_from_random", restart_from_random}};
+  return nlohmann::json{{"algorithm", algorithm},   {"ftol_rel", ftol_rel},
+                        {"xtol_rel", xtol_rel},     {"initial_step", initial_step},
+                        {"population", population}, {"restart_from_random", restart_from_random}};
 }
 
 NloptConfig nlopt_lbfgs_defaults() {
@@ -188,12 +180,11 @@ void NloptOptimizer::minimize(Objective& f, Rng& rng) {
   const AlgoInfo& algo = algo_or_throw(cfg_.algorithm);
   const int n = f.dim();
   if (n < 1) throw std::invalid_argument(name_ + ": dimension must be >= 1");
-  if (algo.gradient && !f.has_gradient())
-    throw std::invalid_argument(name_ + " needs an objective with a gradient");
+  if (algo.gradient && !f.has_gradient()) throw std::invalid_argument(name_ + " needs an objective with a gradient");
   if (algo.id == nlopt::GN_CRS2_LM && cfg_.population != 0 && cfg_.population < n + 1)
-    throw ConfigError(name_, "population",
-                      "must be 0 or >= n + 1 = " + std::to_string(n + 1) + " (got " +
-                          std::to_string(cfg_.population) + ")");
+    throw ConfigError(
+        name_, "population",
+        "must be 0 or >= n + 1 = " + std::to_string(n + 1) + " (got " + std::to_string(cfg_.population) + ")");
 
   CallbackState cb;
   cb.f = &f;
@@ -234,8 +225,7 @@ void NloptOptimizer::minimize(Objective& f, Rng& rng) {
     opt.set_xtol_rel(cfg_.xtol_rel);
     opt.set_maxeval(static_cast<int>(std::min<std::int64_t>(f.remaining(), INT_MAX)));
     if (algo.id == nlopt::LN_BOBYQA && cfg_.initial_step > 0.0) opt.set_initial_step(cfg_.initial_step);
-    if (algo.id == nlopt::GN_CRS2_LM && cfg_.population > 0)
-      opt.set_population(static_cast<unsigned>(cfg_.population));
+    if (algo.id == nlopt::GN_CRS2_LM && cfg_.population > 0) opt.set_population(static_cast<unsigned>(cfg_.population));
     // thread-local generator, stream continues across calls: re-seed before every optimize. An
     // algorithm that never draws from it does not use the seed, so that draw is not counted as a
     // use of the run's seed (the stream advances the same: the same bits either way), and its
@@ -304,19 +294,17 @@ nlohmann::json NloptOptimizer::diagnostics() const {
     const std::string name = nlopt_result_name(s.result);
     results[name] = results.value(name, 0) + 1;
   }
-  nlohmann::json d = {{"starts", stats_.starts.size()},
-                      {"results", std::move(results)},
-                      {"early_return", stats_.early_return.empty() ? nlohmann::json(nullptr)
-                                                                   : nlohmann::json(stats_.early_return)}};
+  nlohmann::json d = {
+      {"starts", stats_.starts.size()},
+      {"results", std::move(results)},
+      {"early_return", stats_.early_return.empty() ? nlohmann::json(nullptr) : nlohmann::json(stats_.early_return)}};
   put_capped(d, "start_list", stats_.starts, [](const NloptStart& s, std::size_t) {
     return nlohmann::json{{"result", nlopt_result_name(s.result)}, {"episodes", s.episodes}};
   });
   return d;
 }
 
-std::unique_ptr<Optimizer> make_nlopt(const NloptConfig& cfg) {
-  return std::make_unique<NloptOptimizer>(cfg);
-}
+std::unique_ptr<Optimizer> make_nlopt(const NloptConfig& cfg) { return std::make_unique<NloptOptimizer>(cfg); }
 std::unique_ptr<Optimizer> make_nlopt_lbfgs() { return make_nlopt(nlopt_lbfgs_defaults()); }
 std::unique_ptr<Optimizer> make_nlopt_bobyqa() { return make_nlopt(nlopt_bobyqa_defaults()); }
 std::unique_ptr<Optimizer> make_nlopt_direct_l() { return make_nlopt(nlopt_direct_l_defaults()); }

@@ -77,12 +77,12 @@
 namespace dsb {
 
 struct NloptConfig {
-  std::string algorithm;    // "LD_LBFGS", "LN_BOBYQA", "GN_DIRECT_L", "GN_CRS2_LM"
-  double ftol_rel = 1e-10;  // NLopt relative f tolerance per start (0 = off)
-  double xtol_rel = 1e-10;  // NLopt relative x tolerance per start (0 = off)
-  double initial_step = 0.0;  // LN_BOBYQA only: initial trust radius in the normalized box,
-                              // 0 = NLopt's heuristic; must be <= 1 (half the box width)
-  int population = 0;       // GN_CRS2_LM only: 0 = NLopt default 10 (n + 1); else >= n + 1
+  std::string algorithm;            // "LD_LBFGS", "LN_BOBYQA", "GN_DIRECT_L", "GN_CRS2_LM"
+  double ftol_rel = 1e-10;          // NLopt relative f tolerance per start (0 = off)
+  double xtol_rel = 1e-10;          // NLopt relative x tolerance per start (0 = off)
+  double initial_step = 0.0;        // LN_BOBYQA only: initial trust radius in the normalized box,
+                                    // 0 = NLopt's heuristic; must be <= 1 (half the box width)
+  int population = 0;               // GN_CRS2_LM only: 0 = NLopt default 10 (n + 1); else >= n + 1
   bool restart_from_random = true;  // restart while budget remains (see above); false = one start
   // throws ConfigError naming the field
   void validate() const;
@@ -101,9 +101,9 @@ std::string nlopt_optimizer_name(const std::string& algorithm);
 
 // One optimize call.
 struct NloptStart {
-  std::int64_t episodes = 0;  // episodes this start used
-  int result = 0;             // nlopt_result code it ended with (5 = MAXEVAL_REACHED, -4 =
-                              // ROUNDOFF_LIMITED, -5 = FORCED_STOP, -1 = FAILURE)
+  std::int64_t episodes = 0;         // episodes this start used
+  int result = 0;                    // nlopt_result code it ended with (5 = MAXEVAL_REACHED, -4 =
+                                     // ROUNDOFF_LIMITED, -5 = FORCED_STOP, -1 = FAILURE)
   std::vector<double> lower, upper;  // the bounds it ran in
   std::vector<double> x0;            // its start point
 };

@@ -69,7 +69,7 @@ bool is_numpy(const py::handle& v, const char* type) {
 // 0-d numpy array of one; else why not ("a str", "None", "a bool"). A bool (Python's or numpy's) is
 // True or False, not a number, and a str is text even when it reads as one.
 std::string not_a_real_number(const py::handle& v) {
-  if (PyBool_Check(v.ptr())) return "a bool";                 // before int: bool is an int in Python
+  if (PyBool_Check(v.ptr())) return "a bool";                      // before int: bool is an int in Python
   if (PyLong_Check(v.ptr()) || PyFloat_Check(v.ptr())) return "";  // numpy's float64 is a float
   if (v.is_none()) return "None";
   if (is_numpy(v, "bool_")) return "a bool";
@@ -111,10 +111,9 @@ std::vector<double> to_vector(const py::object& obj, const char* what) {
     const py::object v = seq[i];
     const auto at = [&] { return ": value " + shown(v) + " at position " + std::to_string(i); };  // errors only
     const bool nested = py::isinstance<py::array>(v)
-                            ? py::reinterpret_borrow<py::array>(v).ndim() > 0
-                            : PySequence_Check(v.ptr()) && !PyUnicode_Check(v.ptr()) && !PyBytes_Check(v.ptr());
-    if (nested)
-      throw py::value_error(w + " must be 1-D" + at() + " is a " + type_name(v));
+        ? py::reinterpret_borrow<py::array>(v).ndim() > 0
+        : PySequence_Check(v.ptr()) && !PyUnicode_Check(v.ptr()) && !PyBytes_Check(v.ptr());
+    if (nested) throw py::value_error(w + " must be 1-D" + at() + " is a " + type_name(v));
     if (const std::string why = not_a_real_number(v); !why.empty())
       throw py::type_error(w + at() + " is " + why + ", not a real number");
     const double d = PyFloat_AsDouble(v.ptr());
@@ -138,9 +137,7 @@ std::vector<double> checked_point(const Env& env, const py::object& obj) {
   return x;
 }
 
-py::object json_to_python(const nlohmann::json& j) {
-  return py::module_::import("json").attr("loads")(j.dump());
-}
+py::object json_to_python(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
 
 py::dict info_dict(const EnvInfo& info, const std::string& description) {
   py::dict d;
@@ -196,8 +193,8 @@ std::string option_text(const std::string& name, const std::string& key, const p
   const std::string label = name + "." + key;
   if (option_is_path(name, key)) {
     const py::module_ os = py::module_::import("os");
-    const bool path_like = PyUnicode_Check(value.ptr()) || PyBytes_Check(value.ptr()) ||
-                           py::isinstance(value, os.attr("PathLike"));
+    const bool path_like =
+        PyUnicode_Check(value.ptr()) || PyBytes_Check(value.ptr()) || py::isinstance(value, os.attr("PathLike"));
     if (!path_like)
       throw py::type_error(label + " must be a path (str, bytes or os.PathLike), got " + type_name(value) + " " +
                            shown(value));
@@ -241,8 +238,8 @@ class PyRl {
   void step(const py::object& obj) {
     const auto a = to_vector(obj, "action");
     if (static_cast<int>(a.size()) != rl_->action_dim())
-      throw py::value_error("action has " + std::to_string(a.size()) + " values, env '" + env_->name() +
-                            "' needs " + std::to_string(rl_->action_dim()));
+      throw py::value_error("action has " + std::to_string(a.size()) + " values, env '" + env_->name() + "' needs " +
+                            std::to_string(rl_->action_dim()));
     for (std::size_t i = 0; i < a.size(); ++i)
       if (!std::isfinite(a[i]))
         throw py::value_error("action: value " + repr(a[i]) + " at position " + std::to_string(i) +
@@ -310,7 +307,8 @@ class PyEnv {
   }
   py::tuple loss_and_grad(const py::object& obj) {
     const auto x = checked_point(*env_, obj);
-    if (!env_->differentiable()) throw py::value_error("loss_and_grad: env '" + env_->name() + "' is not differentiable");
+    if (!env_->differentiable())
+      throw py::value_error("loss_and_grad: env '" + env_->name() + "' is not differentiable");
     Array grad(env_->dim());
     double* g = grad.mutable_data();
     double loss = 0.0;
@@ -338,7 +336,7 @@ class PyEnv {
   }
   std::string repr() const {
     return "<diffsim_bench.Env '" + env_->name() + "' dim=" + std::to_string(env_->dim()) +
-           " threads=" + std::to_string(team_->size()) + ">";
+        " threads=" + std::to_string(team_->size()) + ">";
   }
 
  private:

@@ -21,8 +21,7 @@ bool bounce_throw_is_clear(const BounceConfig& cfg, std::span<const double> x) {
     r.position.push_back(s.position);
     r.velocity.push_back(s.velocity);
   }
-  const ContactEvents e =
-      contact_events(r, Eigen::Vector3d(0.0, -env.model().gravity, 0.0), env.model().dt);
+  const ContactEvents e = contact_events(r, Eigen::Vector3d(0.0, -env.model().gravity, 0.0), env.model().dt);
   const int horizon = BounceModel::build(cfg).steps;
   if (e.clearest_graze < 2.0) return false;
   for (int start : e.episode_starts) {

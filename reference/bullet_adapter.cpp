@@ -37,8 +37,7 @@ double equivalent_restitution(const ContactConfig& contact, double mass, double 
 bool bullet_available() { return true; }
 std::string bullet_version() {
   const int v = btGetVersion();
-  return std::to_string(v / 100) + "." + std::to_string(v % 100) +
-         (sizeof(btScalar) == 8 ? " (double)" : " (single)");
+  return std::to_string(v / 100) + "." + std::to_string(v % 100) + (sizeof(btScalar) == 8 ? " (double)" : " (single)");
 }
 
 namespace {
@@ -69,8 +68,7 @@ void impulse_only_contacts(btDiscreteDynamicsWorld& world) {
 struct StaticBody {
   std::unique_ptr<btCollisionShape> shape;
   std::unique_ptr<btRigidBody> body;
-  StaticBody(btCollisionShape* s, const btTransform& where, double friction, double restitution)
-      : shape(s) {
+  StaticBody(btCollisionShape* s, const btTransform& where, double friction, double restitution) : shape(s) {
     btRigidBody::btRigidBodyConstructionInfo info(0.0, nullptr, s, btVector3(0, 0, 0));
     info.m_startWorldTransform = where;
     body = std::make_unique<btRigidBody>(info);
@@ -83,8 +81,8 @@ struct StaticBody {
 };
 
 // the ball: a sphere that translates only (our ball is a point mass without spin)
-std::unique_ptr<btRigidBody> make_ball(btCollisionShape* shape, double mass, double mu,
-                                       double restitution, const btVector3& linear_factor) {
+std::unique_ptr<btRigidBody> make_ball(btCollisionShape* shape, double mass, double mu, double restitution,
+                                       const btVector3& linear_factor) {
   btVector3 inertia(0, 0, 0);
   shape->calculateLocalInertia(mass, inertia);
   btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, shape, inertia);
@@ -136,8 +134,8 @@ BulletCartpole::BulletCartpole(const CartpoleConfig& cfg) : impl_(std::make_uniq
   const double cart_inertia = cfg.cart_mass * 0.1 * 0.1 / 6.0;
   const btQuaternion identity(0, 0, 0, 1);
   const btVector3 zero(0, 0, 0), half_down(0, -0.5 * L, 0);
-  mb->setupPrismatic(0, cfg.cart_mass, btVector3(cart_inertia, cart_inertia, cart_inertia), -1,
-                     identity, btVector3(1, 0, 0), zero, zero, true);
+  mb->setupPrismatic(0, cfg.cart_mass, btVector3(cart_inertia, cart_inertia, cart_inertia), -1, identity,
+                     btVector3(1, 0, 0), zero, zero, true);
   for (int i = 0; i < n; ++i) {
     const double m = cfg.link_masses[i];
     // uniform rod along the link's y axis: m L^2 / 12 across, m r^2 / 2 along
@@ -212,19 +210,17 @@ CartpoleState BulletCartpole::state() const {
 Eigen::Vector2d BulletCartpole::tip() const {
   // the far end of the last rod: half a length below its centre of mass, in its own frame
   const int last = impl_->cfg.links;
-  const btVector3 p =
-      impl_->body->localPosToWorld(last, btVector3(0, -0.5 * impl_->cfg.link_length, 0));
+  const btVector3 p = impl_->body->localPosToWorld(last, btVector3(0, -0.5 * impl_->cfg.link_length, 0));
   return {p.x(), p.y()};
 }
 
-std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(const CartpoleEnv& env,
-                                                            std::span<const double> x) {
+std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(const CartpoleEnv& env, std::span<const double> x) {
   const auto& cfg = impl_->cfg;
   if (env.cartpole_config().to_json() != cfg.to_json())
     throw std::invalid_argument("BulletCartpole: env '" + env.name() + "' has another config");
   if (static_cast<int>(x.size()) != env.dim())
-    throw std::invalid_argument("BulletCartpole: expected " + std::to_string(env.dim()) +
-                                " parameters, got " + std::to_string(x.size()));
+    throw std::invalid_argument("BulletCartpole: expected " + std::to_string(env.dim()) + " parameters, got " +
+                                std::to_string(x.size()));
   reset();
   std::vector<Eigen::Vector2d> tips{tip()};
   tips.reserve(cfg.steps + 1);
@@ -267,17 +263,14 @@ struct BallWorld {
     statics.push_back(std::make_unique<StaticBody>(shape, where, 1.0, 1.0));
     parts.world.addRigidBody(statics.back()->body.get());
   }
-  void add_ball(double radius, double mass, const ContactConfig& contact, double dt,
-                const btVector3& linear_factor) {
+  void add_ball(double radius, double mass, const ContactConfig& contact, double dt, const btVector3& linear_factor) {
     ball_shape = std::make_unique<btSphereShape>(radius);
-    ball = make_ball(ball_shape.get(), mass, contact.mu, equivalent_restitution(contact, mass, dt),
-                     linear_factor);
+    ball = make_ball(ball_shape.get(), mass, contact.mu, equivalent_restitution(contact, mass, dt), linear_factor);
     parts.world.addRigidBody(ball.get());
   }
   // restart from (start, v0), forgetting old contacts; steps + 1 (position, velocity) pairs
-  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> roll(const btVector3& start,
-                                                                 const btVector3& v0, int steps,
-                                                                 double dt) {
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> roll(const btVector3& start, const btVector3& v0, int steps,
+                                                                double dt) {
     btTransform where;
     where.setIdentity();
     where.setOrigin(start);
@@ -287,8 +280,8 @@ struct BallWorld {
     ball->setAngularVelocity(btVector3(0, 0, 0));
     ball->setInterpolationLinearVelocity(v0);
     ball->clearForces();
-    parts.world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(
-        ball->getBroadphaseHandle(), parts.world.getDispatcher());
+    parts.world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(ball->getBroadphaseHandle(),
+                                                                                parts.world.getDispatcher());
     std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> states;
     states.reserve(steps + 1);
     auto read = [&] {
@@ -327,8 +320,8 @@ BulletBounce::~BulletBounce() = default;
 std::vector<BallState> BulletBounce::trajectory(const Eigen::Vector3d& v0) {
   const auto& cfg = impl_->cfg;
   std::vector<BallState> states;
-  for (const auto& [p, v] : impl_->world.roll(btVector3(cfg.start[0], cfg.start[1], cfg.start[2]), bt(v0),
-                                              impl_->steps, cfg.dt))
+  for (const auto& [p, v] :
+       impl_->world.roll(btVector3(cfg.start[0], cfg.start[1], cfg.start[2]), bt(v0), impl_->steps, cfg.dt))
     states.push_back({p, v});
   return states;
 }
@@ -374,8 +367,8 @@ BulletPinball::~BulletPinball() = default;
 std::vector<Ball2State> BulletPinball::trajectory() {
   const auto& cfg = impl_->cfg;
   std::vector<Ball2State> states;
-  for (const auto& [p, v] : impl_->world.roll(btVector3(cfg.start[0], cfg.start[1], 0.0), btVector3(0, 0, 0),
-                                              impl_->steps, cfg.dt))
+  for (const auto& [p, v] :
+       impl_->world.roll(btVector3(cfg.start[0], cfg.start[1], 0.0), btVector3(0, 0, 0), impl_->steps, cfg.dt))
     states.push_back({p.head<2>(), v.head<2>()});
   return states;
 }
@@ -395,9 +388,7 @@ void BulletCartpole::reset() { missing(); }
 void BulletCartpole::step(double, const double*) { missing(); }
 CartpoleState BulletCartpole::state() const { missing(); }
 Eigen::Vector2d BulletCartpole::tip() const { missing(); }
-std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(const CartpoleEnv&, std::span<const double>) {
-  missing();
-}
+std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(const CartpoleEnv&, std::span<const double>) { missing(); }
 struct BulletBounce::Impl {};
 BulletBounce::BulletBounce(const BounceConfig&) { missing(); }
 BulletBounce::~BulletBounce() = default;

@@ -18,8 +18,7 @@ double tip_loss(const CartpoleConfig& cfg, const Eigen::Vector3d& tip) {
   return std::hypot(tip.x() - cfg.target[0], tip.y() - cfg.target[1]);
 }
 
-Rollout tip_rollout(const std::string& engine, const std::vector<Eigen::Vector2d>& tips,
-                    const CartpoleConfig& cfg) {
+Rollout tip_rollout(const std::string& engine, const std::vector<Eigen::Vector2d>& tips, const CartpoleConfig& cfg) {
   Rollout r;
   r.engine = engine;
   for (const auto& p : tips) r.position.push_back(lift(p));

@@ -10,17 +10,15 @@
 
 namespace dsb {
 
-bool crosscheck_available() {
-  return reference::mujoco_available() || reference::bullet_available();
-}
+bool crosscheck_available() { return reference::mujoco_available() || reference::bullet_available(); }
 
 namespace reference {
 
 namespace {
 
 // compares two rollouts of one vector and folds the worst case into the row
-void compare(const Rollout& a, const Rollout& b, const CrosscheckSetup& setup,
-             std::span<const double> x, int index, CrosscheckRow& row) {
+void compare(const Rollout& a, const Rollout& b, const CrosscheckSetup& setup, std::span<const double> x, int index,
+             CrosscheckRow& row) {
   const std::size_t n = std::min(a.position.size(), b.position.size());
   double deviation = 0.0;
   for (std::size_t t = 0; t < n; ++t) {
@@ -35,15 +33,13 @@ void compare(const Rollout& a, const Rollout& b, const CrosscheckSetup& setup,
     const ContactEvents ea = contact_events(a, setup.gravity(), setup.dt());
     const ContactEvents eb = contact_events(b, setup.gravity(), setup.dt());
     // both engines are in free flight up to the earlier first impact (states 0 .. that step)
-    const int free_end = ea.first_impact < 0   ? eb.first_impact
-                         : eb.first_impact < 0 ? ea.first_impact
-                                               : std::min(ea.first_impact, eb.first_impact);
+    const int free_end = ea.first_impact < 0 ? eb.first_impact
+        : eb.first_impact < 0                ? ea.first_impact
+                                             : std::min(ea.first_impact, eb.first_impact);
     const std::size_t last = free_end < 0 ? n - 1 : static_cast<std::size_t>(free_end);
     for (std::size_t t = 0; t <= last && t < n; ++t)
       free_flight = std::max(free_flight, (a.position[t] - b.position[t]).norm());
-    impact = (ea.first_impact < 0) != (eb.first_impact < 0)
-                 ? 1 << 20
-                 : std::abs(ea.first_impact - eb.first_impact);
+    impact = (ea.first_impact < 0) != (eb.first_impact < 0) ? 1 << 20 : std::abs(ea.first_impact - eb.first_impact);
     bounces = std::abs(setup.floor_bounces(x, a, ea) - setup.floor_bounces(x, b, eb));
     // compared where both have a first impact on a flat surface
     if (ea.first_impact >= 0 && eb.first_impact >= 0) {
@@ -80,16 +76,21 @@ void compare(const Rollout& a, const Rollout& b, const CrosscheckSetup& setup,
 
 std::string format_value(double v, double tol) {
   char buf[40];
-  if (tol < 0.0) std::snprintf(buf, sizeof buf, "%.2e", v);
-  else std::snprintf(buf, sizeof buf, "%.2e/%g", v, tol);
+  if (tol < 0.0)
+    std::snprintf(buf, sizeof buf, "%.2e", v);
+  else
+    std::snprintf(buf, sizeof buf, "%.2e/%g", v, tol);
   return buf;
 }
 
 std::string format_count(int v, int tol) {
   char buf[40];
-  if (v >= (1 << 20)) std::snprintf(buf, sizeof buf, "none");
-  else if (tol < 0) std::snprintf(buf, sizeof buf, "%d", v);
-  else std::snprintf(buf, sizeof buf, "%d/%d", v, tol);
+  if (v >= (1 << 20))
+    std::snprintf(buf, sizeof buf, "none");
+  else if (tol < 0)
+    std::snprintf(buf, sizeof buf, "%d", v);
+  else
+    std::snprintf(buf, sizeof buf, "%d/%d", v, tol);
   return buf;
 }
 
@@ -146,22 +147,20 @@ void print_crosscheck(const std::vector<CrosscheckRow>& rows, std::ostream& out)
       << "  impact: first-impact step difference; rebound: first impact's normal restitution "
          "difference (flat faces); bounces: ground/floor bounce-count difference\n";
   const char* fmt = "%-11s %-13s %2s  %-16s %-16s %-16s %-16s %-6s %-14s %-7s %s\n";
-  std::snprintf(line, sizeof line, fmt, "env", "engines", "n", "deviation", "free flight",
-                "|dloss|", "final pos", "impact", "rebound", "bounces", "result");
+  std::snprintf(line, sizeof line, fmt, "env", "engines", "n", "deviation", "free flight", "|dloss|", "final pos",
+                "impact", "rebound", "bounces", "result");
   out << line;
   for (const auto& r : rows) {
     const std::string dash = "-";
     const std::string result = r.pass ? "PASS" : "FAIL (" + r.failure + ")";
-    std::snprintf(line, sizeof line, fmt, r.env.c_str(), r.engines.c_str(),
-                  std::to_string(r.vectors).c_str(),
+    std::snprintf(line, sizeof line, fmt, r.env.c_str(), r.engines.c_str(), std::to_string(r.vectors).c_str(),
                   format_value(r.deviation, r.tol.deviation).c_str(),
                   r.contact ? format_value(r.free_flight, r.tol.free_flight).c_str() : dash.c_str(),
                   format_value(r.loss, r.tol.loss).c_str(),
                   format_value(r.final_position, r.tol.final_position).c_str(),
                   r.contact ? format_count(r.first_impact, r.tol.first_impact).c_str() : dash.c_str(),
                   r.contact ? format_value(r.rebound, r.tol.rebound).c_str() : dash.c_str(),
-                  r.contact ? format_count(r.bounces, r.tol.bounces).c_str() : dash.c_str(),
-                  result.c_str());
+                  r.contact ? format_count(r.bounces, r.tol.bounces).c_str() : dash.c_str(), result.c_str());
     out << line;
   }
 }

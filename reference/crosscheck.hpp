@@ -39,7 +39,7 @@ struct CrosscheckRow {
   bool contact = false;  // a contact setup (free flight, impact and bounce columns apply)
   Tolerances tol;
   bool pass = true;
-  std::string failure;   // which quantity failed first, with the parameter vector's index
+  std::string failure;  // which quantity failed first, with the parameter vector's index
 };
 
 // the rows of the table for `envs` (empty = all), each pair of the available engines

@@ -27,9 +27,9 @@ struct ContactEvents {
   int bounces = 0;        // episodes whose velocity change (gravity removed) exceeds kBounceDv
                           // (a graze is an episode, not a bounce)
   double clearest_graze = std::numeric_limits<double>::infinity();  // smallest episode change (m/s)
-  std::vector<int> episode_starts;  // first contact step of every episode
-  std::vector<int> episode_ends;    // the state after its last contact step
-  std::vector<bool> episode_bounces;  // whether each episode is a bounce
+  std::vector<int> episode_starts;                                  // first contact step of every episode
+  std::vector<int> episode_ends;                                    // the state after its last contact step
+  std::vector<bool> episode_bounces;                                // whether each episode is a bounce
 };
 constexpr double kContactDv = 1e-6;  // m/s
 constexpr int kEpisodeGap = 4;       // steps

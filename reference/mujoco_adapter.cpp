@@ -49,7 +49,7 @@ Eigen::Vector3d planar(double x, double y) { return to_mujoco(Eigen::Vector3d(x,
 // <option> shared by every setup: semi-implicit Euler at the env's dt, gravity along -z
 std::string option(double dt, double gravity, bool contacts) {
   std::string s = "  <option timestep=\"" + num(dt) + "\" gravity=\"0 0 " + num(-gravity) +
-                  "\" integrator=\"Euler\" cone=\"elliptic\">\n";
+      "\" integrator=\"Euler\" cone=\"elliptic\">\n";
   s += contacts ? "    <flag contact=\"enable\"/>\n" : "    <flag contact=\"disable\"/>\n";
   return s + "  </option>\n";
 }
@@ -57,10 +57,9 @@ std::string option(double dt, double gravity, bool contacts) {
 // <pair> of the ball with one static geom, our contact law mapped to MuJoCo's soft constraint
 std::string contact_pair(const std::string& geom, const MujocoContactParams& p) {
   const std::string d = num(p.impedance);
-  return "    <pair geom1=\"ball\" geom2=\"" + geom + "\" condim=\"3\" friction=\"" +
-         num(p.friction) + " " + num(p.friction) + " 0 0 0\" solref=\"" + num(-p.stiffness) +
-         " " + num(-p.damping) + "\" solimp=\"" + d + " " + d +
-         " 0.001 0.5 2\" margin=\"0\" gap=\"0\"/>\n";
+  return "    <pair geom1=\"ball\" geom2=\"" + geom + "\" condim=\"3\" friction=\"" + num(p.friction) + " " +
+      num(p.friction) + " 0 0 0\" solref=\"" + num(-p.stiffness) + " " + num(-p.damping) + "\" solimp=\"" + d + " " +
+      d + " 0.001 0.5 2\" margin=\"0\" gap=\"0\"/>\n";
 }
 
 // slide-only ball body: joints along the given MuJoCo axes, no rotational freedom
@@ -71,18 +70,17 @@ std::string ball_body(double mass, double radius, const std::vector<std::string>
   const char* names[] = {"ball_x", "ball_y", "ball_z"};
   for (std::size_t i = 0; i < axes.size(); ++i)
     s += "      <joint name=\"" + std::string(names[i]) + "\" type=\"slide\" axis=\"" + axes[i] +
-         "\" limited=\"false\" damping=\"0\" armature=\"0\" frictionloss=\"0\"/>\n";
-  s += "      <inertial pos=\"0 0 0\" mass=\"" + num(mass) + "\" diaginertia=\"" + num(inertia) +
-       " " + num(inertia) + " " + num(inertia) + "\"/>\n";
-  s += "      <geom name=\"ball\" type=\"sphere\" size=\"" + num(radius) +
-       "\" contype=\"0\" conaffinity=\"0\"/>\n";
+        "\" limited=\"false\" damping=\"0\" armature=\"0\" frictionloss=\"0\"/>\n";
+  s += "      <inertial pos=\"0 0 0\" mass=\"" + num(mass) + "\" diaginertia=\"" + num(inertia) + " " + num(inertia) +
+      " " + num(inertia) + "\"/>\n";
+  s += "      <geom name=\"ball\" type=\"sphere\" size=\"" + num(radius) + "\" contype=\"0\" conaffinity=\"0\"/>\n";
   return s + "    </body>\n";
 }
 
 // static plane through `point` whose free side is along `normal` (both MuJoCo frame)
 std::string plane(const std::string& name, const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
-  return "    <geom name=\"" + name + "\" type=\"plane\" pos=\"" + vec(point) + "\" zaxis=\"" +
-         vec(normal) + "\" size=\"0 0 1\" contype=\"0\" conaffinity=\"0\"/>\n";
+  return "    <geom name=\"" + name + "\" type=\"plane\" pos=\"" + vec(point) + "\" zaxis=\"" + vec(normal) +
+      "\" size=\"0 0 1\" contype=\"0\" conaffinity=\"0\"/>\n";
 }
 
 }  // namespace
@@ -100,8 +98,8 @@ std::string cartpole_mjcf(const CartpoleConfig& cfg) {
   s << "    <body name=\"cart\" pos=\"0 0 0\">\n"
     << "      <joint name=\"rail\" type=\"slide\" axis=\"1 0 0\" limited=\"false\" damping=\"0\""
        " armature=\"0\" frictionloss=\"0\"/>\n"
-    << "      <inertial pos=\"0 0 0\" mass=\"" << num(cfg.cart_mass) << "\" diaginertia=\""
-    << num(cart_inertia) << " " << num(cart_inertia) << " " << num(cart_inertia) << "\"/>\n"
+    << "      <inertial pos=\"0 0 0\" mass=\"" << num(cfg.cart_mass) << "\" diaginertia=\"" << num(cart_inertia) << " "
+    << num(cart_inertia) << " " << num(cart_inertia) << "\"/>\n"
     << "      <geom type=\"box\" size=\"0.2 0.1 0.05\" contype=\"0\" conaffinity=\"0\"/>\n";
   // our hanging direction (0, -L) and rotation axis (+z) in MuJoCo's frame
   const Eigen::Vector3d down = to_mujoco(Eigen::Vector3d(0.0, -L, 0.0));
@@ -113,12 +111,12 @@ std::string cartpole_mjcf(const CartpoleConfig& cfg) {
     const double across = m * L * L / 12.0, along = 0.5 * m * rod_radius * rod_radius;
     const Eigen::Vector3d pivot = i == 0 ? Eigen::Vector3d::Zero() : down;
     s << indent << "<body name=\"link" << i + 1 << "\" pos=\"" << vec(pivot) << "\">\n"
-      << indent << "  <joint name=\"hinge" << i + 1 << "\" type=\"hinge\" pos=\"0 0 0\" axis=\""
-      << vec(axis) << "\" limited=\"false\" damping=\"0\" armature=\"0\" frictionloss=\"0\"/>\n"
-      << indent << "  <inertial pos=\"" << vec(0.5 * down) << "\" mass=\"" << num(m)
-      << "\" diaginertia=\"" << num(across) << " " << num(across) << " " << num(along) << "\"/>\n"
-      << indent << "  <geom type=\"capsule\" fromto=\"0 0 0 " << vec(down) << "\" size=\""
-      << num(rod_radius) << "\" contype=\"0\" conaffinity=\"0\"/>\n";
+      << indent << "  <joint name=\"hinge" << i + 1 << "\" type=\"hinge\" pos=\"0 0 0\" axis=\"" << vec(axis)
+      << "\" limited=\"false\" damping=\"0\" armature=\"0\" frictionloss=\"0\"/>\n"
+      << indent << "  <inertial pos=\"" << vec(0.5 * down) << "\" mass=\"" << num(m) << "\" diaginertia=\""
+      << num(across) << " " << num(across) << " " << num(along) << "\"/>\n"
+      << indent << "  <geom type=\"capsule\" fromto=\"0 0 0 " << vec(down) << "\" size=\"" << num(rod_radius)
+      << "\" contype=\"0\" conaffinity=\"0\"/>\n";
     if (i + 1 == cfg.links) s << indent << "  <site name=\"tip\" pos=\"" << vec(down) << "\"/>\n";
     indent += "  ";
   }
@@ -136,7 +134,8 @@ std::string bounce_mjcf(const BounceConfig& cfg) {
   std::ostringstream s;
   s << "<mujoco model=\"bounce\">\n"
     << "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>\n"
-    << option(cfg.dt, cfg.gravity, true) << "  <worldbody>\n"
+    << option(cfg.dt, cfg.gravity, true)
+    << "  <worldbody>\n"
     // ground y = 0 (normal +y) and wall x = wall_x (normal -x), ours
     << plane("ground", to_mujoco({0.0, 0.0, 0.0}), to_mujoco({0.0, 1.0, 0.0}))
     << plane("wall", to_mujoco({cfg.wall_x, 0.0, 0.0}), to_mujoco({-1.0, 0.0, 0.0}))
@@ -170,15 +169,15 @@ std::string pinball_mjcf(const PinballConfig& cfg, std::span<const double> angle
       const auto centre = cfg.paddle_centre(r, c);
       const double dx = half * std::cos(a), dy = half * std::sin(a);
       const std::string name = "paddle_" + std::to_string(r) + "_" + std::to_string(c);
-      s << "    <geom name=\"" << name << "\" type=\"capsule\" fromto=\""
-        << vec(planar(centre[0] - dx, centre[1] - dy)) << " "
-        << vec(planar(centre[0] + dx, centre[1] + dy)) << "\" size=\"" << num(radius)
+      s << "    <geom name=\"" << name << "\" type=\"capsule\" fromto=\"" << vec(planar(centre[0] - dx, centre[1] - dy))
+        << " " << vec(planar(centre[0] + dx, centre[1] + dy)) << "\" size=\"" << num(radius)
         << "\" contype=\"0\" conaffinity=\"0\"/>\n";
       pairs << contact_pair(name, p);
     }
   // the ball moves in the board's plane: MuJoCo x (ours x) and z (ours y)
   s << ball_body(cfg.ball_mass, cfg.ball_radius, {"1 0 0", "0 0 1"}) << "  </worldbody>\n"
-    << "  <contact>\n" << pairs.str() << "  </contact>\n</mujoco>\n";
+    << "  <contact>\n"
+    << pairs.str() << "  </contact>\n</mujoco>\n";
   return s.str();
 }
 
@@ -225,13 +224,12 @@ void MujocoSim::reset() { mj_resetData(impl_->m, impl_->d); }
 bool MujocoSim::healthy() const {
   const mjData* d = impl_->d;
   return d->warning[mjWARN_BADQPOS].number == 0 && d->warning[mjWARN_BADQVEL].number == 0 &&
-         d->warning[mjWARN_BADQACC].number == 0;
+      d->warning[mjWARN_BADQACC].number == 0;
 }
 
 // ---------------------------------- cartpole ------------------------------------------------
 
-MujocoCartpole::MujocoCartpole(const CartpoleConfig& cfg)
-    : cfg_(cfg), sim_(cartpole_mjcf(cfg)) {
+MujocoCartpole::MujocoCartpole(const CartpoleConfig& cfg) : cfg_(cfg), sim_(cartpole_mjcf(cfg)) {
   const int nv = sim_.model()->nv;
   mass_matrix_.assign(static_cast<std::size_t>(nv) * nv, 0.0);
   tip_site_ = mj_name2id(sim_.model(), mjOBJ_SITE, "tip");
@@ -257,16 +255,16 @@ void MujocoCartpole::step(double u, const double* tau) {
   mj_step1(m, d);
   mj_fullM(m, mass_matrix_.data(), d->qM);
   using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  const Eigen::Map<const RowMat> M(mass_matrix_.data(), nv, nv);  // (nv x nv)
+  const Eigen::Map<const RowMat> M(mass_matrix_.data(), nv, nv);   // (nv x nv)
   const Eigen::Map<const Eigen::VectorXd> bias(d->qfrc_bias, nv);  // (nv)
   // velocity control: the cart's acceleration is fixed, a = (u - v) / dt; the links then obey
   // M_ll qacc_l = tau - bias_l - M_l0 a, and the cart force is the first row of M qacc + bias
   const double a = (u - d->qvel[0]) / m->opt.timestep;
   const Eigen::Map<const Eigen::VectorXd> torque(tau, n);
-  const LinkVec M_l0 = M.block(1, 0, n, 1);                // (n), = M_0l by symmetry
-  const LinkMat M_ll = M.block(1, 1, n, n);                // (n x n)
-  const LinkVec rhs = torque - bias.tail(n) - M_l0 * a;   // (n)
-  const LinkVec qacc_links = M_ll.llt().solve(rhs);        // (n)
+  const LinkVec M_l0 = M.block(1, 0, n, 1);              // (n), = M_0l by symmetry
+  const LinkMat M_ll = M.block(1, 1, n, n);              // (n x n)
+  const LinkVec rhs = torque - bias.tail(n) - M_l0 * a;  // (n)
+  const LinkVec qacc_links = M_ll.llt().solve(rhs);      // (n)
   const double cart_force = M(0, 0) * a + M_l0.dot(qacc_links) + bias(0);
   d->qfrc_applied[0] = cart_force;
   for (int j = 0; j < n; ++j) d->qfrc_applied[1 + j] = tau[j];
@@ -299,13 +297,12 @@ Eigen::Vector2d MujocoCartpole::tip() const {
   return ours.head<2>();
 }
 
-std::vector<Eigen::Vector2d> MujocoCartpole::tip_trajectory(const CartpoleEnv& env,
-                                                            std::span<const double> x) {
+std::vector<Eigen::Vector2d> MujocoCartpole::tip_trajectory(const CartpoleEnv& env, std::span<const double> x) {
   if (env.cartpole_config().to_json() != cfg_.to_json())
     throw std::invalid_argument("MujocoCartpole: env '" + env.name() + "' has another config");
   if (static_cast<int>(x.size()) != env.dim())
-    throw std::invalid_argument("MujocoCartpole: expected " + std::to_string(env.dim()) +
-                                " parameters, got " + std::to_string(x.size()));
+    throw std::invalid_argument("MujocoCartpole: expected " + std::to_string(env.dim()) + " parameters, got " +
+                                std::to_string(x.size()));
   reset();
   std::vector<Eigen::Vector2d> tips{tip()};
   tips.reserve(cfg_.steps + 1);
@@ -411,14 +408,11 @@ void MujocoCartpole::reset() { missing(); }
 void MujocoCartpole::step(double, const double*) { missing(); }
 CartpoleState MujocoCartpole::state() const { missing(); }
 Eigen::Vector2d MujocoCartpole::tip() const { missing(); }
-std::vector<Eigen::Vector2d> MujocoCartpole::tip_trajectory(const CartpoleEnv&, std::span<const double>) {
-  missing();
-}
+std::vector<Eigen::Vector2d> MujocoCartpole::tip_trajectory(const CartpoleEnv&, std::span<const double>) { missing(); }
 MujocoBounce::MujocoBounce(const BounceConfig& cfg) : cfg_(cfg), sim_(std::string()) {}
 std::vector<BallState> MujocoBounce::trajectory(const Eigen::Vector3d&) { missing(); }
 BallState MujocoBounce::final_state(const Eigen::Vector3d&) { missing(); }
-MujocoPinball::MujocoPinball(const PinballConfig& cfg, std::span<const double>)
-    : cfg_(cfg), sim_(std::string()) {}
+MujocoPinball::MujocoPinball(const PinballConfig& cfg, std::span<const double>) : cfg_(cfg), sim_(std::string()) {}
 std::vector<Ball2State> MujocoPinball::trajectory() { missing(); }
 
 #endif

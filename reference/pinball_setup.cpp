@@ -68,8 +68,8 @@ class PinballSetup : public RigidSetup<PinballEnv> {
       const auto g = capsule_geometry(p.head<2>(), m.centres[k], axis, m.half_segment, m.paddle_radius);
       // a flat face when the closest point of the segment is inside it, else a rounded end
       const bool face = std::abs((p.head<2>() - m.centres[k]).dot(axis)) < m.half_segment;
-      s.consider("paddle " + std::to_string(k / cols) + "," + std::to_string(k % cols), g.distance,
-                 lift(g.normal), face);
+      s.consider("paddle " + std::to_string(k / cols) + "," + std::to_string(k % cols), g.distance, lift(g.normal),
+                 face);
     }
     return s.nearest();
   }

@@ -4,21 +4,18 @@
 
 namespace dsb::reference {
 
-void NearestSurface::consider(const std::string& name, double distance,
-                              const Eigen::Vector3d& normal, bool flat) {
+void NearestSurface::consider(const std::string& name, double distance, const Eigen::Vector3d& normal, bool flat) {
   if (distance < best_) {
     best_ = distance;
     nearest_ = {name, normal, flat};
   }
 }
 
-CrosscheckSetup::Surface CrosscheckSetup::nearest_surface(std::span<const double>,
-                                                          const Eigen::Vector3d&) const {
+CrosscheckSetup::Surface CrosscheckSetup::nearest_surface(std::span<const double>, const Eigen::Vector3d&) const {
   return {};
 }
 
-int CrosscheckSetup::floor_bounces(std::span<const double> x, const Rollout& r,
-                                   const ContactEvents& e) const {
+int CrosscheckSetup::floor_bounces(std::span<const double> x, const Rollout& r, const ContactEvents& e) const {
   int n = 0;
   for (std::size_t i = 0; i < e.episode_starts.size(); ++i) {
     if (!e.episode_bounces[i]) continue;
@@ -28,16 +25,14 @@ int CrosscheckSetup::floor_bounces(std::span<const double> x, const Rollout& r,
   return n;
 }
 
-double CrosscheckSetup::rebound(std::span<const double> x, const Rollout& r,
-                                const ContactEvents& e) const {
+double CrosscheckSetup::rebound(std::span<const double> x, const Rollout& r, const ContactEvents& e) const {
   if (e.first_impact < 0) return std::numeric_limits<double>::quiet_NaN();
   const int a = e.episode_starts.front(), b = e.episode_ends.front();
   // the ball must stay on one flat face for the whole episode (a fast glancing hit can slide
   // off the face onto the rounded end while a soft contact lasts)
   const Surface surface = nearest_surface(x, r.position[a]);
   const Surface leaving = nearest_surface(x, r.position[b]);
-  if (!surface.flat || !leaving.flat || leaving.name != surface.name)
-    return std::numeric_limits<double>::quiet_NaN();
+  if (!surface.flat || !leaving.flat || leaving.name != surface.name) return std::numeric_limits<double>::quiet_NaN();
   const Eigen::Vector3d& n = surface.normal;
   const Eigen::Vector3d v_in = r.velocity[a];
   const Eigen::Vector3d& v_out = r.velocity[b];

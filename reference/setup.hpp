@@ -22,13 +22,13 @@ namespace dsb::reference {
 
 // What must hold between two engines on one env; a negative entry is not checked.
 struct Tolerances {
-  double deviation = -1.0;    // max |position difference| over the whole trajectory (m)
-  double free_flight = -1.0;  // max |position difference| before the first impact (m)
-  double loss = -1.0;         // |final loss difference|
+  double deviation = -1.0;       // max |position difference| over the whole trajectory (m)
+  double free_flight = -1.0;     // max |position difference| before the first impact (m)
+  double loss = -1.0;            // |final loss difference|
   double final_position = -1.0;  // |final position difference| (m)
-  int first_impact = -1;      // |first-impact step difference|
-  double rebound = -1.0;      // |first rebound difference| (ratio)
-  int bounces = -1;           // |difference of the number of bounces on the ground / floor|
+  int first_impact = -1;         // |first-impact step difference|
+  double rebound = -1.0;         // |first rebound difference| (ratio)
+  int bounces = -1;              // |difference of the number of bounces on the ground / floor|
 };
 
 class CrosscheckSetup {
@@ -38,7 +38,7 @@ class CrosscheckSetup {
   // our env, built from the config its registry family uses (a test checks they are equal)
   virtual const Env& our_env() const = 0;
   int dim() const { return our_env().dim(); }
-  virtual bool contact() const = 0;           // a ball setup (events, rebound, bounces apply)
+  virtual bool contact() const = 0;             // a ball setup (events, rebound, bounces apply)
   virtual Eigen::Vector3d gravity() const = 0;  // ours (m/s^2)
   virtual double dt() const = 0;
   // the seeded parameter vectors, drawn from `rng` (crosscheck_vectors seeds it)
@@ -99,8 +99,7 @@ std::vector<std::vector<double>> uniform_vectors(Rng& rng, int n, int dim, doubl
 // picks the nearest of candidate surfaces, considered in order (the first of equal distances)
 class NearestSurface {
  public:
-  void consider(const std::string& name, double distance, const Eigen::Vector3d& normal,
-                bool flat = true);
+  void consider(const std::string& name, double distance, const Eigen::Vector3d& normal, bool flat = true);
   const CrosscheckSetup::Surface& nearest() const { return nearest_; }
 
  private:

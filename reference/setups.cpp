@@ -10,11 +10,7 @@ namespace dsb::reference {
 
 const std::vector<SetupEntry>& setup_entries() {
   static const std::vector<SetupEntry> entries = {
-      cartpole_setup(1),
-      cartpole_setup(3),
-      bounce_setup(),
-      pinball_setup(1, 2),
-      pinball_setup(4, 4),
+      cartpole_setup(1), cartpole_setup(3), bounce_setup(), pinball_setup(1, 2), pinball_setup(4, 4),
   };
   return entries;
 }

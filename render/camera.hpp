@@ -20,7 +20,7 @@ struct Viewport {
   int width = 0, height = 0;  // panel size (pixels)
   double u0 = 0.0, v0 = 0.0;  // world point at (left, bottom)
   double left = 0.0, bottom = 0.0;
-  double scale = 1.0;         // pixels per metre
+  double scale = 1.0;  // pixels per metre
   double px(const Projected& p) const { return left + (p.u - u0) * scale; }
   double py(const Projected& p) const { return bottom - (p.v - v0) * scale; }
 };

@@ -22,8 +22,9 @@ using Image = std::unique_ptr<gdImage, ImageDeleter>;
 // a palette image with the fixed palette (background first, so it fills the image)
 Image blank(int width, int height, Palette& pal) {
   Image im(gdImageCreate(width, height));
-  if (!im) throw std::runtime_error("render: libgd could not create a " + std::to_string(width) + " x " +
-                                    std::to_string(height) + " image");
+  if (!im)
+    throw std::runtime_error("render: libgd could not create a " + std::to_string(width) + " x " +
+                             std::to_string(height) + " image");
   pal = allocate_palette(im.get());
   return im;
 }
@@ -48,9 +49,12 @@ bool format_of_path(const std::string& path, ImageFormat& format) {
     const std::string e(ext);
     return path.size() > e.size() && path.compare(path.size() - e.size(), e.size(), e) == 0;
   };
-  if (ends_with(".png")) format = ImageFormat::png;
-  else if (ends_with(".gif")) format = ImageFormat::gif;
-  else return false;
+  if (ends_with(".png"))
+    format = ImageFormat::png;
+  else if (ends_with(".gif"))
+    format = ImageFormat::gif;
+  else
+    return false;
   return true;
 }
 

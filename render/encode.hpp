@@ -10,10 +10,10 @@ namespace dsb::render {
 enum class ImageFormat { png, gif };
 
 struct RenderOptions {
-  int width = 320;                     // pixels per frame panel, 64 to 2000
+  int width = 320;  // pixels per frame panel, 64 to 2000
   ImageFormat format = ImageFormat::png;
-  int gif_delay_cs = 60;               // GIF: hundredths of a second per frame, 1 to 1000
-  void validate() const;               // throws ConfigError naming the field
+  int gif_delay_cs = 60;  // GIF: hundredths of a second per frame, 1 to 1000
+  void validate() const;  // throws ConfigError naming the field
 };
 
 // png or gif from a file name's extension (case-sensitive .png, .gif); false for anything else

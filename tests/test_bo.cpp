@@ -175,8 +175,8 @@ TEST(BoCost, ThePlansFitScheduleIsTheOneARunFollowsAndItsWorkIsCounted) {
   EXPECT_DOUBLE_EQ(bo_acquisition_seconds(10, 13), kBoSecondsPerLcbTerm * 812 * (11.0 * 21.0 + 12.0 * 22.0));
   EXPECT_EQ(bo_acquisition_seconds(10, 11), 0.0);
   // and fits at n = 11, 12 and 13 (every point up to refit_every_until)
-  const double fits = kBoEvaluationsPerFit * (kBoSecondsPerN3 * (1331.0 + 1728.0 + 2197.0) +
-                                              kBoSecondsPerN2D * 10.0 * (121.0 + 144.0 + 169.0));
+  const double fits = kBoEvaluationsPerFit *
+      (kBoSecondsPerN3 * (1331.0 + 1728.0 + 2197.0) + kBoSecondsPerN2D * 10.0 * (121.0 + 144.0 + 169.0));
   EXPECT_NEAR(bo_own_seconds(10, 13), fits + bo_acquisition_seconds(10, 13), 1e-12 * fits);
 }
 

@@ -25,7 +25,7 @@ std::vector<int> contact_pattern(const BounceEnv& env, std::span<const double> x
   std::vector<int> flags(traj.size() - 1);
   for (std::size_t t = 0; t + 1 < traj.size(); ++t)
     flags[t] = (cfg.radius - traj[t].position.y() > 0.0 ? 1 : 0) |
-               (cfg.radius - (cfg.wall_x - traj[t].position.x()) > 0.0 ? 2 : 0);
+        (cfg.radius - (cfg.wall_x - traj[t].position.x()) > 0.0 ? 2 : 0);
   return flags;
 }
 
@@ -127,18 +127,18 @@ TEST(ContactLaw, PlaneJacobiansMatchCentralDifferences) {
 TEST(ContactLaw, NormalForceAndSmoothCoulombValues) {
   // closed form: depth 0.01, approach at 2 m/s, sliding at 3 m/s along x on the ground
   ContactConfig cfg;
-  const ContactForce<3> c = contact_force<3>(
-      cfg, 0.1, plane_geometry<3>(Eigen::Vector3d(0.0, 0.09, 0.0), Eigen::Vector3d::UnitY(), 0.0),
-      Eigen::Vector3d(3.0, -2.0, 0.0));
+  const ContactForce<3> c =
+      contact_force<3>(cfg, 0.1, plane_geometry<3>(Eigen::Vector3d(0.0, 0.09, 0.0), Eigen::Vector3d::UnitY(), 0.0),
+                       Eigen::Vector3d(3.0, -2.0, 0.0));
   const double fn = 1e4 * 0.01 + 10.0 * 2.0;
   EXPECT_NEAR(c.normal_force, fn, 1e-9);
   EXPECT_NEAR(c.f.y(), fn, 1e-9);
   EXPECT_NEAR(c.f.x(), -0.25 * fn * 3.0 / std::sqrt(9.0 + 0.25), 1e-9);
   EXPECT_EQ(c.f.z(), 0.0);
   // separating: no damping, spring only
-  const ContactForce<3> s = contact_force<3>(
-      cfg, 0.1, plane_geometry<3>(Eigen::Vector3d(0.0, 0.09, 0.0), Eigen::Vector3d::UnitY(), 0.0),
-      Eigen::Vector3d(0.0, 2.0, 0.0));
+  const ContactForce<3> s =
+      contact_force<3>(cfg, 0.1, plane_geometry<3>(Eigen::Vector3d(0.0, 0.09, 0.0), Eigen::Vector3d::UnitY(), 0.0),
+                       Eigen::Vector3d(0.0, 2.0, 0.0));
   EXPECT_NEAR(s.f.y(), 100.0, 1e-9);
 }
 
@@ -235,10 +235,11 @@ TEST(BounceGradient, AcrossAContactEventTheGradientIsFiniteAndOneSidedDifference
     const double d_left = (loss - env->loss(left)) / h;
     const double d_right = (env->loss(right) - loss) / h;
     const double jump = env->loss(ev.b) - loss;
-    std::printf("%s event at x[1] = %.15f: loss change over 1e-12 %.3e, one-sided differences "
-                "%.6e (left) %.6e (right), analytic %.6e\n", onset ? "onset" : "separation",
-                a[1], jump, d_left, d_right, grad[1]);
-    EXPECT_NEAR(grad[1], d_left, 1e-3 * std::abs(d_left) + 1e-3);  // the gradient of a's piece
+    std::printf(
+        "%s event at x[1] = %.15f: loss change over 1e-12 %.3e, one-sided differences "
+        "%.6e (left) %.6e (right), analytic %.6e\n",
+        onset ? "onset" : "separation", a[1], jump, d_left, d_right, grad[1]);
+    EXPECT_NEAR(grad[1], d_left, 1e-3 * std::abs(d_left) + 1e-3);           // the gradient of a's piece
     EXPECT_GT(std::abs(d_right - d_left), 0.1 * (std::abs(d_left) + 1.0));  // they disagree
     if (onset)
       EXPECT_GT(std::abs(jump), 1e-6);  // a jump of the loss itself
@@ -297,8 +298,7 @@ TEST(BounceDynamics, RestingBallSettlesAtThePenaltyEquilibriumDepth) {
   double deepest = 0.0;
   for (const auto& s : traj) deepest = std::max(deepest, cfg.radius - s.position.y());
   const double final_depth = cfg.radius - traj.back().position.y();
-  std::printf("resting ball: final depth %.9e m (m g / ke = %.9e), deepest %.3e m\n", final_depth,
-              depth, deepest);
+  std::printf("resting ball: final depth %.9e m (m g / ke = %.9e), deepest %.3e m\n", final_depth, depth, deepest);
   EXPECT_NEAR(final_depth, depth, 1e-6 * depth);
   EXPECT_LT(traj.back().velocity.norm(), 1e-6);
   EXPECT_GT(deepest, 1.5 * depth);  // it overshot and the damping brought it back: not vacuous

@@ -108,8 +108,8 @@ TEST(ExecuteRun, OptimizerErrorBecomesAFailedRun) {
 
 // the records of a batch equal those of one value() call per point, whatever the team size, and
 // a batch that overruns the budget records the points that fit, then throws BudgetExhausted
-std::vector<EvalRecord> batch_records(const Env& env, std::span<const double> xs, std::size_t n,
-                                      std::int64_t budget, int threads, bool batched, bool* exhausted) {
+std::vector<EvalRecord> batch_records(const Env& env, std::span<const double> xs, std::size_t n, std::int64_t budget,
+                                      int threads, bool batched, bool* exhausted) {
   ThreadTeam team(threads);
   BudgetedObjective f(env, budget, nullptr, &team);
   std::vector<double> out(n);
@@ -305,7 +305,8 @@ TEST(BudgetRl, TheTestReachEnvsLossIsItsRlEpisode) {
     }
     EXPECT_EQ(r.loss, env.loss(x));
   }
-  EXPECT_LT(env.loss(std::vector<double>(20, 0.5)), 1e-15);  // a = 0.5 throughout reaches the target (round-off: 2.2e-16)
+  EXPECT_LT(env.loss(std::vector<double>(20, 0.5)),
+            1e-15);  // a = 0.5 throughout reaches the target (round-off: 2.2e-16)
 }
 
 // an RL env whose simulation blows up at its third step (NaN state) and never says done early

@@ -95,8 +95,7 @@ TEST(CartpoleDynamics, SingleLinkSwingsWithThePendulumPeriod) {
     const double before = s.phi(0);
     cartpole_step(model, s, 0.0, tau);
     t += cfg.dt;
-    if (before > 0.0 && s.phi(0) <= 0.0)
-      crossings.push_back(t - cfg.dt + cfg.dt * before / (before - s.phi(0)));
+    if (before > 0.0 && s.phi(0) <= 0.0) crossings.push_back(t - cfg.dt + cfg.dt * before / (before - s.phi(0)));
   }
   ASSERT_EQ(crossings.size(), 6u);
   const double measured = (crossings.back() - crossings.front()) / 5.0;

@@ -22,7 +22,8 @@ const ClaimsEnv* find(const std::vector<ClaimsEnv>& envs, const std::string& nam
 }
 
 TEST(ClaimsGrid, TheCompiledClaimsAreTheRepositorysFile) {
-  EXPECT_EQ(std::string(paper_claims_csv()), testing::read_file(std::string(DSB_SOURCE_DIR) + "/reports/paper_claims.csv"));
+  EXPECT_EQ(std::string(paper_claims_csv()),
+            testing::read_file(std::string(DSB_SOURCE_DIR) + "/reports/paper_claims.csv"));
 }
 
 TEST(ClaimsGrid, EachEnvGetsTheOptimizersItsClaimsCompare) {
@@ -36,7 +37,8 @@ TEST(ClaimsGrid, EachEnvGetsTheOptimizersItsClaimsCompare) {
   const ClaimsEnv* c3 = find(envs, "cartpole3");
   ASSERT_NE(c3, nullptr);
   EXPECT_FALSE(c3->every_optimizer);
-  EXPECT_EQ(c3->optimizers, (std::vector<std::string>{"gd", "rand-descents", "boleap", "nlopt-lbfgs", "cmaes", "random"}));
+  EXPECT_EQ(c3->optimizers,
+            (std::vector<std::string>{"gd", "rand-descents", "boleap", "nlopt-lbfgs", "cmaes", "random"}));
   const ClaimsEnv* pinch = find(envs, "plb-pinch");
   ASSERT_NE(pinch, nullptr);
   EXPECT_EQ(pinch->optimizers, (std::vector<std::string>{"boleap", "gd", "rand-descents", "nlopt-lbfgs", "cmaes"}));
@@ -52,9 +54,9 @@ TEST(ClaimsGrid, ParsesQuotesAndRefusesAMalformedFile) {
   ASSERT_EQ(envs.size(), 2u);
   EXPECT_EQ(envs[1].env, "e2");
   EXPECT_EQ(envs[1].optimizers, (std::vector<std::string>{"o1", "o2", "o3"}));
-  EXPECT_THROW(claims_envs("id,env,kind,a\nx,e,a_best,o\n"), UsageError);          // no column b
-  EXPECT_THROW(claims_envs("id,env,kind,a,b\nx,e,a_best,\"o,\n"), UsageError);      // unclosed quote
-  EXPECT_THROW(claims_envs("id,env,kind,a,b\nx,e,a_best,o\n"), UsageError);         // a short row
+  EXPECT_THROW(claims_envs("id,env,kind,a\nx,e,a_best,o\n"), UsageError);       // no column b
+  EXPECT_THROW(claims_envs("id,env,kind,a,b\nx,e,a_best,\"o,\n"), UsageError);  // unclosed quote
+  EXPECT_THROW(claims_envs("id,env,kind,a,b\nx,e,a_best,o\n"), UsageError);     // a short row
 }
 
 class ClaimsCli : public testing::TempDirTest {
@@ -103,7 +105,8 @@ TEST_F(ClaimsCli, BadCombinationsExitTwoNamingTheValue) {
   EXPECT_NE(knob.err.find("--set bo.init_points: optimizer bo runs on none of the claims grid's envs that --env keeps"),
             std::string::npos)
       << knob.err;
-  const auto left_out = harness("plan --claims --env cartpole3 --set plb-pinch.target=t.npy --db " + path("none.sqlite"));
+  const auto left_out =
+      harness("plan --claims --env cartpole3 --set plb-pinch.target=t.npy --db " + path("none.sqlite"));
   EXPECT_EQ(left_out.code, 2);
   EXPECT_NE(left_out.err.find("--set plb-pinch.target: env plb-pinch is in the claims grid, but --env leaves it out"),
             std::string::npos)

@@ -66,8 +66,8 @@ TEST(ClothPhysics, SpringMassOscillatorHasThePeriodTwoPiSqrtMOverK) {
   const double expected = 2.0 * std::numbers::pi * std::sqrt(mass / k);
   const double rel = std::abs(measured - expected) / expected;
   std::printf("[cloth] oscillator: period %.6f s, expected %.6f s, relative error %.2e\n", measured, expected, rel);
-  EXPECT_LT(rel, 0.01);   // the requirement
-  EXPECT_LT(rel, 1e-3);   // what the integrator's (omega dt)^2 / 24 promises, with margin
+  EXPECT_LT(rel, 0.01);             // the requirement
+  EXPECT_LT(rel, 1e-3);             // what the integrator's (omega dt)^2 / 24 promises, with margin
   EXPECT_EQ(s.x[0], Vec3::Zero());  // the anchor never moved
 }
 
@@ -113,11 +113,12 @@ TEST(ClothPhysics, HangingClothConvergesToAStaticSag) {
   // pairs, so -(f_0 + f_8) = M g + sum over free vertices of f_y, = M g at equilibrium
   const double weight = 0.1 * 9.81;
   const double carried = -(force[0].y() + force[8].y());
-  const double sag = 0.5 - s.x[4].y();       // top-middle vertex below the corners
-  const double drop = 0.3 - s.x[76].y();     // bottom-middle vertex below its rest height 0.3 m
-  std::printf("[cloth] hanging: max |v| %.2e m/s, residual %.2e of a vertex weight, anchors carry %.6f N "
-              "(weight %.6f N, left %.6f right %.6f), top sag %.5f m, bottom drop %.5f m\n",
-              vmax, residual, carried, weight, -force[0].y(), -force[8].y(), sag, drop);
+  const double sag = 0.5 - s.x[4].y();    // top-middle vertex below the corners
+  const double drop = 0.3 - s.x[76].y();  // bottom-middle vertex below its rest height 0.3 m
+  std::printf(
+      "[cloth] hanging: max |v| %.2e m/s, residual %.2e of a vertex weight, anchors carry %.6f N "
+      "(weight %.6f N, left %.6f right %.6f), top sag %.5f m, bottom drop %.5f m\n",
+      vmax, residual, carried, weight, -force[0].y(), -force[8].y(), sag, drop);
   EXPECT_LT(vmax, 1e-5);
   EXPECT_LT(residual, 1e-4);
   EXPECT_NEAR(carried, weight, 1e-4 * weight);
@@ -172,10 +173,10 @@ TEST(ClothPhysics, EnergyStaysBoundedWithoutDampingOrContact) {
   const EnergyRun a = free_swing(1e-4, 10.0);
   const EnergyRun b = free_swing(2e-4, 10.0);
   for (const EnergyRun* r : {&a, &b})
-    std::printf("[cloth] energy (omega_max dt %.3f): max |E - E0| %.3e J in [0, 5] s, %.3e J in [5, 10] s, "
-                "largest kinetic %.4e J, relative %.3e (bound omega_max dt / 2 = %.3e)\n",
-                r->omega_dt, r->first_half, r->second_half, r->max_kinetic, r->max_dev() / r->max_kinetic,
-                r->omega_dt / 2.0);
+    std::printf(
+        "[cloth] energy (omega_max dt %.3f): max |E - E0| %.3e J in [0, 5] s, %.3e J in [5, 10] s, "
+        "largest kinetic %.4e J, relative %.3e (bound omega_max dt / 2 = %.3e)\n",
+        r->omega_dt, r->first_half, r->second_half, r->max_kinetic, r->max_dev() / r->max_kinetic, r->omega_dt / 2.0);
   std::printf("[cloth] energy: deviation ratio for 2 dt / dt = %.3f\n", b.max_dev() / a.max_dev());
   for (const EnergyRun* r : {&a, &b}) {
     ASSERT_GT(r->max_kinetic, 0.05 * 0.1 * 9.81);  // it really fell (at least 5 cm of its weight)
@@ -228,12 +229,13 @@ TEST(ClothPhysics, FloorContactNeverLetsAVertexMoveFurtherIn) {
         deepest = std::max(deepest, -s.x[i].y());
       }
     }
-    std::printf("[cloth] floor (tangential_keep %.1f): %d vertex-steps in contact, deepest %.2e m "
-                "(one step's travel <= %.2e m), violations %d\n",
-                keep, contacts, deepest, tol_used, violations);
+    std::printf(
+        "[cloth] floor (tangential_keep %.1f): %d vertex-steps in contact, deepest %.2e m "
+        "(one step's travel <= %.2e m), violations %d\n",
+        keep, contacts, deepest, tol_used, violations);
     EXPECT_GT(contacts, 1000);  // it landed
     EXPECT_EQ(violations, 0);
-    EXPECT_LT(deepest, 2e-4);   // entering at <= ~1.2 m/s for one step of 1e-4 s
+    EXPECT_LT(deepest, 2e-4);  // entering at <= ~1.2 m/s for one step of 1e-4 s
   }
 }
 
@@ -318,14 +320,15 @@ double loss_and_gradient(const Problem& p, ClothTape& tape, ClothGradient& grad)
   fb.reset(p.model.vertices());
   for (int i = 0; i < p.model.vertices(); ++i) fb.x[i] = 2.0 * (tape.x(p.steps)[i] - p.target[i]);
   const double wv = p.w_v * p.model.dt, wx = p.w_x * p.model.dt;
-  cloth_rollout_adjoint(p.model, {k, p.path}, tape, fb,
-                        [&](int, std::span<const Vec3> x, std::span<const Vec3> v, ClothAdjoint& adj) {
-                          for (std::size_t i = 0; i < v.size(); ++i) {
-                            adj.x[i] += 2.0 * wx * (x[i] - p.target[i]);
-                            adj.v[i] += 2.0 * wv * v[i];
-                          }
-                        },
-                        grad);
+  cloth_rollout_adjoint(
+      p.model, {k, p.path}, tape, fb,
+      [&](int, std::span<const Vec3> x, std::span<const Vec3> v, ClothAdjoint& adj) {
+        for (std::size_t i = 0; i < v.size(); ++i) {
+          adj.x[i] += 2.0 * wx * (x[i] - p.target[i]);
+          adj.v[i] += 2.0 * wv * v[i];
+        }
+      },
+      grad);
   // chain rule to log-stiffness: dL/dlog k = k dL/dk
   for (std::size_t s = 0; s < k.size(); ++s) grad.stiffness[s] *= k[s];
   return L;
@@ -354,7 +357,8 @@ Problem make_problem(bool floor, std::uint64_t seed) {
     return r + Vec3(0.3 * t + (a == 0 ? 0.5 : -0.3) * t * t, vy * t + 2.0 * t * t, 0.5 * t);
   });
   p.s0 = rest_state(p.model);
-  for (Vec3& v : p.s0.v) v = Vec3(rng.uniform(-0.2, 0.2), rng.uniform(-0.5, 0.0) - (floor ? 0.3 : 0.0), rng.uniform(-0.2, 0.2));
+  for (Vec3& v : p.s0.v)
+    v = Vec3(rng.uniform(-0.2, 0.2), rng.uniform(-0.5, 0.0) - (floor ? 0.3 : 0.0), rng.uniform(-0.2, 0.2));
   for (int i = 0; i < p.model.vertices(); ++i)
     p.target.push_back(p.model.rest_position[i] + Vec3(0.03, floor ? -0.02 : -0.05, 0.02));
   if (floor) p.model.surfaces = {PlaneSurface::floor()};
@@ -382,10 +386,10 @@ std::vector<std::uint8_t> contact_pattern(const Problem& p, const ClothTape& tap
 }
 
 struct GroupError {
-  double worst = 0.0;      // worst |a - c| / (|c| + 1e-3 max |c|) over the compared coordinates
+  double worst = 0.0;  // worst |a - c| / (|c| + 1e-3 max |c|) over the compared coordinates
   double max_central = 0.0;
   int coords = 0;
-  int across_events = 0;   // coordinates whose window [-h, h] changes the contact pattern
+  int across_events = 0;  // coordinates whose window [-h, h] changes the contact pattern
 };
 
 // Central differences of loss_of over one group of coordinates against the analytic values, on
@@ -425,10 +429,11 @@ GroupError check_group(const Problem& base, int count, double h,
     const double err = std::abs(analytic(i) - central[i]) / (std::abs(central[i]) + 1e-3 * r.max_central);
     if (err > r.worst) r.worst = err, worst_i = i;
   }
-  std::printf("[cloth]   %-14s %4d coords (%d across a contact event), h %.0e, max |dL| %.3e, worst relative "
-              "error %.2e (coord %d: analytic %.9e, central %.9e)\n",
-              name.c_str(), count, r.across_events, h, r.max_central, r.worst, worst_i,
-              worst_i >= 0 ? analytic(worst_i) : 0.0, worst_i >= 0 ? central[worst_i] : 0.0);
+  std::printf(
+      "[cloth]   %-14s %4d coords (%d across a contact event), h %.0e, max |dL| %.3e, worst relative "
+      "error %.2e (coord %d: analytic %.9e, central %.9e)\n",
+      name.c_str(), count, r.across_events, h, r.max_central, r.worst, worst_i, worst_i >= 0 ? analytic(worst_i) : 0.0,
+      worst_i >= 0 ? central[worst_i] : 0.0);
   return r;
 }
 
@@ -442,17 +447,21 @@ void expect_gradient_matches(const Problem& p, double tolerance, double max_acro
   loss_and_gradient(p, tape, g);
   const int n = p.model.vertices(), ns = p.model.spring_count();
   std::vector<GroupError> errs;
-  errs.push_back(check_group(p, 3 * n, 1e-5, [](Problem& q, int i, double d) { q.s0.v[i / 3][i % 3] += d; },
-                             [&](int i) { return g.v0[i / 3][i % 3]; }, "initial v"));
-  errs.push_back(check_group(p, 3 * n, 1e-6, [](Problem& q, int i, double d) { q.s0.x[i / 3][i % 3] += d; },
-                             [&](int i) { return g.x0[i / 3][i % 3]; }, "initial x"));
-  errs.push_back(check_group(p, ns, 1e-5, [](Problem& q, int i, double d) { q.log_k[i] += d; },
-                             [&](int i) { return g.stiffness[i]; }, "log stiffness"));
-  errs.push_back(check_group(p, ns, 1e-5, [](Problem& q, int i, double d) { q.model.springs[i].damping += d; },
-                             [&](int i) { return g.damping[i]; }, "spring damping"));
-  errs.push_back(check_group(p, 3 * static_cast<int>(p.path.size()), 1e-6,
-                             [](Problem& q, int i, double d) { q.path[i / 3][i % 3] += d; },
-                             [&](int i) { return g.anchor_path[i / 3][i % 3]; }, "anchor path"));
+  errs.push_back(check_group(
+      p, 3 * n, 1e-5, [](Problem& q, int i, double d) { q.s0.v[i / 3][i % 3] += d; },
+      [&](int i) { return g.v0[i / 3][i % 3]; }, "initial v"));
+  errs.push_back(check_group(
+      p, 3 * n, 1e-6, [](Problem& q, int i, double d) { q.s0.x[i / 3][i % 3] += d; },
+      [&](int i) { return g.x0[i / 3][i % 3]; }, "initial x"));
+  errs.push_back(check_group(
+      p, ns, 1e-5, [](Problem& q, int i, double d) { q.log_k[i] += d; }, [&](int i) { return g.stiffness[i]; },
+      "log stiffness"));
+  errs.push_back(check_group(
+      p, ns, 1e-5, [](Problem& q, int i, double d) { q.model.springs[i].damping += d; },
+      [&](int i) { return g.damping[i]; }, "spring damping"));
+  errs.push_back(check_group(
+      p, 3 * static_cast<int>(p.path.size()), 1e-6, [](Problem& q, int i, double d) { q.path[i / 3][i % 3] += d; },
+      [&](int i) { return g.anchor_path[i / 3][i % 3]; }, "anchor path"));
   if (p.ball >= 0) {
     errs.push_back(check_group(
         p, 9, 1e-6,
@@ -526,7 +535,8 @@ TEST(ClothGradient, MatchesCentralDifferencesOnASpinningBallWithFriction) {
   p.model.rest_position = p.s0.x;
   for (int i = 0; i < p.model.vertices(); ++i) p.target[i] = p.s0.x[i] + Vec3(0.03, -0.02, 0.02);
   p.model.tangential_keep = 0.7;
-  p.model.surfaces = {std::make_shared<Ball>(std::array<double, 9>{0.1, 0.0, 0.1, 0.05, 0.1, -0.02, 1.0, 3.0, -2.0}, 0.05)};
+  p.model.surfaces = {
+      std::make_shared<Ball>(std::array<double, 9>{0.1, 0.0, 0.1, 0.05, 0.1, -0.02, 1.0, 3.0, -2.0}, 0.05)};
   p.ball = 0;
   p.path = anchor_path_from(p.model, p.steps, [&](int a, double t) -> Vec3 {
     return p.model.rest_position[p.model.anchors[a].vertex] + Vec3(0.0, -0.05 * t, 0.1 * t);

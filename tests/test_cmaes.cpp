@@ -111,7 +111,7 @@ TEST(CmaesConstants, N10ExactValues) {
 
 TEST(CmaesConstants, PositiveWeightsSumToOneNegativeFollowAlphaMin) {
   // table rows plus larger / odd populations (odd lambda: w'_{mu+1} = 0 counts as non-negative)
-  const std::pair<int, int> cases[] = {{1, 4}, {2, 6}, {3, 7}, {5, 8}, {10, 10}, {20, 12}, {50, 15},
+  const std::pair<int, int> cases[] = {{1, 4}, {2, 6},   {3, 7},   {5, 8},    {10, 10},  {20, 12}, {50, 15},
                                        {2, 3}, {10, 21}, {10, 40}, {10, 640}, {400, 21}, {3, 2}};
   for (auto [n, lambda] : cases) {
     SCOPED_TRACE("n = " + std::to_string(n) + ", lambda = " + std::to_string(lambda));
@@ -125,8 +125,8 @@ TEST(CmaesConstants, PositiveWeightsSumToOneNegativeFollowAlphaMin) {
       s2 += wp[i] * wp[i];
     }
     const double mu_eff_minus = s * s / s2;
-    const double alpha_min = std::min({1.0 + k.c1 / k.cmu, 1.0 + 2.0 * mu_eff_minus / (k.mu_eff + 2.0),
-                                       (1.0 - k.c1 - k.cmu) / (n * k.cmu)});
+    const double alpha_min =
+        std::min({1.0 + k.c1 / k.cmu, 1.0 + 2.0 * mu_eff_minus / (k.mu_eff + 2.0), (1.0 - k.c1 - k.cmu) / (n * k.cmu)});
     EXPECT_NEAR(k.alpha_min, alpha_min, 1e-12);
     // cmu capped at 1 - c1 - 1e-8
     EXPECT_LE(k.cmu, 1.0 - k.c1 - 1e-8 + 1e-16);
@@ -352,8 +352,7 @@ TEST(Cmaes, SameSeedBitIdenticalDifferentSeedDifferent) {
     Rng rng(seed);
     try {
       opt.minimize(f, rng);
-    } catch (const dsb::BudgetExhausted&) {
-    }
+    } catch (const dsb::BudgetExhausted&) {}
     return f.losses();
   };
   const auto a = run(42), b = run(42), c = run(43);

@@ -60,8 +60,8 @@ struct Unary {
   double (*libm)(double);
   double lo, hi;
   bool log_scale;
-  double max_ulp;            // SLEEF's bound against the exact value
-  std::uint64_t max_apart;   // against glibc's double function (its own error included)
+  double max_ulp;           // SLEEF's bound against the exact value
+  std::uint64_t max_apart;  // against glibc's double function (its own error included)
 };
 
 // glibc's own double functions are within 1 ulp of exact for exp, log, pow, sin, cos and
@@ -115,13 +115,13 @@ TEST(DetMath, UnaryFunctionsMatchLibm) {
       worst = std::max(worst, err);
       worst_apart = std::max(worst_apart, apart);
       if (err > c.max_ulp + kRefSlack || apart > c.max_apart) {
-        ADD_FAILURE() << c.name << "(" << std::hexfloat << x << ") = " << got << ", error "
-                      << std::defaultfloat << err << " ulp, " << apart << " doubles from libm";
+        ADD_FAILURE() << c.name << "(" << std::hexfloat << x << ") = " << got << ", error " << std::defaultfloat << err
+                      << " ulp, " << apart << " doubles from libm";
         break;
       }
     }
-    std::printf("[ info     ] %-15s worst %.3f ulp, at most %llu doubles from glibc\n", c.name,
-                worst, static_cast<unsigned long long>(worst_apart));
+    std::printf("[ info     ] %-15s worst %.3f ulp, at most %llu doubles from glibc\n", c.name, worst,
+                static_cast<unsigned long long>(worst_apart));
   }
 }
 
@@ -133,8 +133,7 @@ TEST(DetMath, BinaryFunctionsMatchLibm) {
     double (*libm)(double, double);
     double max_ulp;
   };
-  for (const Binary& c : {Binary{"pow", dm::pow, powl, ::pow, 1.0},
-                          Binary{"atan2", dm::atan2, atan2l, ::atan2, 1.0},
+  for (const Binary& c : {Binary{"pow", dm::pow, powl, ::pow, 1.0}, Binary{"atan2", dm::atan2, atan2l, ::atan2, 1.0},
                           Binary{"hypot", dm::hypot, hypotl, ::hypot, 0.5}}) {
     SCOPED_TRACE(c.name);
     dsb::Rng rng(dsb::fnv1a64(c.name));
@@ -158,8 +157,8 @@ TEST(DetMath, BinaryFunctionsMatchLibm) {
       const double err = ulp_error(got, c.ref(x, y));
       worst = std::max(worst, err);
       if (err > c.max_ulp + kRefSlack || ulp_distance(got, c.libm(x, y)) > 1) {
-        ADD_FAILURE() << c.name << "(" << std::hexfloat << x << ", " << y << ") = " << got
-                      << std::defaultfloat << ", error " << err << " ulp";
+        ADD_FAILURE() << c.name << "(" << std::hexfloat << x << ", " << y << ") = " << got << std::defaultfloat
+                      << ", error " << err << " ulp";
         break;
       }
     }
@@ -238,8 +237,8 @@ TEST(DetMath, BatchesGiveTheScalarBits) {
   // the dispatched path (below: each path forced): odd lengths exercise the tails, special values
   // and wide ranges the vector lanes
   dsb::Rng rng(77);
-  std::vector<double> x = {0.0, -0.0, 1.0, -1.0, kInf, -kInf, std::numeric_limits<double>::quiet_NaN(), 1e-310,
-                           709.78, -745.2, 1e300};
+  std::vector<double> x = {0.0,    -0.0,   1.0,    -1.0, kInf, -kInf, std::numeric_limits<double>::quiet_NaN(),
+                           1e-310, 709.78, -745.2, 1e300};
   for (int i = 0; i < 100001; ++i) x.push_back(rng.uniform(-50.0, 50.0) * (i % 3 == 0 ? 1e-6 : 1.0));
   std::vector<double> positive(x.size());
   for (std::size_t i = 0; i < x.size(); ++i) positive[i] = std::abs(x[i]) * (1.0 + i % 7);
@@ -263,10 +262,9 @@ std::vector<double> batch_arguments(std::size_t count) {
   const double nmin = std::numeric_limits<double>::min();
   const double dmax = std::numeric_limits<double>::max();
   const double eps = std::numeric_limits<double>::epsilon();
-  std::vector<double> x = {0.0,     -0.0,      1.0,   -1.0,   kInf,        -kInf,    nan,
-                           -nan,    dmin,      -dmin, nmin,   nmin - dmin, dmax,     -dmax,
-                           1e-310,  1e300,     0.5,   2.0,    1.0 - eps,   1.0 + eps, 709.78,
-                           709.7827, 709.7828, -708.39, -745.1332, -745.2, -746.0};
+  std::vector<double> x = {0.0,       -0.0,      1.0,         -1.0,     kInf,     -kInf,   nan,       -nan,   dmin,
+                           -dmin,     nmin,      nmin - dmin, dmax,     -dmax,    1e-310,  1e300,     0.5,    2.0,
+                           1.0 - eps, 1.0 + eps, 709.78,      709.7827, 709.7828, -708.39, -745.1332, -745.2, -746.0};
   dsb::Rng rng(20240612);
   while (x.size() < count) {
     double v = 0.0;
@@ -279,7 +277,7 @@ std::vector<double> batch_arguments(std::size_t count) {
         v = std::ldexp(rng.uniform(0.5, 1.0), static_cast<int>(rng.below(2100)) - 1074);
         break;
       case 5: v = std::bit_cast<double>(rng.next_u64() >> 12); break;  // a denormal (or zero)
-      default: v = std::bit_cast<double>(rng.next_u64()); break;      // any double, NaNs too
+      default: v = std::bit_cast<double>(rng.next_u64()); break;       // any double, NaNs too
     }
     x.push_back(rng.below(4) == 0 ? -v : v);
   }

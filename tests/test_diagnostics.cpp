@@ -186,8 +186,8 @@ void check_cmaes(const std::string& who, const StoredRun& r, int dim) {
 
 // the number of GP fits the schedule of optimizers/bo/bo.hpp gives for `episodes` points
 int expected_bo_fits(const json& cfg, int dim, std::int64_t episodes) {
-  const int n_init = cfg["initial_points"].get<int>() > 0 ? cfg["initial_points"].get<int>()
-                                                          : std::clamp(dim + 1, 5, 20);
+  const int n_init =
+      cfg["initial_points"].get<int>() > 0 ? cfg["initial_points"].get<int>() : std::clamp(dim + 1, 5, 20);
   const int every_until = cfg["refit_every_until"];
   const double growth = cfg["refit_growth"];
   int fits = 0, last = 0;
@@ -232,7 +232,9 @@ void check_boleap(const std::string& who, const StoredRun& r, int dim) {
       EXPECT_TRUE(ended == "episode_cap" || ended.rfind("cma:", 0) == 0) << who << ": " << ended;
     else
       EXPECT_EQ(ended, "budget") << who;
-    if (l["descents"] > 0) { EXPECT_LE(l["best_loss"].get<double>(), l["end_loss"].get<double>()) << who; }
+    if (l["descents"] > 0) {
+      EXPECT_LE(l["best_loss"].get<double>(), l["end_loss"].get<double>()) << who;
+    }
   }
   // every episode is in the initial design or a leap; every gradient episode is a descent step
   EXPECT_EQ(episodes, r.episodes) << who;
@@ -245,10 +247,10 @@ void check_boleap(const std::string& who, const StoredRun& r, int dim) {
 
 void check_nlopt(const std::string& who, const StoredRun& r) {
   const json& d = r.diagnostics["optimizer"];
-  const std::set<std::string> names = {
-      "NLOPT_FAILURE",         "NLOPT_INVALID_ARGS",  "NLOPT_OUT_OF_MEMORY", "NLOPT_ROUNDOFF_LIMITED",
-      "NLOPT_FORCED_STOP",     "NLOPT_SUCCESS",       "NLOPT_STOPVAL_REACHED", "NLOPT_FTOL_REACHED",
-      "NLOPT_XTOL_REACHED",    "NLOPT_MAXEVAL_REACHED", "NLOPT_MAXTIME_REACHED"};
+  const std::set<std::string> names = {"NLOPT_FAILURE",          "NLOPT_INVALID_ARGS",   "NLOPT_OUT_OF_MEMORY",
+                                       "NLOPT_ROUNDOFF_LIMITED", "NLOPT_FORCED_STOP",    "NLOPT_SUCCESS",
+                                       "NLOPT_STOPVAL_REACHED",  "NLOPT_FTOL_REACHED",   "NLOPT_XTOL_REACHED",
+                                       "NLOPT_MAXEVAL_REACHED",  "NLOPT_MAXTIME_REACHED"};
   ASSERT_GE(d["starts"].get<int>(), 1) << who;
   ASSERT_EQ(d["start_list_truncated"], 0) << who;
   ASSERT_EQ(d["start_list"].size(), d["starts"].get<std::size_t>()) << who;
@@ -275,13 +277,17 @@ void check_descents(const std::string& who, const StoredRun& r, bool single) {
   for (std::size_t i = 0; i < list.size(); ++i) {
     steps += list[i]["steps"].get<std::int64_t>();
     EXPECT_GT(list[i]["steps"].get<int>(), 0) << who;
-    if (i + 1 < list.size()) { EXPECT_NE(list[i]["stop"], "budget") << who << " descent " << i; }
+    if (i + 1 < list.size()) {
+      EXPECT_NE(list[i]["stop"], "budget") << who << " descent " << i;
+    }
   }
   for (const auto& [reason, n] : d["stops"].items()) by_reason += n.get<int>();
   EXPECT_EQ(by_reason, static_cast<int>(list.size())) << who;
   EXPECT_EQ(steps, r.episodes) << who;
   EXPECT_EQ(r.grad_evals, r.episodes) << who;
-  if (single) { EXPECT_EQ(list, json::parse(R"([{"steps": )" + std::to_string(r.budget) + R"(, "stop": "budget"}])")) << who; }
+  if (single) {
+    EXPECT_EQ(list, json::parse(R"([{"steps": )" + std::to_string(r.budget) + R"(, "stop": "budget"}])")) << who;
+  }
 }
 
 TEST_F(DiagnosticsCli, StoredDiagnosticsAgreeWithTheEvalsAndARerunGivesTheSameJson) {
@@ -312,7 +318,9 @@ TEST_F(DiagnosticsCli, StoredDiagnosticsAgreeWithTheEvalsAndARerunGivesTheSameJs
     if (optimizer == "nlopt-lbfgs") check_nlopt(who, r);
     if (optimizer == "gd") check_descents(who, r, true);
     if (optimizer == "rand-descents") check_descents(who, r, false);
-    if (optimizer == "random") { EXPECT_EQ(r.diagnostics["optimizer"], json::object()) << who; }
+    if (optimizer == "random") {
+      EXPECT_EQ(r.diagnostics["optimizer"], json::object()) << who;
+    }
   }
 
   // identical reruns (other --jobs, other order) give identical JSON, byte for byte
@@ -338,7 +346,8 @@ TEST_F(DiagnosticsCli, ANewerOrForeignDatabaseIsRefusedWithExitTwoAndLeftAlone) 
   {
     sqlite3* h = nullptr;
     ASSERT_EQ(sqlite3_open(newer.c_str(), &h), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(h, "UPDATE meta SET value='99' WHERE key='schema_version'", nullptr, nullptr, nullptr), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(h, "UPDATE meta SET value='99' WHERE key='schema_version'", nullptr, nullptr, nullptr),
+              SQLITE_OK);
     sqlite3_close(h);
   }
   const std::string newer_bytes = read_file(newer);

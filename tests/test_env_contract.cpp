@@ -255,7 +255,7 @@ TEST_P(EnvContract, RlViewReplaysTheLossOfItsActions) {
       ASSERT_EQ(o.size(), static_cast<std::size_t>(rl->observation_dim()));
       EXPECT_TRUE(all_finite(o)) << "step " << t;
       rl->step(std::span<const double>(actions).subspan(static_cast<std::size_t>(t) * rl->action_dim(),
-                                                       static_cast<std::size_t>(rl->action_dim())));
+                                                        static_cast<std::size_t>(rl->action_dim())));
     }
     EXPECT_TRUE(rl->done());
     EXPECT_EQ(rl->observe().size(), static_cast<std::size_t>(rl->observation_dim()));

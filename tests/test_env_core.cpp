@@ -46,8 +46,8 @@ TEST(EnvCore, SharedEnvBuildsItsModelOnceOnFirstRollout) {
 }
 
 TEST(EnvCore, ThreadedRolloutsAreBitIdenticalForAnyThreadCount) {
-  for (const std::string name : {"sphere-10000", "rosenbrock-10000", "rastrigin-10000", "ackley-10000",
-                                 "styblinski-10000"}) {
+  for (const std::string name :
+       {"sphere-10000", "rosenbrock-10000", "rastrigin-10000", "ackley-10000", "styblinski-10000"}) {
     const auto env = make_env(name);
     ASSERT_TRUE(env->info().threaded) << name;
     Rng rng(8);

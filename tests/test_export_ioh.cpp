@@ -119,8 +119,9 @@ TEST_F(ExportIoh, MetaFilesAndDataRowsMatchTheDatabaseBitForBit) {
   std::size_t rows_checked = 0, runs_checked = 0;
   for (const std::string algorithm : {"cmaes", "random"}) {
     const fs::path folder = fs::path(out) / algorithm;
-    EXPECT_EQ(names_in(folder), (std::set<std::string>{"IOHprofiler_f1_branin.json", "data_f1_branin",
-                                                       "IOHprofiler_f2_sphere-10.json", "data_f2_sphere-10"}));
+    EXPECT_EQ(names_in(folder),
+              (std::set<std::string>{"IOHprofiler_f1_branin.json", "data_f1_branin", "IOHprofiler_f2_sphere-10.json",
+                                     "data_f2_sphere-10"}));
     for (const auto& [env, id_dim] : functions) {
       const auto [fid, dim] = id_dim;
       const auto meta = read_json(folder / ("IOHprofiler_f" + std::to_string(fid) + "_" + env + ".json"));
@@ -135,8 +136,9 @@ TEST_F(ExportIoh, MetaFilesAndDataRowsMatchTheDatabaseBitForBit) {
       const auto& scenario = meta.at("scenarios")[0];
       EXPECT_EQ(scenario.at("dimension"), dim);
       const std::string dat = scenario.at("path");
-      EXPECT_EQ(dat, "data_f" + std::to_string(fid) + "_" + env + "/IOHprofiler_f" + std::to_string(fid) +
-                         "_DIM" + std::to_string(dim) + ".dat");
+      EXPECT_EQ(dat,
+                "data_f" + std::to_string(fid) + "_" + env + "/IOHprofiler_f" + std::to_string(fid) + "_DIM" +
+                    std::to_string(dim) + ".dat");
       const auto blocks = read_dat(folder / dat);
       const auto& runs = scenario.at("runs");
       ASSERT_EQ(runs.size(), 2u);
@@ -160,8 +162,8 @@ TEST_F(ExportIoh, MetaFilesAndDataRowsMatchTheDatabaseBitForBit) {
         for (std::size_t i = 0; i < got.size(); ++i) {
           EXPECT_EQ(got[i].first, want[i].first);
           EXPECT_TRUE(same_bits(got[i].second, loss[got[i].first - 1]))
-              << env << " " << algorithm << " seed " << seed << " evaluation " << got[i].first << ": "
-              << got[i].second << " vs " << loss[got[i].first - 1];
+              << env << " " << algorithm << " seed " << seed << " evaluation " << got[i].first << ": " << got[i].second
+              << " vs " << loss[got[i].first - 1];
           ++rows_checked;
         }
         // best: the last improvement, with a point of the env's dimension

@@ -67,8 +67,9 @@ TEST(ExtProtocol, TheProbeLearnsNameAndVersionAndRefusesABrokenProgram) {
   EXPECT_EQ(spec.version, "1");
   const auto opt = make_ext_optimizer(spec, "sphere-3", 7);
   EXPECT_EQ(opt->name(), "ext:r");
-  EXPECT_EQ(opt->config(), nlohmann::json({{"protocol", 1}, {"command", test_optimizer("random")},
-                                           {"name", "test-random"}, {"version", "1"}}));
+  EXPECT_EQ(opt->config(),
+            nlohmann::json(
+                {{"protocol", 1}, {"command", test_optimizer("random")}, {"name", "test-random"}, {"version", "1"}}));
   try {
     probed("bad", test_optimizer("bad-probe"));
     FAIL() << "the probe accepted a program that exits before its hello";
@@ -85,24 +86,24 @@ TEST(ExtProtocol, TheProbeLearnsNameAndVersionAndRefusesABrokenProgram) {
 TEST(ExtProtocol, NumbersCrossThePipesBitForBitAsJsonTextAndAsBase64) {
   // the program sends each loss and gradient component back as the next point's x[0], x[1]
   for (const std::string mode : {"roundtrip", "roundtrip-binary"}) {
-  auto f = [](std::span<const double> x) { return std::sin(1000.0 * x[0] + 7.0 * x[1]); };
-  auto g = [&](std::span<const double> x, std::span<double> grad) {
-    std::fill(grad.begin(), grad.end(), 0.0);
-    grad[1] = 0.999 * std::cos(1000.0 * x[0] + 7.0 * x[1]);
-    return f(x);
-  };
-  testing::FunctionObjective obj(3, 40, f, g);
-  auto opt = make_ext_optimizer(probed("rt", test_optimizer(mode)), "rt", 1);
-  EXPECT_EQ(run_error(*opt, obj), "") << mode;
-  ASSERT_EQ(obj.points().size(), 40u) << mode;
-  for (std::size_t k = 1; k < 40; ++k) {
-    const auto& prev = obj.points()[k - 1];
-    const double loss = obj.losses()[k - 1], grad1 = 0.999 * std::cos(1000.0 * prev[0] + 7.0 * prev[1]);
-    EXPECT_EQ(std::memcmp(&obj.points()[k][0], &loss, sizeof loss), 0) << mode << " " << k;
-    EXPECT_EQ(std::memcmp(&obj.points()[k][1], &grad1, sizeof grad1), 0) << mode << " " << k;
-  }
-  EXPECT_EQ(opt->diagnostics()["end"], "budget");
-  EXPECT_EQ(opt->diagnostics()["grad_asks"], 40);
+    auto f = [](std::span<const double> x) { return std::sin(1000.0 * x[0] + 7.0 * x[1]); };
+    auto g = [&](std::span<const double> x, std::span<double> grad) {
+      std::fill(grad.begin(), grad.end(), 0.0);
+      grad[1] = 0.999 * std::cos(1000.0 * x[0] + 7.0 * x[1]);
+      return f(x);
+    };
+    testing::FunctionObjective obj(3, 40, f, g);
+    auto opt = make_ext_optimizer(probed("rt", test_optimizer(mode)), "rt", 1);
+    EXPECT_EQ(run_error(*opt, obj), "") << mode;
+    ASSERT_EQ(obj.points().size(), 40u) << mode;
+    for (std::size_t k = 1; k < 40; ++k) {
+      const auto& prev = obj.points()[k - 1];
+      const double loss = obj.losses()[k - 1], grad1 = 0.999 * std::cos(1000.0 * prev[0] + 7.0 * prev[1]);
+      EXPECT_EQ(std::memcmp(&obj.points()[k][0], &loss, sizeof loss), 0) << mode << " " << k;
+      EXPECT_EQ(std::memcmp(&obj.points()[k][1], &grad1, sizeof grad1), 0) << mode << " " << k;
+    }
+    EXPECT_EQ(opt->diagnostics()["end"], "budget");
+    EXPECT_EQ(opt->diagnostics()["grad_asks"], 40);
   }
 }
 
@@ -159,14 +160,16 @@ using testing::scalar;
 std::vector<std::string> evals_of(const std::string& path, const std::string& where = "1") {
   return rows(path,
               "SELECT r.env, r.optimizer, r.seed, r.status, r.opt_config_hash, e.episode, e.loss, e.best_loss, "
-              "e.used_grad, e.failed FROM evals e JOIN runs r USING(run_id) WHERE " + where +
-              " ORDER BY r.env, r.optimizer, r.seed, e.episode");
+              "e.used_grad, e.failed FROM evals e JOIN runs r USING(run_id) WHERE " +
+                  where + " ORDER BY r.env, r.optimizer, r.seed, e.episode");
 }
 
 const std::string kExamples = "--ext lbfgsb='" + kPython + " " + kSource + "/examples/ext/scipy_lbfgsb.py' --ext de='" +
-                              kPython + " " + kSource + "/examples/ext/scipy_de.py'";
-const std::string kExampleGrid = "--env sphere-10,cartpole1 --optimizer ext:lbfgsb,ext:de,cmaes,gd --seeds 2 "
-                                 "--budget 60 --quiet " + kExamples;
+    kPython + " " + kSource + "/examples/ext/scipy_de.py'";
+const std::string kExampleGrid =
+    "--env sphere-10,cartpole1 --optimizer ext:lbfgsb,ext:de,cmaes,gd --seeds 2 "
+    "--budget 60 --quiet " +
+    kExamples;
 
 TEST_F(ExtCli, ScipyExamplesBesideBuiltInsGiveTheSameDatabaseOnRerunAndForAnyJobs) {
   const auto first = harness(kExampleGrid + " --jobs 1 --db " + db("a.sqlite"));
@@ -179,31 +182,40 @@ TEST_F(ExtCli, ScipyExamplesBesideBuiltInsGiveTheSameDatabaseOnRerunAndForAnyJob
   EXPECT_EQ(a, evals_of(db("b.sqlite")));
   EXPECT_EQ(a, evals_of(db("c.sqlite")));
   // L-BFGS-B asked with gradients on both envs, DE in batches
-  EXPECT_EQ(scalar(db("a.sqlite"), "SELECT min(e.used_grad) FROM evals e JOIN runs r USING(run_id) "
-                                   "WHERE r.optimizer='ext:lbfgsb'"), "1");
-  EXPECT_EQ(scalar(db("a.sqlite"), "SELECT max(json_extract(diagnostics, '$.optimizer.largest_ask')) FROM runs "
-                                   "WHERE optimizer='ext:de'"), "5");
+  EXPECT_EQ(scalar(db("a.sqlite"),
+                   "SELECT min(e.used_grad) FROM evals e JOIN runs r USING(run_id) "
+                   "WHERE r.optimizer='ext:lbfgsb'"),
+            "1");
+  EXPECT_EQ(scalar(db("a.sqlite"),
+                   "SELECT max(json_extract(diagnostics, '$.optimizer.largest_ask')) FROM runs "
+                   "WHERE optimizer='ext:de'"),
+            "5");
   // the config holds the command and the version the program reported
-  const std::string config = scalar(db("a.sqlite"), "SELECT c.json FROM configs c JOIN runs r ON "
-                                                    "c.hash=r.opt_config_hash WHERE r.optimizer='ext:lbfgsb' LIMIT 1");
+  const std::string config = scalar(db("a.sqlite"),
+                                    "SELECT c.json FROM configs c JOIN runs r ON "
+                                    "c.hash=r.opt_config_hash WHERE r.optimizer='ext:lbfgsb' LIMIT 1");
   EXPECT_NE(config.find("examples/ext/scipy_lbfgsb.py"), std::string::npos) << config;
   EXPECT_NE(config.find("\"version\":\"1 (scipy "), std::string::npos) << config;
   // the medians beside the built-ins (docs/optimizers.md "Benchmark your own optimizer")
-  for (const auto& r : rows(db("a.sqlite"), "SELECT env, optimizer, group_concat(best_loss, ' ') FROM "
-                                            "(SELECT * FROM runs ORDER BY best_loss) GROUP BY env, optimizer"))
+  for (const auto& r : rows(db("a.sqlite"),
+                            "SELECT env, optimizer, group_concat(best_loss, ' ') FROM "
+                            "(SELECT * FROM runs ORDER BY best_loss) GROUP BY env, optimizer"))
     std::cout << "final best (2 seeds, 60 episodes): " << r << "\n";
 }
 
 TEST_F(ExtCli, OptunaTpeBesideBuiltInsGivesTheSameDatabaseForAnyJobs) {
-  const std::string grid = "--env sphere-10,bounce --optimizer ext:tpe,cmaes,random --seeds 2 --budget 40 --quiet "
-                           "--ext tpe='" + kPython + " " + kSource + "/examples/ext/optuna_tpe.py' --db ";
+  const std::string grid =
+      "--env sphere-10,bounce --optimizer ext:tpe,cmaes,random --seeds 2 --budget 40 --quiet "
+      "--ext tpe='" +
+      kPython + " " + kSource + "/examples/ext/optuna_tpe.py' --db ";
   const auto first = harness(grid + db("a.sqlite") + " --jobs 1");
   ASSERT_EQ(first.code, 0) << first.err;
   EXPECT_EQ(scalar(db("a.sqlite"), "SELECT count(*) FROM runs WHERE status='done' AND episodes=40"), "12");
   ASSERT_EQ(harness(grid + db("b.sqlite") + " --jobs 2").code, 0);
   EXPECT_EQ(evals_of(db("a.sqlite")), evals_of(db("b.sqlite")));
-  for (const auto& r : rows(db("a.sqlite"), "SELECT env, optimizer, group_concat(best_loss, ' ') FROM "
-                                            "(SELECT * FROM runs ORDER BY best_loss) GROUP BY env, optimizer"))
+  for (const auto& r : rows(db("a.sqlite"),
+                            "SELECT env, optimizer, group_concat(best_loss, ' ') FROM "
+                            "(SELECT * FROM runs ORDER BY best_loss) GROUP BY env, optimizer"))
     std::cout << "final best (2 seeds, 40 episodes): " << r << "\n";
 }
 
@@ -211,7 +223,8 @@ TEST_F(ExtCli, EachFailureModeFailsOnlyItsRunAndLeavesTheDatabaseIntact) {
   // a database with an earlier grid in it
   ASSERT_EQ(harness("--env branin --optimizer cmaes --seeds 1 --budget 15 --quiet --db " + db("f.sqlite")).code, 0);
   const auto before = evals_of(db("f.sqlite"));
-  ASSERT_EQ(harness("--env sphere-10 --optimizer random --seeds 1 --budget 20 --quiet --db " + db("ref.sqlite")).code, 0);
+  ASSERT_EQ(harness("--env sphere-10 --optimizer random --seeds 1 --budget 20 --quiet --db " + db("ref.sqlite")).code,
+            0);
 
   std::string ext = "--optimizer random";
   for (const std::string mode : {"crash", "garbage", "outside", "hang", "after-end"}) {
@@ -219,15 +232,16 @@ TEST_F(ExtCli, EachFailureModeFailsOnlyItsRunAndLeavesTheDatabaseIntact) {
   }
   for (const std::string mode : {"crash", "garbage", "outside", "hang", "after-end"})
     ext += " --ext " + mode + "='" + test_optimizer(mode) + "'";
-  const auto r = harness("--env sphere-10 " + ext + " --seeds 1 --budget 20 --jobs 2 --ext-timeout 2 --db " +
-                         db("f.sqlite"));
+  const auto r =
+      harness("--env sphere-10 " + ext + " --seeds 1 --budget 20 --jobs 2 --ext-timeout 2 --db " + db("f.sqlite"));
   // failed runs are results, told by exit status 3 (not 1, a harness failure; not 2, bad input)
   ASSERT_EQ(r.code, 3) << r.err;
   EXPECT_NE(r.err.find("0 already done, 1 done now, 5 failed"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("5 runs failed (exit status 3)"), std::string::npos) << r.err;
   const std::map<std::string, std::string> reason = {
-      {"ext:crash", "ext:crash: closed its stdout and exited with status 3 before the budget end; stderr: "
-                    "Traceback (most recent call last): | ZeroDivisionError: division by zero"},
+      {"ext:crash",
+       "ext:crash: closed its stdout and exited with status 3 before the budget end; stderr: "
+       "Traceback (most recent call last): | ZeroDivisionError: division by zero"},
       {"ext:garbage", "ext:garbage: malformed line 'this is not json' (not a JSON object)"},
       {"ext:outside", "ext:outside: point 0 of the ask has x[1] = 1.5, outside the box [-1, 1]"},
       {"ext:hang", "ext:hang: no reply within the timeout of 2.0 s (waiting for an ask)"},
@@ -238,9 +252,9 @@ TEST_F(ExtCli, EachFailureModeFailsOnlyItsRunAndLeavesTheDatabaseIntact) {
     ASSERT_EQ(run.size(), 1u) << opt;
     EXPECT_EQ(run[0], "failed|" + std::string(opt == "ext:after-end" ? "20" : "3") + "|" + why) << opt;
     // the episodes before the breach are stored
-    EXPECT_EQ(scalar(db("f.sqlite"), "SELECT count(*) FROM evals e JOIN runs r USING(run_id) WHERE optimizer='" +
-                                         opt + "'"),
-              opt == "ext:after-end" ? "20" : "3");
+    EXPECT_EQ(
+        scalar(db("f.sqlite"), "SELECT count(*) FROM evals e JOIN runs r USING(run_id) WHERE optimizer='" + opt + "'"),
+        opt == "ext:after-end" ? "20" : "3");
   }
   // the built-in run beside them is the run it is alone, and the earlier grid is untouched
   EXPECT_EQ(evals_of(db("f.sqlite"), "r.optimizer='random'"), evals_of(db("ref.sqlite")));
@@ -261,7 +275,8 @@ TEST_F(ExtCli, BadExternalOptimizerInputExitsTwoBeforeTheDatabase) {
       {"--optimizer ext:r --ext r", "--ext wants NAME=COMMAND"},
       {"--optimizer ext:a/b --ext a/b=true", "external optimizer name 'a/b' must be"},
       {"--optimizer ext:r --ext r='" + test_optimizer("random") + "' --ext-timeout 0", "--ext-timeout must be"},
-      {"--optimizer ext:r --ext r='" + test_optimizer("random") + "' --set ext:r.lr=1", "optimizer 'ext:r' has no knobs to --set"},
+      {"--optimizer ext:r --ext r='" + test_optimizer("random") + "' --set ext:r.lr=1",
+       "optimizer 'ext:r' has no knobs to --set"},
       {"--optimizer ext:bad --ext bad='" + test_optimizer("bad-probe") + "'",
        "ext:bad: probe of '" + test_optimizer("bad-probe") + "' failed: closed its stdout and exited with status 4"},
   };
@@ -276,19 +291,20 @@ TEST_F(ExtCli, BadExternalOptimizerInputExitsTwoBeforeTheDatabase) {
 
 TEST_F(ExtCli, TheReportedVersionIsPartOfTheRunKey) {
   const std::string grid = "--env sphere-10 --optimizer ext:r --ext r='" + test_optimizer("random", 4) +
-                           "' --seeds 1 --budget 12 --quiet --db " + db("v.sqlite");
+      "' --seeds 1 --budget 12 --quiet --db " + db("v.sqlite");
   ASSERT_EQ(harness(grid, "TEST_OPT_VERSION=1").code, 0);
   const auto again = harness(grid, "TEST_OPT_VERSION=1");
   EXPECT_NE(again.err.find("1 already done, 0 done now"), std::string::npos) << again.err;
   ASSERT_EQ(harness(grid, "TEST_OPT_VERSION=2").code, 0);
-  const auto versions = rows(db("v.sqlite"), "SELECT json_extract(c.json, '$.version'), r.status, r.episodes FROM runs r "
-                                             "JOIN configs c ON c.hash=r.opt_config_hash ORDER BY 1");
+  const auto versions = rows(db("v.sqlite"),
+                             "SELECT json_extract(c.json, '$.version'), r.status, r.episodes FROM runs r "
+                             "JOIN configs c ON c.hash=r.opt_config_hash ORDER BY 1");
   EXPECT_EQ(versions, (std::vector<std::string>{"1|done|12", "2|done|12"}));
 }
 
 TEST_F(ExtCli, SigtermMidRunCommitsAndTheResumedRunReplaysToTheSameEvals) {
-  const std::string grid = "--env cartpole1 --optimizer ext:lbfgsb --seeds 1 --budget 60 --jobs 1 --quiet " + kExamples +
-                           " --db ";
+  const std::string grid =
+      "--env cartpole1 --optimizer ext:lbfgsb --seeds 1 --budget 60 --jobs 1 --quiet " + kExamples + " --db ";
   // --ext de is not in this grid: keep only lbfgsb's
   const std::string lbfgsb_only = grid.substr(0, grid.find(" --ext de=")) + " --db ";
   ASSERT_EQ(harness(lbfgsb_only + db("full.sqlite")).code, 0);

@@ -32,9 +32,7 @@ using mpm::Vec3;
 // with the bowl's lip under the cube, then up (found by hand, see docs/envs.md "fluid")
 const std::vector<double> kScoop = {0.5, -1.0, 0.6, -1.0, 0.5, 0.2, -0.3, 1.0, -0.3, 1.0};
 
-const mpm::FluidEnv& fluid(const std::string& name) {
-  return static_cast<const mpm::FluidEnv&>(*shared_env(name));
-}
+const mpm::FluidEnv& fluid(const std::string& name) { return static_cast<const mpm::FluidEnv&>(*shared_env(name)); }
 
 TEST(Fluid, ModelIsResolved) {
   const auto& env = fluid("fluid");

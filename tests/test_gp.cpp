@@ -116,7 +116,8 @@ TEST(GaussianProcess, PosteriorEqualsDenseSolve) {
   const Eigen::MatrixXd Kinv = dense_kernel(X, h, h.noise).inverse();
   double worst_mean = 0.0, worst_var = 0.0;
   for (int t = 0; t < 6; ++t) {
-    const Eigen::VectorXd x = t == 0 ? Eigen::VectorXd(X.row(3).transpose()) : uniform_points(rng, 1, d).row(0).transpose();
+    const Eigen::VectorXd x =
+        t == 0 ? Eigen::VectorXd(X.row(3).transpose()) : uniform_points(rng, 1, d).row(0).transpose();
     Eigen::VectorXd k(n);
     for (int i = 0; i < n; ++i) k[i] = GaussianProcess::matern52(X.row(i).transpose(), x, h);
     const double mean_ref = st.mean + st.scale * (h.mean + k.dot(Kinv * (ys.array() - h.mean).matrix()));
@@ -249,7 +250,7 @@ double dense_objective(const GaussianProcess& gp, const GpConfig& cfg, const Eig
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(dense_kernel(X, h, h.noise));
   const double n = static_cast<double>(y.size());
   double v = -0.5 * r.dot(ldlt.solve(r)) - 0.5 * ldlt.vectorD().array().log().sum() -
-             0.5 * n * std::log(2.0 * std::numbers::pi);
+      0.5 * n * std::log(2.0 * std::numbers::pi);
   for (Eigen::Index i = 0; i < h.lengthscales.size(); ++i)
     v += log_gamma_pdf(h.lengthscales[i], cfg.lengthscale_prior_concentration, cfg.lengthscale_prior_rate);
   v += log_gamma_pdf(h.outputscale, cfg.outputscale_prior_concentration, cfg.outputscale_prior_rate);
@@ -260,8 +261,8 @@ double dense_objective(const GaussianProcess& gp, const GpConfig& cfg, const Eig
 // value against the dense evaluation and gradient against central differences at seeded theta;
 // n = 130 runs the blocked (recursive) triangular inverse and L^-T L^-1 kernels
 TEST(GaussianProcess, FitObjectiveValueAndGradient) {
-  for (const auto& [n, d, constant_mean] : {std::tuple{30, 3, true}, std::tuple{130, 4, true},
-                                            std::tuple{25, 2, false}}) {
+  for (const auto& [n, d, constant_mean] :
+       {std::tuple{30, 3, true}, std::tuple{130, 4, true}, std::tuple{25, 2, false}}) {
     Rng rng(static_cast<std::uint64_t>(n * 10 + d));
     GpConfig cfg;
     cfg.constant_mean = constant_mean;

@@ -36,7 +36,9 @@ class FunctionEnv final : public Env {
   using ValueAndGrad = std::function<double(std::span<const double>, std::span<double>)>;
   FunctionEnv(int dim, Value value, ValueAndGrad value_and_grad)
       : Env(EnvInfo{"test-function", dim, static_cast<bool>(value_and_grad), false, false, 0.0, ""}),
-        dim_(dim), value_(std::move(value)), value_and_grad_(std::move(value_and_grad)) {}
+        dim_(dim),
+        value_(std::move(value)),
+        value_and_grad_(std::move(value_and_grad)) {}
 
   nlohmann::json config() const override { return {{"dim", dim_}}; }
 
@@ -463,8 +465,7 @@ TEST(GradientCheck, OptionsNameTheBadField) {
   EXPECT_NE(message([](auto& o) { o.check.tolerance = 0.0; }).find("'tolerance'"), std::string::npos);
   EXPECT_NE(message([](auto& o) { o.check.relative_floor = -1.0; }).find("'relative_floor'"), std::string::npos);
   EXPECT_NE(message([](auto& o) { o.check.absolute_floor = NAN; }).find("'absolute_floor'"), std::string::npos);
-  EXPECT_NE(message([](auto& o) { o.check.value_tolerance = -1e-9; }).find("'value_tolerance'"),
-            std::string::npos);
+  EXPECT_NE(message([](auto& o) { o.check.value_tolerance = -1e-9; }).find("'value_tolerance'"), std::string::npos);
   EXPECT_NE(message([](auto& o) { o.points = 0; }).find("'points'"), std::string::npos);
   EXPECT_NE(message([](auto& o) { o.amplitude = 1.5; }).find("'amplitude'"), std::string::npos);
   EXPECT_NE(message([](auto& o) { o.large_step = 0.6; }).find("'large_step'"), std::string::npos);
@@ -474,7 +475,8 @@ TEST(GradientCheck, OptionsNameTheBadField) {
   const auto env = smooth_env();
   EXPECT_THROW(check_gradient(env, std::vector<double>{0.0, 0.0, 0.0}), std::invalid_argument);
   EXPECT_THROW(check_gradient(env, std::vector<double>{0.0, 1.5, 0.0, 0.0}), std::invalid_argument);
-  const FunctionEnv value_only(1, [](std::span<const double> x) { return x[0]; }, nullptr);
+  const FunctionEnv value_only(
+      1, [](std::span<const double> x) { return x[0]; }, nullptr);
   EXPECT_THROW(check_gradient(value_only, std::vector<double>{0.0}), std::invalid_argument);
 }
 
@@ -580,10 +582,10 @@ TEST(HarnessGradcheck, AnyFailingPointExitsOneAndTheTableHasTheSummary) {
 
   const auto table = harness("gradcheck --env sphere-2 --points 3");
   EXPECT_EQ(table.code, 0);
-  for (const char* text : {"gradient agrees with central differences", "gradient within 25 degrees of differences",
-                           "gradient opposed to differences (cos < 0)", "gradient exactly zero", "|grad|",
-                           "loss() != loss_and_grad()", "opposed to a step-0.05 difference along it",
-                           "step-difference along it / |grad|", "PASS"})
+  for (const char* text :
+       {"gradient agrees with central differences", "gradient within 25 degrees of differences",
+        "gradient opposed to differences (cos < 0)", "gradient exactly zero", "|grad|", "loss() != loss_and_grad()",
+        "opposed to a step-0.05 difference along it", "step-difference along it / |grad|", "PASS"})
     EXPECT_NE(table.out.find(text), std::string::npos) << text << "\n" << table.out;
 
   EXPECT_EQ(harness("gradcheck --env sphere-2 --points 0").code, 2);

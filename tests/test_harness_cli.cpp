@@ -73,8 +73,8 @@ std::string scalar(const std::string& path, const std::string& sql) {
   sqlite3_stmt* q = nullptr;
   sqlite3_prepare_v2(db, sql.c_str(), -1, &q, nullptr);
   std::string v = sqlite3_step(q) == SQLITE_ROW && sqlite3_column_text(q, 0)
-                      ? reinterpret_cast<const char*>(sqlite3_column_text(q, 0))
-                      : "";
+      ? reinterpret_cast<const char*>(sqlite3_column_text(q, 0))
+      : "";
   sqlite3_finalize(q);
   sqlite3_close(db);
   return v;
@@ -89,8 +89,8 @@ void expect_same_evals(const std::map<EvalKey, double>& a, const std::map<EvalKe
     ASSERT_NE(it, b.end());
     // bit-identical (NaN matches NaN)
     EXPECT_TRUE(std::memcmp(&v, &it->second, sizeof v) == 0 || (std::isnan(v) && std::isnan(it->second)))
-        << std::get<0>(k) << "/" << std::get<1>(k) << " seed " << std::get<2>(k) << " episode "
-        << std::get<3>(k) << ": " << v << " vs " << it->second;
+        << std::get<0>(k) << "/" << std::get<1>(k) << " seed " << std::get<2>(k) << " episode " << std::get<3>(k)
+        << ": " << v << " vs " << it->second;
   }
 }
 
@@ -98,15 +98,19 @@ const std::string kGrid =
     "--env cartpole3,rosenbrock-10,branin --optimizer random,gd,rand-descents,cmaes --seeds 2 --budget 60 --quiet";
 
 TEST_F(HarnessCli, DoneWhenGridStoresSixHundredEvals) {
-  const auto r = harness("--env cartpole3,rosenbrock-10 --optimizer random,gd,cmaes --seeds 2 "
-                         "--budget 50 --db " + db("x.sqlite"));
+  const auto r = harness(
+      "--env cartpole3,rosenbrock-10 --optimizer random,gd,cmaes --seeds 2 "
+      "--budget 50 --db " +
+      db("x.sqlite"));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(scalar(db("x.sqlite"), "SELECT count(*) FROM evals"), "600");
   EXPECT_EQ(scalar(db("x.sqlite"), "SELECT count(*) FROM runs WHERE status='done' AND episodes=50"), "12");
   EXPECT_NE(r.err.find("runs 12/12"), std::string::npos) << r.err;  // the progress line
   // a second start finds everything done and changes nothing
-  const auto again = harness("--env cartpole3,rosenbrock-10 --optimizer random,gd,cmaes --seeds 2 "
-                             "--budget 50 --db " + db("x.sqlite"));
+  const auto again = harness(
+      "--env cartpole3,rosenbrock-10 --optimizer random,gd,cmaes --seeds 2 "
+      "--budget 50 --db " +
+      db("x.sqlite"));
   ASSERT_EQ(again.code, 0);
   EXPECT_NE(again.err.find("12 already done, 0 done now"), std::string::npos) << again.err;
   EXPECT_EQ(scalar(db("x.sqlite"), "SELECT count(*) FROM evals"), "600");
@@ -144,16 +148,16 @@ TEST_F(HarnessCli, ExternalSigkillDuringALongRunLeavesNothingHalfDone) {
   // background, killed once the database shows its first run 'running' (polled, no sleep that a
   // loaded machine could outlast)
   const std::string grid = "--env cartpole3 --optimizer cmaes --seeds 3 --budget 20000 --jobs 1 --quiet";
-  const std::string cmd = std::string("exec ") + DSB_HARNESS_EXE + " " + grid + " --db " +
-                          db("k.sqlite") + " > /dev/null 2>&1 < /dev/null";
+  const std::string cmd =
+      std::string("exec ") + DSB_HARNESS_EXE + " " + grid + " --db " + db("k.sqlite") + " > /dev/null 2>&1 < /dev/null";
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
     ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
-  const bool started = wait_until(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='running'",
-                                  "1", pid, std::chrono::seconds(120));
+  const bool started = wait_until(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='running'", "1", pid,
+                                  std::chrono::seconds(120));
   ::kill(pid, SIGKILL);
   int status = 0;
   ::waitpid(pid, &status, 0);
@@ -209,12 +213,13 @@ void drop_own_work_from_journals(const std::string& path) {
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr), SQLITE_OK);
   char* error = nullptr;
-  const int rc = sqlite3_exec(db,
-                              "BEGIN; DELETE FROM replay WHERE kind=4; "
-                              "CREATE TEMP TABLE renumbered AS SELECT run_id, (SELECT count(*) FROM replay b "
-                              "WHERE b.run_id=a.run_id AND b.seq<a.seq) AS seq, kind, input_hash, payload FROM replay a; "
-                              "DELETE FROM replay; INSERT INTO replay SELECT * FROM renumbered; COMMIT;",
-                              nullptr, nullptr, &error);
+  const int rc =
+      sqlite3_exec(db,
+                   "BEGIN; DELETE FROM replay WHERE kind=4; "
+                   "CREATE TEMP TABLE renumbered AS SELECT run_id, (SELECT count(*) FROM replay b "
+                   "WHERE b.run_id=a.run_id AND b.seq<a.seq) AS seq, kind, input_hash, payload FROM replay a; "
+                   "DELETE FROM replay; INSERT INTO replay SELECT * FROM renumbered; COMMIT;",
+                   nullptr, nullptr, &error);
   EXPECT_EQ(rc, SQLITE_OK) << (error ? error : "");
   sqlite3_free(error);
   sqlite3_close(db);
@@ -239,8 +244,7 @@ TEST_F(HarnessCli, AGpOptimizerStoppedMidRunResumesWithoutRefittingAndEqualsTheU
   // those results (an older binary's) still resumes to the same bits, computing them again.
   for (const std::string opt : {"bo", "boleap"}) {
     const std::string grid = "--env rosenbrock-10 --optimizer " + opt +
-                             (opt == "boleap" ? " --set boleap.episodes_per_leap=20" : "") +
-                             " --seeds 1 --budget 70 --jobs 1 --quiet --db ";
+        (opt == "boleap" ? " --set boleap.episodes_per_leap=20" : "") + " --seeds 1 --budget 70 --jobs 1 --quiet --db ";
     ASSERT_EQ(harness(grid + db(opt + "-full.sqlite")).code, 0) << opt;
     const auto stopped = harness(grid + db(opt + ".sqlite"),
                                  "DSB_FAULT_INJECTION=signal-in-run DSB_FAULT_AT_EPISODE=40 DSB_FAULT_SIGNAL=15");
@@ -255,8 +259,9 @@ TEST_F(HarnessCli, AGpOptimizerStoppedMidRunResumesWithoutRefittingAndEqualsTheU
     EXPECT_GE(kept, opt == "bo" ? 40 : 4) << opt;
     // of which an older binary's resume computes again those before the journal's last episode
     // (the rest come after it, where the run goes on live)
-    const int before_last = std::stoi(scalar(db(opt + ".sqlite"), "SELECT count(*) FROM replay WHERE kind=4 AND "
-                                                                  "seq < (SELECT max(seq) FROM replay WHERE kind<>4)"));
+    const int before_last = std::stoi(scalar(db(opt + ".sqlite"),
+                                             "SELECT count(*) FROM replay WHERE kind=4 AND "
+                                             "seq < (SELECT max(seq) FROM replay WHERE kind<>4)"));
     EXPECT_GT(before_last, 0) << opt;
     fs::copy_file(db(opt + ".sqlite"), db(opt + "-old.sqlite"));
     drop_own_work_from_journals(db(opt + "-old.sqlite"));
@@ -287,8 +292,9 @@ TEST_F(HarnessCli, SigkillMidRunLosesOnlyWhatWasNotCommitted) {
   // committing after every episode, a SIGKILL after episode 30 leaves exactly 30 to replay
   const std::string grid = "--env flip --optimizer gd --seeds 1 --budget 50 --jobs 1 --quiet --db ";
   ASSERT_EQ(harness(grid + db("full.sqlite")).code, 0);
-  const auto killed = harness(grid + db("k.sqlite"), "DSB_FAULT_INJECTION=signal-in-run DSB_FAULT_AT_EPISODE=30 "
-                                                     "DSB_FAULT_SIGNAL=9 DSB_FAULT_COMMIT_EVERY_EPISODE=1");
+  const auto killed = harness(grid + db("k.sqlite"),
+                              "DSB_FAULT_INJECTION=signal-in-run DSB_FAULT_AT_EPISODE=30 "
+                              "DSB_FAULT_SIGNAL=9 DSB_FAULT_COMMIT_EVERY_EPISODE=1");
   EXPECT_EQ(killed.code, 128 + SIGKILL);
   EXPECT_EQ(scalar(db("k.sqlite"), "SELECT episodes FROM runs WHERE status='running'"), "30");
   const auto resumed = harness(grid + db("k.sqlite"));
@@ -300,8 +306,8 @@ TEST_F(HarnessCli, SigkillMidRunLosesOnlyWhatWasNotCommitted) {
 
 TEST_F(HarnessCli, ASecondHarnessOnTheSameDatabaseIsRefusedAndSigtermStopsTheFirst) {
   const std::string grid = "--env cartpole3 --optimizer cmaes --seeds 2 --budget 20000 --jobs 1 --quiet";
-  const std::string cmd = std::string("exec ") + DSB_HARNESS_EXE + " " + grid + " --db " + db("l.sqlite") +
-                          " > /dev/null 2>&1 < /dev/null";
+  const std::string cmd =
+      std::string("exec ") + DSB_HARNESS_EXE + " " + grid + " --db " + db("l.sqlite") + " > /dev/null 2>&1 < /dev/null";
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
@@ -356,16 +362,19 @@ TEST_F(HarnessCli, PlanCountsTheGridAndWritesNothing) {
   EXPECT_NE(r.out.find("env models built: 0"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(db("plan.sqlite")));
   // runs already done are counted as such
-  ASSERT_EQ(harness("--env sphere-2,branin --optimizer random --seeds 3 --budget 5 --quiet --db " + db("p.sqlite")).code, 0);
+  ASSERT_EQ(
+      harness("--env sphere-2,branin --optimizer random --seeds 3 --budget 5 --quiet --db " + db("p.sqlite")).code, 0);
   const std::string before = read(db("p.sqlite"));
-  const auto p = harness("plan --env sphere-2,branin,bounce --optimizer random --seeds 3 --budget 5 --db " + db("p.sqlite"));
+  const auto p =
+      harness("plan --env sphere-2,branin,bounce --optimizer random --seeds 3 --budget 5 --db " + db("p.sqlite"));
   EXPECT_NE(p.out.find("9 runs in the grid; 6 already done"), std::string::npos) << p.out;
   EXPECT_NE(p.out.find("3 to run (15 episodes)"), std::string::npos) << p.out;
   EXPECT_EQ(read(db("p.sqlite")), before);
 }
 
 TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase) {
-  ASSERT_EQ(harness("--env sphere-2 --optimizer random --seeds 1 --budget 5 --quiet --db " + db("keep.sqlite")).code, 0);
+  ASSERT_EQ(harness("--env sphere-2 --optimizer random --seeds 1 --budget 5 --quiet --db " + db("keep.sqlite")).code,
+            0);
   const std::string before = read(db("keep.sqlite"));
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"--env nosuchenv --optimizer random --seeds 1", "nosuchenv"},
@@ -395,8 +404,8 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
     EXPECT_EQ(read(db("keep.sqlite")), before) << args;
   }
   // a kernel path forced from the environment that does not exist: refused before any run
-  for (const auto& [prefix, bad] : std::vector<std::pair<std::string, std::string>>{
-           {"DSB_SIMD=avx512", "avx512"}, {"DSB_SIMD=neon", "neon"}}) {
+  for (const auto& [prefix, bad] :
+       std::vector<std::pair<std::string, std::string>>{{"DSB_SIMD=avx512", "avx512"}, {"DSB_SIMD=neon", "neon"}}) {
     const auto r = harness("--env sphere-2 --optimizer random --seeds 1 --db " + db("keep.sqlite"), prefix);
     EXPECT_EQ(r.code, 2) << prefix;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << prefix << ": " << r.err;
@@ -449,7 +458,8 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
 TEST_F(HarnessCli, KnobVariantsAreSeparateRunsWithTheirOwnConfigs) {
   // a knob left at its default is the default run (same config hash, nothing to do); another
   // value is another run, stored with its resolved config, with different evals
-  const std::string base = "--env sphere-10 --optimizer rand-descents --seeds 1 --budget 50 --quiet --db " + db("k.sqlite");
+  const std::string base =
+      "--env sphere-10 --optimizer rand-descents --seeds 1 --budget 50 --quiet --db " + db("k.sqlite");
   ASSERT_EQ(harness(base).code, 0);
   const auto r = harness(base + " --set rand-descents.start_scale=1");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -463,8 +473,10 @@ TEST_F(HarnessCli, KnobVariantsAreSeparateRunsWithTheirOwnConfigs) {
   EXPECT_NE(scalar(db("k.sqlite"), "SELECT loss FROM evals WHERE run_id=1 AND episode=0"),
             scalar(db("k.sqlite"), "SELECT loss FROM evals WHERE run_id=2 AND episode=0"));
   // a Slurm array runs the same variant
-  const auto slurm = harness("slurm --env sphere-10 --optimizer rand-descents --seeds 2 --budget 50 --set "
-                             "rand-descents.max_steps=7 --shards 2 --dir " + db("slurm"));
+  const auto slurm = harness(
+      "slurm --env sphere-10 --optimizer rand-descents --seeds 2 --budget 50 --set "
+      "rand-descents.max_steps=7 --shards 2 --dir " +
+      db("slurm"));
   ASSERT_EQ(slurm.code, 0) << slurm.err;
   EXPECT_NE(read(dir_ / "slurm" / "array.sbatch").find("--set rand-descents.max_steps=7 --shard"), std::string::npos);
 }
@@ -601,8 +613,8 @@ TEST_F(HarnessCli, LandscapeChecksTheGradientAtEveryPoint) {
   ASSERT_EQ(tight.code, 0) << tight.err;
   EXPECT_EQ(tight.err.find("at 36 of 36"), std::string::npos) << tight.err;
   // bad check options: one line naming the value, exit 2
-  for (const std::string& bad : {std::string("--check-step 0"), std::string("--check-step 0.5"),
-                                 std::string("--check-step 1e-6 --tol -1")}) {
+  for (const std::string& bad :
+       {std::string("--check-step 0"), std::string("--check-step 0.5"), std::string("--check-step 1e-6 --tol -1")}) {
     const auto b = harness("landscape --env branin --dims 0,1 --res 3 " + bad + " --out " + out);
     EXPECT_EQ(b.code, 2) << bad;
     EXPECT_EQ(std::count(b.err.begin(), b.err.end(), '\n'), 1) << b.err;
@@ -620,12 +632,18 @@ TEST_F(HarnessCli, ShardsPartitionTheGrid) {
 
 TEST_F(HarnessCli, ShardsAreCutFromRunKeysSoAddingAnEnvMovesNoRun) {
   // shard 0 of 3 of a grid, and of the same grid with one more env and the names reordered
-  const std::string runs_sql = "SELECT group_concat(env || '/' || optimizer || '/' || seed, ' ') FROM "
-                               "(SELECT env, optimizer, seed FROM runs WHERE env != 'hartmann6' ORDER BY 1, 2, 3)";
+  const std::string runs_sql =
+      "SELECT group_concat(env || '/' || optimizer || '/' || seed, ' ') FROM "
+      "(SELECT env, optimizer, seed FROM runs WHERE env != 'hartmann6' ORDER BY 1, 2, 3)";
   ASSERT_EQ(harness("--env sphere-2,branin --optimizer random,cmaes --seeds 3 --budget 5 --quiet --shard 0/3 --db " +
-                    db("a.sqlite")).code, 0);
+                    db("a.sqlite"))
+                .code,
+            0);
   ASSERT_EQ(harness("--env hartmann6,branin,sphere-2 --optimizer cmaes,random --seeds 3 --budget 5 --quiet "
-                    "--shard 0/3 --db " + db("b.sqlite")).code, 0);
+                    "--shard 0/3 --db " +
+                    db("b.sqlite"))
+                .code,
+            0);
   const std::string a = scalar(db("a.sqlite"), runs_sql);
   EXPECT_FALSE(a.empty());
   EXPECT_EQ(a, scalar(db("b.sqlite"), runs_sql));
@@ -702,8 +720,10 @@ TEST_F(HarnessCli, MergeCombinesShardsAndRefusesConflicts) {
   const std::string bad = db("shard-1.sqlite");
   sqlite3* h = nullptr;
   ASSERT_EQ(sqlite3_open(bad.c_str(), &h), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(h, "UPDATE evals SET loss = loss * 2 WHERE episode = 3 AND run_id = (SELECT min(run_id) FROM runs)",
-                         nullptr, nullptr, nullptr), SQLITE_OK);
+  ASSERT_EQ(
+      sqlite3_exec(h, "UPDATE evals SET loss = loss * 2 WHERE episode = 3 AND run_id = (SELECT min(run_id) FROM runs)",
+                   nullptr, nullptr, nullptr),
+      SQLITE_OK);
   sqlite3_close(h);
   const std::string before = read(db("merged.sqlite"));
   const auto c = harness("merge --into " + db("merged.sqlite") + " " + bad);
@@ -719,8 +739,10 @@ TEST_F(HarnessCli, MergeCombinesShardsAndRefusesConflicts) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("nosuch.sqlite"), std::string::npos) << r.err;
   ASSERT_EQ(sqlite3_open(bad.c_str(), &h), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(h, "UPDATE evals SET loss = loss / 2 WHERE episode = 3 AND run_id = (SELECT min(run_id) FROM runs)",
-                         nullptr, nullptr, nullptr), SQLITE_OK);
+  ASSERT_EQ(
+      sqlite3_exec(h, "UPDATE evals SET loss = loss / 2 WHERE episode = 3 AND run_id = (SELECT min(run_id) FROM runs)",
+                   nullptr, nullptr, nullptr),
+      SQLITE_OK);
   ASSERT_EQ(sqlite3_exec(h, "UPDATE runs SET status='running'", nullptr, nullptr, nullptr), SQLITE_OK);
   sqlite3_close(h);
   const auto k = harness("merge --into " + db("merged.sqlite") + " " + bad);

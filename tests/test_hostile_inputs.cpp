@@ -112,7 +112,8 @@ TEST_F(HostileInputs, AFifoAsADatabaseOrBaselineIsRefusedByEveryCommand) {
   expect_refused(harness("report --db " + f + " --out " + path("r")), "--db: " + says, "report --db");
   expect_refused(harness("merge --into " + path("m.sqlite") + " " + f), "merge input: " + says, "merge input");
   expect_refused(harness("merge --into " + f + " " + db), "--into: " + says, "merge --into");
-  expect_refused(harness("render --env cartpole1 --best-of " + f + " --out " + path("r.png")), says, "render --best-of");
+  expect_refused(harness("render --env cartpole1 --best-of " + f + " --out " + path("r.png")), says,
+                 "render --best-of");
   for (const char* made : {"x.csv", "r", "m.sqlite", "r.png"}) EXPECT_FALSE(fs::exists(path(made))) << made;
 }
 
@@ -202,20 +203,20 @@ TEST_F(HostileInputs, NumbersOutsideTheDoublesSayWhichWayTheyFallOut) {
 TEST_F(HostileInputs, ADatabaseMovedWhileAGridWritesItStopsTheGridWhichSaysWhereItsDataIs) {
   // run 1 (random on sphere-2) ends done; run 2, an external optimizer, hangs after 3 episodes
   const std::string db = path("mv.sqlite"), moved = path("moved.sqlite");
-  const std::string opt =
-      "/usr/bin/python3 " + std::string(DSB_SOURCE_DIR) + "/tests/ext/test_optimizer.py hang";
+  const std::string opt = "/usr/bin/python3 " + std::string(DSB_SOURCE_DIR) + "/tests/ext/test_optimizer.py hang";
   const std::string cmd = "TEST_OPT_PIDFILE=" + path("opt.pid") + " exec " + DSB_HARNESS_EXE +
-                          " --env sphere-2 --optimizer random,ext:stuck --ext stuck='" + opt +
-                          "' --ext-timeout 600 --seeds 1 --budget 20 --jobs 2 --quiet --db " + db + " > /dev/null 2> " +
-                          path("err") + " < /dev/null";
+      " --env sphere-2 --optimizer random,ext:stuck --ext stuck='" + opt +
+      "' --ext-timeout 600 --seeds 1 --budget 20 --jobs 2 --quiet --db " + db + " > /dev/null 2> " + path("err") +
+      " < /dev/null";
   const pid_t h = ::fork();
   if (h == 0) {
     ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
   ASSERT_TRUE(eventually([&] { return fs::exists(path("opt.pid")); }, std::chrono::seconds(60)));
-  ASSERT_TRUE(eventually([&] { return testing::quiet_scalar(db, "SELECT count(*) FROM runs WHERE status='done'") == "1"; },
-                         std::chrono::seconds(60)));
+  ASSERT_TRUE(
+      eventually([&] { return testing::quiet_scalar(db, "SELECT count(*) FROM runs WHERE status='done'") == "1"; },
+                 std::chrono::seconds(60)));
   fs::rename(db, moved);
   ::kill(h, SIGTERM);  // the stopped run commits its episodes: the commit finds the path moved
   const int code = wait_exit_code(h);

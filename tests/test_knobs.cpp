@@ -32,8 +32,7 @@ std::vector<std::vector<double>> points_of(const std::string& name, const KnobSe
   Rng rng(5);
   try {
     opt->minimize(f, rng);
-  } catch (const BudgetExhausted&) {
-  }
+  } catch (const BudgetExhausted&) {}
   return f.points();
 }
 
@@ -51,9 +50,10 @@ TEST(KnobTable, SetsNumbersIntegersAndFlags) {
 }
 
 TEST(KnobTable, ErrorsNameTheKnobAndTheValue) {
-  EXPECT_EQ(error_of("boleap", {{"sigma", "1"}}).find("boleap: unknown knob 'sigma' (knobs: adam_per_leap, elite, episodes_per_leap, "
-                                                     "leap_iterations, lr, max_descent_steps, patience, plain_steps, "
-                                                     "population, sigma0, step_size)"),
+  EXPECT_EQ(error_of("boleap", {{"sigma", "1"}})
+                .find("boleap: unknown knob 'sigma' (knobs: adam_per_leap, elite, episodes_per_leap, "
+                      "leap_iterations, lr, max_descent_steps, patience, plain_steps, "
+                      "population, sigma0, step_size)"),
             0u);
   EXPECT_NE(error_of("boleap", {{"patience", "2.5"}}).find("wants an integer, got '2.5'"), std::string::npos);
   EXPECT_NE(error_of("boleap", {{"sigma0", "nan"}}).find("wants a finite number, got 'nan'"), std::string::npos);
@@ -69,7 +69,8 @@ TEST(KnobTable, ErrorsNameTheKnobAndTheValue) {
 TEST(Knobs, ReachTheResolvedConfigAndItsHash) {
   const auto def = make_optimizer("boleap")->config();
   const auto same = make_optimizer("boleap", {{"sigma0", "0.3"}, {"elite", "5"}})->config();
-  const auto other = make_optimizer("boleap", {{"sigma0", "0.3"}, {"max_descent_steps", "10"}, {"lr", "0.03"}})->config();
+  const auto other =
+      make_optimizer("boleap", {{"sigma0", "0.3"}, {"max_descent_steps", "10"}, {"lr", "0.03"}})->config();
   EXPECT_EQ(config_hash(def), config_hash(same));  // elite 5 is K / 2 = the default
   EXPECT_NE(config_hash(def), config_hash(other));
   EXPECT_EQ(other["sigma0"].get<double>(), 0.3);
@@ -105,8 +106,7 @@ TEST(Knobs, BoLeapEliteAndDescentLengthChangeTheSearch) {
   Rng rng(3);
   try {
     one_step.minimize(f, rng);
-  } catch (const BudgetExhausted&) {
-  }
+  } catch (const BudgetExhausted&) {}
   for (int len : one_step.last_run().descent_lengths) EXPECT_LE(len, 1);
   EXPECT_NE(points_of("boleap", {{"elite", "1"}}, 3, 80), points_of("boleap", {}, 3, 80));
 }

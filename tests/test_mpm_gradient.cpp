@@ -46,7 +46,8 @@ TEST(MpmGradient, ActionsMatchCentralDifferencesWithEveryPrimitive) {
       hi[i] += h;
       lo[i] -= h;
       central[i] = (mpm::run_episode(m, ws, serial_team(), hi, env_steps, objective) -
-                    mpm::run_episode(m, ws, serial_team(), lo, env_steps, objective)) / (2 * h);
+                    mpm::run_episode(m, ws, serial_team(), lo, env_steps, objective)) /
+          (2 * h);
       EXPECT_NEAR(grad[i], central[i], 1e-5 * std::abs(central[i]) + 1e-4 * gmax)
           << "seed " << seed << " action " << i << " (step " << i / m.action_dim() << ", component "
           << i % m.action_dim() << ")";
@@ -140,8 +141,9 @@ TEST(MpmGradient, AnyTapeBudgetGivesTheSameBits) {
     EXPECT_EQ(adj1[p].F, ws.adj[p].F) << p;
   }
   // what one env step's tapes hold, as counted: at least the particles and their SVDs of S substeps
-  EXPECT_GE(per_step, static_cast<std::size_t>(m.config.substeps) * m.particles() *
-                          (sizeof(mpm::Particle) + sizeof(mpm::SvdRecord)));
+  EXPECT_GE(
+      per_step,
+      static_cast<std::size_t>(m.config.substeps) * m.particles() * (sizeof(mpm::Particle) + sizeof(mpm::SvdRecord)));
 }
 
 TEST(MpmGradient, SameBitsForAnyNumberOfThreads) {

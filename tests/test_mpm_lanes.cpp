@@ -142,7 +142,8 @@ void expect_same_bits(const EpisodeBits& got, const EpisodeBits& want, const cha
   EXPECT_EQ(first_difference(bytes(got.loss), bytes(want.loss)), "") << what << ": loss";
   EXPECT_EQ(first_difference(bytes(got.grad_loss), bytes(want.grad_loss)), "") << what << ": gradient episode's loss";
   EXPECT_EQ(first_difference(bytes(got.action_grad), bytes(want.action_grad)), "") << what << ": gradient (actions)";
-  EXPECT_EQ(first_difference(bytes(got.state_grad), bytes(want.state_grad)), "") << what << ": gradient (initial state)";
+  EXPECT_EQ(first_difference(bytes(got.state_grad), bytes(want.state_grad)), "")
+      << what << ": gradient (initial state)";
   EXPECT_EQ(first_difference(bytes(got.pose_grad), bytes(want.pose_grad)), "") << what << ": gradient (poses)";
 }
 

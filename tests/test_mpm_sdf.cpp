@@ -84,9 +84,7 @@ std::vector<Case> cases() {
           {"shallow bowl", bowl(0.5, 0.04, -0.35), 0.55}};
 }
 
-double rim_w(const Shape& s) {
-  return std::sqrt(s.radius * s.radius - s.rim_height * s.rim_height);
-}
+double rim_w(const Shape& s) { return std::sqrt(s.radius * s.radius - s.rim_height * s.rim_height); }
 
 // ---- dense surface samplings --------------------------------------------------------------
 
@@ -137,12 +135,8 @@ Sampling surface_of(const Shape& s) {
       break;
     case ShapeKind::capsule:
       out.revolve(-h, h, 1.0, r, [&](double y) { return RhoY{r, y}; });
-      out.revolve(0.0, kPi / 2, r, r, [&](double a) {
-        return RhoY{r * dm::sin(a), h + r * dm::cos(a)};
-      });
-      out.revolve(kPi / 2, kPi, r, r, [&](double a) {
-        return RhoY{r * dm::sin(a), -h + r * dm::cos(a)};
-      });
+      out.revolve(0.0, kPi / 2, r, r, [&](double a) { return RhoY{r * dm::sin(a), h + r * dm::cos(a)}; });
+      out.revolve(kPi / 2, kPi, r, r, [&](double a) { return RhoY{r * dm::sin(a), -h + r * dm::cos(a)}; });
       break;
     case ShapeKind::cylinder:
       out.revolve(-h, h, 1.0, r, [&](double y) { return RhoY{r, y}; });
@@ -151,9 +145,7 @@ Sampling surface_of(const Shape& s) {
       break;
     case ShapeKind::torus: {
       const double big = s.major_radius;
-      out.revolve(0.0, 2.0 * kPi, r, big + r, [&](double a) {
-        return RhoY{big + r * dm::cos(a), r * dm::sin(a)};
-      });
+      out.revolve(0.0, 2.0 * kPi, r, big + r, [&](double a) { return RhoY{big + r * dm::cos(a), r * dm::sin(a)}; });
       break;
     }
     case ShapeKind::box:
@@ -175,9 +167,7 @@ Sampling surface_of(const Shape& s) {
       const double c = s.rim_height, w = rim_w(s), ht = 0.5 * s.thickness;
       const double alpha_max = dm::acos(-c / r), gamma = dm::atan2(c, w);
       for (double rr : {r + ht, r - ht})
-        out.revolve(0.0, alpha_max, rr, rr, [&](double a) {
-          return RhoY{rr * dm::sin(a), -rr * dm::cos(a)};
-        });
+        out.revolve(0.0, alpha_max, rr, rr, [&](double a) { return RhoY{rr * dm::sin(a), -rr * dm::cos(a)}; });
       out.revolve(gamma, gamma + kPi, ht, w + ht, [&](double b) {
         return RhoY{w + ht * dm::cos(b), c + ht * dm::sin(b)};
       });
@@ -191,9 +181,7 @@ Sampling surface_of(const Shape& s) {
 Sampling bowl_cap(const Shape& s) {
   Sampling out;
   const double r = s.radius;
-  out.revolve(0.0, dm::acos(-s.rim_height / r), r, r, [&](double a) {
-    return RhoY{r * dm::sin(a), -r * dm::cos(a)};
-  });
+  out.revolve(0.0, dm::acos(-s.rim_height / r), r, r, [&](double a) { return RhoY{r * dm::sin(a), -r * dm::cos(a)}; });
   return out;
 }
 
@@ -251,12 +239,12 @@ TEST(MpmSdf, ClosedFormsSphereCapsuleCylinder) {
 
   const Shape ca = capsule(0.25, 1.0);
   expect_distance(ca, Vec3::Zero(), -0.25);
-  expect_distance(ca, Vec3(0.0, 1.0, 0.0), -0.25);  // segment end
-  expect_distance(ca, Vec3(0.0, 2.0, 0.0), 0.75);   // on the axis beyond the end
-  expect_distance(ca, Vec3(0.0, -1.25, 0.0), 0.0);  // bottom pole
-  expect_distance(ca, Vec3(1.0, 0.5, 0.0), 0.75);   // beside the segment
-  expect_distance(ca, Vec3(0.0, -0.9, 0.25), 0.0);  // on the side
-  expect_distance(ca, Vec3(0.3, 1.4, 0.0), 0.25);   // beyond the end: |(0.3, 0.4)| - 0.25
+  expect_distance(ca, Vec3(0.0, 1.0, 0.0), -0.25);                 // segment end
+  expect_distance(ca, Vec3(0.0, 2.0, 0.0), 0.75);                  // on the axis beyond the end
+  expect_distance(ca, Vec3(0.0, -1.25, 0.0), 0.0);                 // bottom pole
+  expect_distance(ca, Vec3(1.0, 0.5, 0.0), 0.75);                  // beside the segment
+  expect_distance(ca, Vec3(0.0, -0.9, 0.25), 0.0);                 // on the side
+  expect_distance(ca, Vec3(0.3, 1.4, 0.0), 0.25);                  // beyond the end: |(0.3, 0.4)| - 0.25
   expect_distance(capsule(0.25, 0.0), Vec3(0.0, 0.0, 1.0), 0.75);  // h = 0: a sphere
 
   const Shape cy = cylinder(0.5, 1.0);
@@ -282,8 +270,8 @@ TEST(MpmSdf, ClosedFormsTorusBoxBowl) {
   expect_distance(to, Vec3(0.0, 0.0, 0.75), 0.0);  // inner equator
   expect_distance(to, Vec3(2.0, 0.0, 0.0), 0.75);
   expect_distance(to, Vec3(0.0, 1.0, 0.0), std::sqrt(2.0) - 0.25);  // on the axis
-  expect_distance(to, Vec3(0.6, 0.4, -0.8), 0.15);      // rho = 1, y = 0.4: |(0, 0.4)| - r
-  expect_distance(torus(0.5, 0.5), Vec3::Zero(), 0.0);  // horn torus: the centre is on it
+  expect_distance(to, Vec3(0.6, 0.4, -0.8), 0.15);                  // rho = 1, y = 0.4: |(0, 0.4)| - r
+  expect_distance(torus(0.5, 0.5), Vec3::Zero(), 0.0);              // horn torus: the centre is on it
 
   const Shape bx = box(1.0, 2.0, 3.0);
   expect_distance(bx, Vec3::Zero(), -1.0);
@@ -304,8 +292,8 @@ TEST(MpmSdf, ClosedFormsTorusBoxBowl) {
   expect_distance(hemi, Vec3(0.0, -1.0, 0.0), -0.05);  // bottom of the mid-surface
   expect_distance(hemi, Vec3(0.0, -1.05, 0.0), 0.0);   // outer surface
   expect_distance(hemi, Vec3(0.0, -2.0, 0.0), 0.95);
-  expect_distance(hemi, Vec3(1.0, 0.0, 0.0), -0.05);  // rim
-  expect_distance(hemi, Vec3(2.0, 0.0, 0.0), 0.95);   // beside the rim, level with it
+  expect_distance(hemi, Vec3(1.0, 0.0, 0.0), -0.05);                  // rim
+  expect_distance(hemi, Vec3(2.0, 0.0, 0.0), 0.95);                   // beside the rim, level with it
   expect_distance(hemi, Vec3(0.0, 1.0, 0.0), std::sqrt(2.0) - 0.05);  // on the axis above
   expect_distance(hemi, Vec3(1.0, 1.0, 0.0), 0.95);                   // above the rim
   expect_distance(hemi, Vec3(0.0, 0.5, -1.0), 0.45);
@@ -335,8 +323,7 @@ TEST(MpmSdf, DistanceMatchesBruteForceOverADenseSurfaceSampling) {
     for (const Vec3& p : random_points(rng, surface, c.extent, 240)) {
       const double d = sdf_distance(c.shape, p), brute = surface.min_distance(p);
       EXPECT_LE(std::abs(d), brute + 1e-12) << c.name << " at (" << p.transpose() << ")";
-      EXPECT_GE(std::abs(d), brute - surface.cover - 1e-12)
-          << c.name << " at (" << p.transpose() << ")";
+      EXPECT_GE(std::abs(d), brute - surface.cover - 1e-12) << c.name << " at (" << p.transpose() << ")";
       worst_gap = std::max(worst_gap, brute - std::abs(d));
       if (std::abs(d) < 1e-9) continue;
       bool in;
@@ -350,8 +337,8 @@ TEST(MpmSdf, DistanceMatchesBruteForceOverADenseSurfaceSampling) {
       ++signs;
       EXPECT_EQ(d < 0.0, in) << c.name << " sign at (" << p.transpose() << "), d = " << d;
     }
-    std::printf("[ brute    ] %-16s %7zu samples, cover %.4f, worst gap %.4f, %d signs\n",
-                c.name.c_str(), surface.points.size(), surface.cover, worst_gap, signs);
+    std::printf("[ brute    ] %-16s %7zu samples, cover %.4f, worst gap %.4f, %d signs\n", c.name.c_str(),
+                surface.points.size(), surface.cover, worst_gap, signs);
   }
 }
 
@@ -369,8 +356,8 @@ TEST(MpmSdf, BowlIsTheDistanceToItsSphericalCap) {
       EXPECT_GE(d, brute - cap.cover - 1e-12) << c.name << " at (" << p.transpose() << ")";
       worst_gap = std::max(worst_gap, brute - d);
     }
-    std::printf("[ cap      ] %-16s %7zu samples, cover %.4f, worst gap %.4f\n", c.name.c_str(),
-                cap.points.size(), cap.cover, worst_gap);
+    std::printf("[ cap      ] %-16s %7zu samples, cover %.4f, worst gap %.4f\n", c.name.c_str(), cap.points.size(),
+                cap.cover, worst_gap);
   }
 }
 
@@ -389,13 +376,11 @@ bool near_nonsmooth(const Shape& s, const Vec3& p, double m) {
       return std::min({std::abs(d0), std::abs(d1), std::abs(d0 - d1), std::abs(p.y()), rho}) < m;
     }
     case ShapeKind::torus:
-      return rho < m ||
-             std::sqrt((rho - s.major_radius) * (rho - s.major_radius) + p.y() * p.y()) < m;
+      return rho < m || std::sqrt((rho - s.major_radius) * (rho - s.major_radius) + p.y() * p.y()) < m;
     case ShapeKind::box: {
       const Vec3 q = p.cwiseAbs() - s.half_extents;
       for (int i = 0; i < 3; ++i)
-        if (std::abs(q(i)) < m || std::abs(p(i)) < m || std::abs(q(i) - q((i + 1) % 3)) < m)
-          return true;
+        if (std::abs(q(i)) < m || std::abs(p(i)) < m || std::abs(q(i) - q((i + 1) % 3)) < m) return true;
       return false;
     }
     case ShapeKind::bowl: {
@@ -427,8 +412,7 @@ TEST(MpmSdf, NormalIsTheGradientAndHessianItsJacobian) {
         lo(i) -= kStep;
         hi(i) += kStep;
         grad(i) = (sdf_distance(c.shape, hi) - sdf_distance(c.shape, lo)) / (2.0 * kStep);
-        jac.col(i) =
-            (evaluate_sdf(c.shape, hi).normal - evaluate_sdf(c.shape, lo).normal) / (2.0 * kStep);
+        jac.col(i) = (evaluate_sdf(c.shape, hi).normal - evaluate_sdf(c.shape, lo).normal) / (2.0 * kStep);
       }
       const double hmax = e.hessian.cwiseAbs().maxCoeff();
       const double eg = (grad - e.normal).cwiseAbs().maxCoeff();
@@ -436,13 +420,10 @@ TEST(MpmSdf, NormalIsTheGradientAndHessianItsJacobian) {
       const double eu = std::abs(e.normal.norm() - 1.0);
       const double ehn = (e.hessian * e.normal).cwiseAbs().maxCoeff() / (hmax + 1.0);
       EXPECT_LE(eg, 1e-7) << c.name << " gradient at (" << p.transpose() << ")";
-      EXPECT_LE(eh, 1e-6) << c.name << " Hessian at (" << p.transpose() << ")\n"
-                          << e.hessian << "\nvs\n"
-                          << jac;
+      EXPECT_LE(eh, 1e-6) << c.name << " Hessian at (" << p.transpose() << ")\n" << e.hessian << "\nvs\n" << jac;
       EXPECT_LE(eu, 1e-15) << c.name << " |normal| at (" << p.transpose() << ")";
       EXPECT_LE(ehn, 1e-14) << c.name << " H n at (" << p.transpose() << ")";
-      EXPECT_TRUE(e.hessian == e.hessian.transpose())
-          << c.name << " symmetric at (" << p.transpose() << ")";
+      EXPECT_TRUE(e.hessian == e.hessian.transpose()) << c.name << " symmetric at (" << p.transpose() << ")";
       worst_grad = std::max(worst_grad, eg);
       worst_hess = std::max(worst_hess, eh);
       worst_unit = std::max(worst_unit, eu);
@@ -460,9 +441,8 @@ TEST(MpmSdf, NormalIsTheGradientAndHessianItsJacobian) {
 
 std::vector<Vec3> degenerate_points(const Shape& s) {
   const double r = s.radius, h = s.half_height;
-  std::vector<Vec3> pts = {
-      Vec3::Zero(),         Vec3(0.0, 0.3, 0.0),    Vec3(0.0, -0.3, 0.0),     Vec3(0.0, 2.0, 0.0),
-      Vec3(0.0, -2.0, 0.0), Vec3(1e-300, 0.0, 0.0), Vec3(0.0, 1e-170, 1e-170)};
+  std::vector<Vec3> pts = {Vec3::Zero(),         Vec3(0.0, 0.3, 0.0),    Vec3(0.0, -0.3, 0.0),     Vec3(0.0, 2.0, 0.0),
+                           Vec3(0.0, -2.0, 0.0), Vec3(1e-300, 0.0, 0.0), Vec3(0.0, 1e-170, 1e-170)};
   switch (s.kind) {
     case ShapeKind::capsule:
       for (double y : {-h, h, 0.5 * h, std::nextafter(h, 2.0)}) pts.push_back(Vec3(0.0, y, 0.0));
@@ -561,8 +541,7 @@ TEST(MpmSdf, ValidateNamesTheBadField) {
   try {
     sphere(-1.0).validate();
   } catch (const ConfigError& e) {
-    EXPECT_EQ(std::string(e.what()),
-              "shape config: field 'radius' must be finite and > 0 for a sphere, got -1");
+    EXPECT_EQ(std::string(e.what()), "shape config: field 'radius' must be finite and > 0 for a sphere, got -1");
   }
 }
 

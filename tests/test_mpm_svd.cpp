@@ -93,10 +93,9 @@ std::vector<Family> families() {
 std::vector<Mat3> special_inputs() {
   std::vector<Mat3> out;
   const double e9 = 1e-9;
-  for (const Vec3& d : {Vec3(1, 1, 1), Vec3(2, 1, 1), Vec3(1, 1, 0.5), Vec3(1, 1 + e9, 1 - e9),
-                        Vec3(1, 2, 3), Vec3(-1, 1, 1), Vec3(-1, -1, -1), Vec3(0, 0, 0),
-                        Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(0, 1, 1), Vec3(1e-8, 1e-8, 1e-8),
-                        Vec3(1e8, 1e8, 1e8), Vec3(1e8, 1, 1e-8), Vec3(0.5, -2, 1)})
+  for (const Vec3& d : {Vec3(1, 1, 1), Vec3(2, 1, 1), Vec3(1, 1, 0.5), Vec3(1, 1 + e9, 1 - e9), Vec3(1, 2, 3),
+                        Vec3(-1, 1, 1), Vec3(-1, -1, -1), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(0, 1, 1),
+                        Vec3(1e-8, 1e-8, 1e-8), Vec3(1e8, 1e8, 1e8), Vec3(1e8, 1, 1e-8), Vec3(0.5, -2, 1)})
     out.push_back(d.asDiagonal());
   Mat3 p;
   p << 0, 1, 0, 0, 0, 1, 1, 0, 0;
@@ -163,8 +162,8 @@ TEST(MpmSvd, ForwardOnRandomAndHardFamilies) {
       check_svd(A, svd3(A), st, f.name + " #" + std::to_string(n));
       if (HasFatalFailure()) return;
     }
-    std::printf("  %-24s max errors / eps: reconstruction %5.2f  U %5.2f  V %5.2f  sigma %5.2f\n",
-                f.name.c_str(), st.rec, st.orth_u, st.orth_v, st.sigma);
+    std::printf("  %-24s max errors / eps: reconstruction %5.2f  U %5.2f  V %5.2f  sigma %5.2f\n", f.name.c_str(),
+                st.rec, st.orth_u, st.orth_v, st.sigma);
     all.rec = std::max(all.rec, st.rec);
     all.orth_u = std::max(all.orth_u, st.orth_u);
     all.orth_v = std::max(all.orth_v, st.orth_v);
@@ -173,8 +172,8 @@ TEST(MpmSvd, ForwardOnRandomAndHardFamilies) {
   const std::vector<Mat3> special = special_inputs();
   for (std::size_t n = 0; n < special.size(); ++n)
     check_svd(special[n], svd3(special[n]), all, "special #" + std::to_string(n));
-  std::printf("  %-24s max errors / eps: reconstruction %5.2f  U %5.2f  V %5.2f  sigma %5.2f\n",
-              "all", all.rec, all.orth_u, all.orth_v, all.sigma);
+  std::printf("  %-24s max errors / eps: reconstruction %5.2f  U %5.2f  V %5.2f  sigma %5.2f\n", "all", all.rec,
+              all.orth_u, all.orth_v, all.sigma);
 }
 
 TEST(MpmSvd, ExactCasesAndRankDeficient) {
@@ -229,8 +228,8 @@ TEST(MpmSvd, RecordRestoresTheFactorsToAFewUlps) {
   EXPECT_LE(worst_v, 24 * kEps);  // measured 16.4 (Frobenius norm of the 9 entries)
   EXPECT_LE(worst_u, 24 * kEps);  // measured 15.3
   EXPECT_GT(fallbacks, 0) << "the inputs include near-singular matrices";
-  std::printf("  restored V within %.2f eps, U within %.2f eps x sigma_0 / sigma_2; %d fallbacks\n",
-              worst_v / kEps, worst_u / kEps, fallbacks);
+  std::printf("  restored V within %.2f eps, U within %.2f eps x sigma_0 / sigma_2; %d fallbacks\n", worst_v / kEps,
+              worst_u / kEps, fallbacks);
 }
 
 TEST(MpmSvd, RecordedDigest) {
@@ -288,8 +287,7 @@ TEST(MpmSvd, ClampedAdjointAtSeparatedSingularValues) {
     const Vec3 w(rng.normal(), rng.normal(), rng.normal());
     // L = <W1, U> + <w, sigma^2> + <W2, V> + <W3, U> <W4, V> / 2: a smooth function of (U, sigma, V)
     auto loss = [&](const Svd3& s) {
-      return inner(W1, s.U) + w.dot(s.sigma.cwiseAbs2()) + inner(W2, s.V) +
-             0.5 * inner(W3, s.U) * inner(W4, s.V);
+      return inner(W1, s.U) + w.dot(s.sigma.cwiseAbs2()) + inner(W2, s.V) + 0.5 * inner(W3, s.U) * inner(W4, s.V);
     };
     const Svd3 s = svd3(A);
     const Mat3 U_bar = W1 + 0.5 * inner(W4, s.V) * W3;
@@ -313,8 +311,7 @@ TEST(MpmSvd, ClampedAdjointDegradesAsTheGapShrinks) {
     const Mat3 A = R1 * Vec3(1 + gap, 1, 0.5).asDiagonal() * R2;
     auto loss = [&](const Mat3& B) {
       const Svd3 s = svd3(B);
-      return inner(W1, s.U * s.sigma.cwiseAbs2().asDiagonal() * s.V.transpose()) +
-             inner(W2, s.U * s.V.transpose());
+      return inner(W1, s.U * s.sigma.cwiseAbs2().asDiagonal() * s.V.transpose()) + inner(W2, s.U * s.V.transpose());
     };
     const Mat3 fd = central_diff(loss, A);
     const Svd3 s = svd3(A);
@@ -328,7 +325,7 @@ TEST(MpmSvd, ClampedAdjointDegradesAsTheGapShrinks) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) dd2(i, j) = s.sigma(i) + s.sigma(j);
     const Mat3 stable_grad = iso_uv_adjoint(s, sq, Mat3(2.0 * s.sigma.asDiagonal()), dd2, W1) +
-                             iso_uv_adjoint(s, Vec3::Ones(), Mat3::Zero(), dd1, W2);
+        iso_uv_adjoint(s, Vec3::Ones(), Mat3::Zero(), dd1, W2);
     const double stable = rel_err(stable_grad, fd);
     std::printf("  %.0e   %.2e          %.2e\n", gap, clamped, stable);
     EXPECT_LE(stable, 1e-7) << gap;
@@ -354,8 +351,8 @@ std::vector<std::pair<std::string, Mat3>> iso_inputs(bool inverted) {
   std::vector<std::pair<std::string, Mat3>> out;
   auto rot = [&](Vec3 s) { return Mat3(rotation(rng) * s.asDiagonal() * rotation(rng)); };
   for (int n = 0; n < 5; ++n)
-    out.push_back({"separated", rot(Vec3(1.7 + 0.1 * rng.uniform(), 1.1 + 0.1 * rng.uniform(),
-                                         0.6 + 0.1 * rng.uniform()))});
+    out.push_back(
+        {"separated", rot(Vec3(1.7 + 0.1 * rng.uniform(), 1.1 + 0.1 * rng.uniform(), 0.6 + 0.1 * rng.uniform()))});
   out.push_back({"near-equal 1e-9", rot(Vec3(1 + 1e-9, 1, 1 - 1e-9))});
   out.push_back({"near-equal 1e-7 pair", rot(Vec3(1.3, 0.8 + 1e-7, 0.8))});
   out.push_back({"I + 1e-6 gaussian", Mat3(Mat3::Identity() + 1e-6 * gaussian(rng))});
@@ -420,8 +417,7 @@ TEST(MpmSvd, IsoUuAdjointKirchhoffStressAgainstFiniteDifferences) {
     const Mat3 W = gaussian(rng);
     auto g_of = [&](const Vec3& sg) {
       const double J = sg(0) * sg(1) * sg(2);
-      return Vec3(2 * mu * (sg(0) - 1) * sg(0) + lam * J * (J - 1),
-                  2 * mu * (sg(1) - 1) * sg(1) + lam * J * (J - 1),
+      return Vec3(2 * mu * (sg(0) - 1) * sg(0) + lam * J * (J - 1), 2 * mu * (sg(1) - 1) * sg(1) + lam * J * (J - 1),
                   2 * mu * (sg(2) - 1) * sg(2) + lam * J * (J - 1));
     };
     auto loss = [&](const Mat3& B) {

@@ -82,14 +82,14 @@ TEST(MpmTargetGrid, DistanceMatchesBruteForce) {
         }
         const double err = std::abs(d[i] - ref[i]) / std::max(ref[i], kDx);
         worst = std::max(worst, err);
-        ASSERT_LE(err, 1e-12) << "shape " << n[0] << "x" << n[1] << "x" << n[2] << " density " << density
-                              << " node " << i << ": " << d[i] << " vs " << ref[i];
+        ASSERT_LE(err, 1e-12) << "shape " << n[0] << "x" << n[1] << "x" << n[2] << " density " << density << " node "
+                              << i << ": " << d[i] << " vs " << ref[i];
       }
       ++cases;
       nodes += static_cast<int>(d.size());
     }
-  std::printf("distance_to_mass vs brute force: %d grids, %d nodes, worst relative difference %.3g\n", cases,
-              nodes, worst);
+  std::printf("distance_to_mass vs brute force: %d grids, %d nodes, worst relative difference %.3g\n", cases, nodes,
+              worst);
 }
 
 TEST(MpmTargetGrid, DistanceSingleNodeClosedForm) {
@@ -117,8 +117,8 @@ TEST(MpmTargetGrid, DistanceEmptyTarget) {
 TEST(MpmTargetGrid, DistanceThresholdIsStrict) {
   const double threshold = 0.25;
   NodeGrid g = NodeGrid::zeros({4, 4, 4});
-  g.at(0, 0, 0) = threshold;                           // equal: not a target
-  g.at(3, 3, 3) = std::nextafter(threshold, 1.0);      // just above: a target
+  g.at(0, 0, 0) = threshold;                       // equal: not a target
+  g.at(3, 3, 3) = std::nextafter(threshold, 1.0);  // just above: a target
   const std::vector<double> d = distance_to_mass(g, threshold, 0.5);
   EXPECT_EQ(d[g.index(3, 3, 3)], 0.0);
   EXPECT_EQ(d[g.index(0, 0, 0)], std::sqrt(27.0) * 0.5);
@@ -245,9 +245,9 @@ TEST(MpmTargetShape, BoxIouCountsCells) {
   EXPECT_DOUBLE_EQ(box_iou(lo, hi, lo + Vec3(kDx, 0, 0), hi + Vec3(kDx, 0, 0), kDx), 4.0 / 12.0);
   EXPECT_DOUBLE_EQ(box_iou(lo, hi, lo + Vec3(2 * kDx, 0, 0), hi + Vec3(2 * kDx, 0, 0), kDx), 0.0);
   // rounded coordinates (3 decimals, as the facts give them) count the same cells
-  EXPECT_DOUBLE_EQ(box_iou(Vec3(0.391, 0.031, 0.359), Vec3(0.656, 0.219, 0.625), Vec3(25, 2, 23) * kDx,
-                           Vec3(42, 14, 40) * kDx, kDx),
-                   1.0);
+  EXPECT_DOUBLE_EQ(
+      box_iou(Vec3(0.391, 0.031, 0.359), Vec3(0.656, 0.219, 0.625), Vec3(25, 2, 23) * kDx, Vec3(42, 14, 40) * kDx, kDx),
+      1.0);
 }
 
 class MpmTargetGridFile : public dsb::testing::TempDirTest {};
@@ -279,13 +279,20 @@ std::string gzip_text(const std::string& text) {
 
 NodeGrid random_storage_grid(Rng& rng, std::array<int, 3> n) {
   NodeGrid g = NodeGrid::zeros(n);
-  const double specials[] = {std::numeric_limits<double>::denorm_min(), 2.2250738585072009e-308,
-                             -4.9406564584124654e-322, std::numeric_limits<double>::max(), -1.0e300,
-                             -1.0e-5, -0.0, 0.1, 1.0 / 3.0, std::numeric_limits<double>::min()};
+  const double specials[] = {std::numeric_limits<double>::denorm_min(),
+                             2.2250738585072009e-308,
+                             -4.9406564584124654e-322,
+                             std::numeric_limits<double>::max(),
+                             -1.0e300,
+                             -1.0e-5,
+                             -0.0,
+                             0.1,
+                             1.0 / 3.0,
+                             std::numeric_limits<double>::min()};
   for (double& v : g.values) {
     const double u = rng.uniform();
     if (u < 0.6) continue;
-    v = u < 0.7 ? specials[rng.below(std::size(specials))]
+    v = u < 0.7   ? specials[rng.below(std::size(specials))]
         : u < 0.8 ? -rng.uniform(0.0, 1e-3)
                   : rng.uniform(0.0, 2.0) * std::ldexp(1.0, static_cast<int>(rng.below(80)) - 40);
   }
@@ -322,8 +329,8 @@ TEST_F(MpmTargetGridFile, StableBytes) {
   ASSERT_GE(a.size(), 10u);
   EXPECT_EQ(static_cast<unsigned char>(a[0]), 0x1f);  // gzip magic
   EXPECT_EQ(static_cast<unsigned char>(a[1]), 0x8b);
-  EXPECT_EQ(a[3], 0);                                   // flags: no name, no comment, no extra
-  EXPECT_EQ(a.substr(4, 4), std::string(4, '\0'));      // mtime 0
+  EXPECT_EQ(a[3], 0);                               // flags: no name, no comment, no extra
+  EXPECT_EQ(a.substr(4, 4), std::string(4, '\0'));  // mtime 0
   // the decoded text starts with the header
   NodeGrid small = NodeGrid::zeros({2, 1, 2});
   small.at(1, 0, 1) = 0.1;

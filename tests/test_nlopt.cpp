@@ -29,10 +29,10 @@ using testing::FunctionObjective;
 const std::vector<std::string> kNames = {"nlopt-lbfgs", "nlopt-bobyqa", "nlopt-direct-l", "nlopt-crs2"};
 
 std::unique_ptr<NloptOptimizer> make(const std::string& name) {
-  NloptConfig c = name == "nlopt-lbfgs"      ? nlopt_lbfgs_defaults()
-                  : name == "nlopt-bobyqa"   ? nlopt_bobyqa_defaults()
-                  : name == "nlopt-direct-l" ? nlopt_direct_l_defaults()
-                                             : nlopt_crs2_defaults();
+  NloptConfig c = name == "nlopt-lbfgs" ? nlopt_lbfgs_defaults()
+      : name == "nlopt-bobyqa"          ? nlopt_bobyqa_defaults()
+      : name == "nlopt-direct-l"        ? nlopt_direct_l_defaults()
+                                        : nlopt_crs2_defaults();
   return std::make_unique<NloptOptimizer>(c);
 }
 
@@ -182,8 +182,7 @@ void expect_config_error(const NloptConfig& c, const std::string& field) {
 }
 
 TEST(NloptConfig, ValidationNamesTheField) {
-  for (auto c : {nlopt_lbfgs_defaults(), nlopt_bobyqa_defaults(), nlopt_direct_l_defaults(),
-                 nlopt_crs2_defaults()})
+  for (auto c : {nlopt_lbfgs_defaults(), nlopt_bobyqa_defaults(), nlopt_direct_l_defaults(), nlopt_crs2_defaults()})
     EXPECT_NO_THROW(c.validate());
 
   NloptConfig c = nlopt_bobyqa_defaults();
@@ -292,8 +291,7 @@ TEST_P(EveryNlopt, UsesExactlyTheBudgetForSmallAndOddBudgets) {
 
 TEST_P(EveryNlopt, SameSeedGivesBitIdenticalLosses) {
   auto a = make(GetParam()), b = make(GetParam());
-  FunctionObjective fa(3, 400, rastrigin, fd_grad(rastrigin)),
-      fb(3, 400, rastrigin, fd_grad(rastrigin));
+  FunctionObjective fa(3, 400, rastrigin, fd_grad(rastrigin)), fb(3, 400, rastrigin, fd_grad(rastrigin));
   EXPECT_EQ(run(*a, fa, 42), End::budget);
   EXPECT_EQ(run(*b, fb, 42), End::budget);
   EXPECT_EQ(fa.used(), 400);
@@ -392,13 +390,12 @@ TEST_P(EveryNlopt, ObjectiveExceptionsKeepTheirType) {
   EXPECT_EQ(f.used(), 9);
 }
 
-INSTANTIATE_TEST_SUITE_P(Nlopt, EveryNlopt, ::testing::ValuesIn(kNames),
-                         [](const auto& info) {
-                           std::string s = info.param;
-                           for (auto& ch : s)
-                             if (ch == '-') ch = '_';
-                           return s;
-                         });
+INSTANTIATE_TEST_SUITE_P(Nlopt, EveryNlopt, ::testing::ValuesIn(kNames), [](const auto& info) {
+  std::string s = info.param;
+  for (auto& ch : s)
+    if (ch == '-') ch = '_';
+  return s;
+});
 
 TEST(NloptLbfgs, UsesExactlyTheBudgetOnRosenbrock5) {
   auto opt = make("nlopt-lbfgs");
@@ -465,9 +462,7 @@ TEST(NloptSeeds, LocalMethodsShareTheCentreStartAndDifferAfterTheRestart) {
     ASSERT_EQ(first, b->last_run().starts[0].episodes) << name;
     ASSERT_LT(first, 300) << name;
     // the first start (box centre) is deterministic without the seed ...
-    EXPECT_EQ(std::memcmp(fa.losses().data(), fb.losses().data(),
-                          static_cast<std::size_t>(first) * sizeof(double)),
-              0)
+    EXPECT_EQ(std::memcmp(fa.losses().data(), fb.losses().data(), static_cast<std::size_t>(first) * sizeof(double)), 0)
         << name;
     // ... the second starts at a seed-dependent random point
     EXPECT_NE(fa.points()[first], fb.points()[first]) << name;
@@ -578,8 +573,7 @@ TEST(NloptRestarts, BobyqaAndCrs2RestartWhenTheyConverge) {
     const auto& st = opt->last_run();
     EXPECT_GE(st.starts.size(), 2u) << name;
     EXPECT_EQ(episodes_over_starts(st), 1000);
-    for (std::size_t k = 1; k < st.starts.size(); ++k)
-      EXPECT_NE(st.starts[k].x0, std::vector<double>(1, 0.0));
+    for (std::size_t k = 1; k < st.starts.size(); ++k) EXPECT_NE(st.starts[k].x0, std::vector<double>(1, 0.0));
     EXPECT_LT(f.best(), 1e-12) << name;
   }
 }

@@ -207,8 +207,8 @@ TEST_F(NpyTarget, ReadsNumpysFloat64AndFloat32InEveryVersion) {
   }
   const auto a = read_npy(file("small_f4.npy"));
   EXPECT_EQ(a.dtype, "<f4");
-  EXPECT_EQ(a.values, f4);     // each float as the double of its value
-  EXPECT_NE(a.values, f8);     // and not the float64 ones
+  EXPECT_EQ(a.values, f4);  // each float as the double of its value
+  EXPECT_NE(a.values, f8);  // and not the float64 ones
   EXPECT_EQ(read_npy(file("vector.npy")).values, (std::vector<double>{1.5, -2.25, 3.0}));
   EXPECT_EQ(read_npy(file("vector.npy")).shape, std::vector<std::size_t>{3});
   const auto s = read_npy(file("scalar.npy"));
@@ -449,7 +449,9 @@ TEST_F(NpyTarget, OptionsTheEnvDoesNotTakeAreRefusedByKey) {
       << unknown;
   const std::string bad = refusal([&] { make_env("plb-pinch-h5", {{"target", file("target_2d.npy")}}); });
   EXPECT_EQ(bad.rfind("plb-pinch-h5.target: " + file("target_2d.npy") + ": shape (64, 64)", 0), 0u) << bad;
-  EXPECT_NE(refusal([&] { shared_env("plb-pinch-h5", {{"target", file("missing.npy")}}); }).find("cannot open"),
+  EXPECT_NE(refusal([&] {
+              shared_env("plb-pinch-h5", {{"target", file("missing.npy")}});
+            }).find("cannot open"),
             std::string::npos);
   const auto& family = env_family_of("plb-rope-h10");
   ASSERT_EQ(family.options.size(), 1u);
@@ -527,9 +529,12 @@ TEST_F(NpyTarget, HarnessEvalTakesTheTargetAndRefusesBadFiles) {
   EXPECT_EQ(other_loss, make_env("plb-table-h5", {{"target", file("target_a.npy")}})->loss(std::vector<double>(15)));
 
   const std::pair<std::string, std::string> bad[] = {
-      {"missing.npy", "cannot open"},           {"not_npy.npy", "not a .npy file"},
-      {"version4.npy", "unsupported .npy version 4.0"}, {"int32.npy", "dtype '<i4'"},
-      {"target_2d.npy", "shape (64, 64)"},      {"target_fortran.npy", "Fortran order"},
+      {"missing.npy", "cannot open"},
+      {"not_npy.npy", "not a .npy file"},
+      {"version4.npy", "unsupported .npy version 4.0"},
+      {"int32.npy", "dtype '<i4'"},
+      {"target_2d.npy", "shape (64, 64)"},
+      {"target_fortran.npy", "Fortran order"},
       {"target_truncated.npy", "truncated data"},
       {"target_negative.npy", "value -5 at [5, 6, 7] is negative"},
       {"target_all_negative.npy", "value -1 at [0, 0, 0] is negative"},
@@ -574,8 +579,9 @@ TEST_F(NpyTarget, GridPlanSlurmAndListPassTheTargetOn) {
   const auto again = harness(grid + " --set plb-pinch-h5.target=" + file("target_a_copy.npy"));
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_NE(again.err.find("1 already done, 0 done now"), std::string::npos) << again.err;
-  const auto hashes = testing::quiet_scalar(db, "SELECT group_concat(env_config_hash, ' ') FROM "
-                                                "(SELECT env_config_hash FROM runs ORDER BY run_id)");
+  const auto hashes = testing::quiet_scalar(db,
+                                            "SELECT group_concat(env_config_hash, ' ') FROM "
+                                            "(SELECT env_config_hash FROM runs ORDER BY run_id)");
   const std::string with_target = config_hash(make_env("plb-pinch-h5", {{"target", file("target_a.npy")}})->config());
   EXPECT_EQ(hashes, with_target + " " + baseline_env_hash("plb-pinch-h5"));
   // the two runs' losses differ: each has its own target
@@ -604,8 +610,9 @@ TEST_F(NpyTarget, GridPlanSlurmAndListPassTheTargetOn) {
   EXPECT_EQ(harness("plan " + grid + " --set plb-pinch-h5.target=" + file("version4.npy")).code, 2);
 
   // slurm's tasks get the target as an absolute path (they run elsewhere), a knob as it is
-  const auto slurm = harness("slurm --env plb-pinch-h5 --optimizer rand-descents --seeds 1 --budget 1 --shards 1 "
-                             "--dir s --set plb-pinch-h5.target=mine.npy --set rand-descents.max_steps=7");
+  const auto slurm = harness(
+      "slurm --env plb-pinch-h5 --optimizer rand-descents --seeds 1 --budget 1 --shards 1 "
+      "--dir s --set plb-pinch-h5.target=mine.npy --set rand-descents.max_steps=7");
   ASSERT_EQ(slurm.code, 0) << slurm.err;
   const std::string sbatch = testing::read_file(run / "s" / "array.sbatch");
   const std::string absolute = "--set plb-pinch-h5.target=" + (run / "mine.npy").string();

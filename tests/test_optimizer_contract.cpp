@@ -34,9 +34,9 @@ constexpr std::int64_t kBudget = 48;
 constexpr std::int64_t kLateBudget = 300;
 
 enum class Landscape {
-  bowl,         // loss(x) = sum_i (x_i - c_i)^2, c_i = 0.3 - 0.1 i (dim 4)
-  hostile,      // the bowl, NaN where x_0 > 0.5, +inf where x_0 < -0.5, a NaN gradient where x_1 > 0.6
-  raised,       // 1e4 + bowl: relative tolerances (1e-10) end a local start early, and it restarts
+  bowl,     // loss(x) = sum_i (x_i - c_i)^2, c_i = 0.3 - 0.1 i (dim 4)
+  hostile,  // the bowl, NaN where x_0 > 0.5, +inf where x_0 < -0.5, a NaN gradient where x_1 > 0.6
+  raised,   // 1e4 + bowl: relative tolerances (1e-10) end a local start early, and it restarts
 };
 
 // The RL view takes one action per step (horizon = dim, observation (t / dim, last action)) and
@@ -129,7 +129,8 @@ bool seed_free(const std::string& optimizer) {
 std::vector<std::uint64_t> bits_of(const RunResult& r) {
   std::vector<std::uint64_t> bits;
   for (const EvalRecord& e : r.evals)
-    for (double v : {e.loss, e.best_loss, e.used_grad ? 1.0 : 0.0, e.metric}) bits.push_back(std::bit_cast<std::uint64_t>(v));
+    for (double v : {e.loss, e.best_loss, e.used_grad ? 1.0 : 0.0, e.metric})
+      bits.push_back(std::bit_cast<std::uint64_t>(v));
   for (double v : r.best_x) bits.push_back(std::bit_cast<std::uint64_t>(v));
   return bits;
 }

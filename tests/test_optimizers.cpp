@@ -31,8 +31,7 @@ std::vector<double> run(const std::string& name, FunctionObjective& f, std::uint
   Rng rng(seed);
   try {
     opt->minimize(f, rng);
-  } catch (const BudgetExhausted&) {
-  }
+  } catch (const BudgetExhausted&) {}
   return f.losses();
 }
 
@@ -72,7 +71,7 @@ TEST(Gd, FirstAdamStepHasLengthLrPerCoordinate) {
   auto f = sphere_objective(3, 2);
   run("gd", f, 0);
   const auto& x1 = f.points()[1];
-  EXPECT_NEAR(x1[0], 0.1, 1e-7);   // c_0 = 0.3 > 0: gradient negative, step +lr
+  EXPECT_NEAR(x1[0], 0.1, 1e-7);  // c_0 = 0.3 > 0: gradient negative, step +lr
   EXPECT_NEAR(x1[1], 0.1, 1e-7);
   EXPECT_NEAR(x1[2], 0.1, 1e-7);
 }
@@ -80,8 +79,7 @@ TEST(Gd, FirstAdamStepHasLengthLrPerCoordinate) {
 TEST(Gd, RecoversFromAFailedEpisode) {
   // losses are +inf beyond x_0 > 0.25: gd must back off and still finish the budget
   FunctionObjective f(
-      2, 200,
-      [](std::span<const double> x) { return shifted_sphere(x); },
+      2, 200, [](std::span<const double> x) { return shifted_sphere(x); },
       [](std::span<const double> x, std::span<double> g) {
         const double v = shifted_sphere(x, g);
         return x[0] > 0.25 ? std::numeric_limits<double>::quiet_NaN() : v;

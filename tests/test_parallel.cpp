@@ -34,7 +34,11 @@ TEST(ThreadTeam, RunsEveryTaskExactlyOnce) {
 
 TEST(ThreadTeam, RethrowsATaskErrorAndStaysUsable) {
   ThreadTeam team(3);
-  EXPECT_THROW(team.run(40, [](int i) { if (i == 17) throw std::runtime_error("task 17"); }), std::runtime_error);
+  EXPECT_THROW(team.run(40,
+                        [](int i) {
+                          if (i == 17) throw std::runtime_error("task 17");
+                        }),
+               std::runtime_error);
   std::atomic<int> n{0};
   team.run(40, [&](int) { n.fetch_add(1); });
   EXPECT_EQ(n.load(), 40);

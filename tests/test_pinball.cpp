@@ -67,16 +67,17 @@ void expect_gradient_matches(const std::string& name, std::uint64_t seed, int po
     EXPECT_TRUE(r.value_agrees) << "loss_and_grad and loss disagree";
     for (int i = 0; i < env->dim(); ++i) {
       const auto& c = r.coordinates[i];
-      EXPECT_LE(c.relative_error, options.tolerance)
-          << name << " try " << tried << " coordinate " << i << ": analytic " << c.analytic << ", central "
-          << c.differences.central;
+      EXPECT_LE(c.relative_error, options.tolerance) << name << " try " << tried << " coordinate " << i << ": analytic "
+                                                     << c.analytic << ", central " << c.differences.central;
       worst = std::max(worst, c.relative_error);
       largest = std::max(largest, std::abs(c.analytic));
     }
   }
   EXPECT_EQ(accepted, points) << name << ": too few smooth points among " << tried;
-  std::printf("%s gradient vs central differences (%d of %d points smooth): worst relative error "
-              "%.2e, largest |grad| %.3g\n", name.c_str(), accepted, tried, worst, largest);
+  std::printf(
+      "%s gradient vs central differences (%d of %d points smooth): worst relative error "
+      "%.2e, largest |grad| %.3g\n",
+      name.c_str(), accepted, tried, worst, largest);
 }
 
 TEST(ContactLaw, CapsuleJacobiansMatchCentralDifferences) {
@@ -127,13 +128,9 @@ TEST(ContactLaw, CapsuleJacobiansMatchCentralDifferences) {
   EXPECT_NEAR(e.distance, 1.0 - half - thick, 1e-15);
 }
 
-TEST(PinballGradient, OneByTwoMatchesCentralDifferences) {
-  expect_gradient_matches("pinball-1x2", 31, 8, 200);
-}
+TEST(PinballGradient, OneByTwoMatchesCentralDifferences) { expect_gradient_matches("pinball-1x2", 31, 8, 200); }
 
-TEST(PinballGradient, FourByFourMatchesCentralDifferences) {
-  expect_gradient_matches("pinball-4x4", 41, 5, 300);
-}
+TEST(PinballGradient, FourByFourMatchesCentralDifferences) { expect_gradient_matches("pinball-4x4", 41, 5, 300); }
 
 TEST(PinballEnv, AtTheCentreTheBallHitsTheFirstPaddle) {
   // x = 0: every paddle horizontal; the first one sits under the drop point (1.0, 9.5)
@@ -249,9 +246,11 @@ TEST(PinballGradient, WhereAPaddleStartsToBeTouchedTheFlatRegionEnds) {
   across[1] += dir * h;
   const double d_same = (l_off - env->loss(same)) / h;
   const double d_across = (env->loss(across) - l_off) / h;
-  std::printf("first touch of paddle 2 at x = (%.3f, %.15f): loss change over 1e-12 %.3e, "
-              "one-sided differences %.3e (untouched side) %.3e (across), gradient on the touched "
-              "side %.3e\n", on[0], on[1], l_on - l_off, d_same, d_across, g_on[1]);
+  std::printf(
+      "first touch of paddle 2 at x = (%.3f, %.15f): loss change over 1e-12 %.3e, "
+      "one-sided differences %.3e (untouched side) %.3e (across), gradient on the touched "
+      "side %.3e\n",
+      on[0], on[1], l_on - l_off, d_same, d_across, g_on[1]);
   EXPECT_EQ(d_same, 0.0);
   EXPECT_GT(std::abs(d_across), 1.0);
 }

@@ -46,8 +46,8 @@ TEST(Progress, TheEstimatedWorkDoneCountsFinishedRunsAndTheEpisodesOfRunningOnes
   EXPECT_NE(p.line().find("0.0% of the estimated work, ETA 00:03:20 (planned)"), std::string::npos) << p.line();
   p.run_started(0, 10.0);  // 100 s / 10 episodes
   p.run_started(1, 30.0);
-  p.episodes_of(0) += 4;   // 40 s of work
-  p.episodes_of(1) += 2;   // 60 s
+  p.episodes_of(0) += 4;  // 40 s of work
+  p.episodes_of(1) += 2;  // 60 s
   EXPECT_NE(p.line().find("episodes 6/20"), std::string::npos) << p.line();
   EXPECT_NE(p.line().find("25.0% of the estimated work, ETA 00:02:30 (planned)"), std::string::npos) << p.line();
   p.episodes_of(0) += 6;
@@ -152,7 +152,8 @@ TEST(PlanOrder, LightRunsReportFirstAndAnExpensiveLeadEndsAsItsFollowersAreDue) 
   for (std::size_t f = 1; f < 5; ++f) EXPECT_LT(at[0], at[f]);
   for (std::size_t t = 5; t < 25; ++t) EXPECT_LT(at[t], at[0]);
   const auto end_of = [](const std::vector<double>& e, std::size_t from, std::size_t to) {
-    return *std::max_element(e.begin() + static_cast<std::ptrdiff_t>(from), e.begin() + static_cast<std::ptrdiff_t>(to));
+    return *std::max_element(e.begin() + static_cast<std::ptrdiff_t>(from),
+                             e.begin() + static_cast<std::ptrdiff_t>(to));
   };
   const auto end = simulate_runner(order, cost, lead, 2);
   // the tiny env is done after its 20 s of work on 2 workers; no worker ever waits:
@@ -234,7 +235,9 @@ class PlanFromDatabase : public testing::TempDirTest {
 };
 
 TEST_F(PlanFromDatabase, DoneRunsOfAGroupCostItsPendingRunsByTheirMedianWall) {
-  ASSERT_EQ(harness("--env cartpole1 --optimizer cmaes,random --seeds 2 --budget 30 --quiet --db " + path("m.sqlite")).code, 0);
+  ASSERT_EQ(
+      harness("--env cartpole1 --optimizer cmaes,random --seeds 2 --budget 30 --quiet --db " + path("m.sqlite")).code,
+      0);
   const auto p = harness("plan --env cartpole1 --optimizer cmaes,gd --seeds 4 --budget 30 --db " + path("m.sqlite") +
                          " --runs-csv " + path("runs.csv"));
   ASSERT_EQ(p.code, 0) << p.err;
@@ -243,8 +246,8 @@ TEST_F(PlanFromDatabase, DoneRunsOfAGroupCostItsPendingRunsByTheirMedianWall) {
   const std::string csv = testing::read_file(path("runs.csv"));
   EXPECT_EQ(csv.rfind("env,optimizer,seed,budget,planned_s,source,start_rank,lead_seed\n", 0), 0u) << csv;
   // cmaes seeds 2 and 3 at the median of seeds 0 and 1 (their mean), gd from the model
-  const double median = std::stod(testing::scalar(
-      path("m.sqlite"), "SELECT printf('%.17g', avg(wall_s)) FROM runs WHERE optimizer='cmaes'"));
+  const double median = std::stod(
+      testing::scalar(path("m.sqlite"), "SELECT printf('%.17g', avg(wall_s)) FROM runs WHERE optimizer='cmaes'"));
   const auto at = csv.find("cartpole1,cmaes,2,30,");
   ASSERT_NE(at, std::string::npos) << csv;
   EXPECT_NEAR(std::stod(csv.substr(at + 21)), median, 1e-5 * median) << csv;
@@ -264,8 +267,8 @@ TEST_F(PlanFromDatabase, SlurmTakesItsTimeLimitFromThePlanUnlessGivenOne) {
   const std::string array = testing::read_file(path("c/array.sbatch"));
   EXPECT_NE(array.find("#SBATCH --time=0-00:15:"), std::string::npos) << array;  // a short grid: the 15 min extra
   EXPECT_NE(s.out.find("the plan's longest task"), std::string::npos) << s.out;
-  const auto t = harness("slurm --env cartpole1 --optimizer cmaes --seeds 2 --budget 30 --shards 2 --time 2:00:00 --dir " +
-                         path("d"));
+  const auto t = harness(
+      "slurm --env cartpole1 --optimizer cmaes --seeds 2 --budget 30 --shards 2 --time 2:00:00 --dir " + path("d"));
   ASSERT_EQ(t.code, 0) << t.err;
   EXPECT_NE(testing::read_file(path("d/array.sbatch")).find("#SBATCH --time=2:00:00"), std::string::npos);
   EXPECT_EQ(slurm_time_limit(3600.0), "0-01:45:00");  // 1.5 h + 15 min
@@ -315,8 +318,8 @@ TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSe
   ASSERT_GT(cmaes_s, 0.0);
   ASSERT_GT(boleap_s, 0.0);
   ASSERT_GT(ppo_s, 0.0);
-  const auto p = testing::run_harness(dir_, "plan " + grid + " --db " + path("p.sqlite") + " --runs-csv " +
-                                                path("runs.csv"), cache);
+  const auto p = testing::run_harness(
+      dir_, "plan " + grid + " --db " + path("p.sqlite") + " --runs-csv " + path("runs.csv"), cache);
   ASSERT_EQ(p.code, 0) << p.err;
   const std::string csv = testing::read_file(path("runs.csv"));
   // cmaes: its measured run itself (the plan writes 6 significant digits)
@@ -324,11 +327,9 @@ TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSe
   // boleap: the measured 200 episodes carried to 300 by its model: the episodes at their calibrated
   // costs (47% gradient episodes), its own time the probe's plus the model's growth from 200 to 300
   const auto costs = j.at("costs").begin().value();
-  const double per_episode =
-      0.47 * costs.at("gradient_s").get<double>() + 0.53 * costs.at("forward_s").get<double>();
+  const double per_episode = 0.47 * costs.at("gradient_s").get<double>() + 0.53 * costs.at("forward_s").get<double>();
   const auto& own = optimizer_entry("boleap").costs.own_seconds;
-  const double expected =
-      per_episode * 300.0 + (boleap_s - per_episode * 200.0) + own(400, 300) - own(400, 200);
+  const double expected = per_episode * 300.0 + (boleap_s - per_episode * 200.0) + own(400, 300) - own(400, 200);
   EXPECT_NEAR(planned_seconds(csv, "cartpole3,boleap,0,300,"), expected, 1e-5 * expected) << csv;
   EXPECT_GT(own(400, 300), own(400, 200));
   // gd: seed 0 its measured run, seed 1 (a copy of seed 0) the replay of 300 episodes
@@ -337,7 +338,8 @@ TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSe
   // ppo: its measured seconds per episode (acting, learning, the env) over the budget
   EXPECT_NEAR(planned_seconds(csv, "cartpole3,ppo,0,300,"), ppo_s / 41.0 * 300.0, 1e-5 * ppo_s * 300.0 / 41.0) << csv;
   // a longer budget: cmaes is timed again over the whole of it, and the cache keeps both
-  ASSERT_EQ(testing::run_harness(dir_, "calibrate --env cartpole3 --optimizer cmaes --seeds 1 --budget 400", cache).code, 0);
+  ASSERT_EQ(
+      testing::run_harness(dir_, "calibrate --env cartpole3 --optimizer cmaes --seeds 1 --budget 400", cache).code, 0);
   const auto j2 = nlohmann::json::parse(testing::read_file(path("costs.json")));
   EXPECT_EQ(j2.at("runs").size(), 5u) << j2.dump();
 }

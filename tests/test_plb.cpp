@@ -37,7 +37,7 @@ struct Expected {
 };
 
 // PlasticineLab's task files
-const Expected kExpected[] = {{"assembly", 30, 10000, 5e3, 0.2, 100, 100},   {"pinch", 15, 6000, 5e3, 0.2, 50, 100},
+const Expected kExpected[] = {{"assembly", 30, 10000, 5e3, 0.2, 100, 100},  {"pinch", 15, 6000, 5e3, 0.2, 50, 100},
                               {"rollingpin", 15, 10000, 5e3, 0.2, 50, 1.5}, {"rope", 30, 10000, 5e3, 0.2, 50, 0.3},
                               {"table", 15, 10000, 5e3, 0.05, 50, 0.3},     {"torus", 15, 10000, 5e3, 0.2, 50, 100},
                               {"triplemove", 90, 9999, 5e3, 0.2, 200, 1.5}, {"writer", 15, 10000, 5e3, 0.2, 50, 100}};
@@ -69,9 +69,10 @@ TEST(Plb, ModelsAsPlasticineLabDefinesThem) {
     for (const auto& p : m.initial) {
       bool inside = false;
       for (const auto& s : task.shapes)
-        inside = inside || (s.kind == mpm::PlbShape::Kind::box
-                                ? ((p.x - s.centre).cwiseAbs().array() <= s.size.array() / 2 + 1e-12).all()
-                                : (p.x - s.centre).norm() <= s.radius + 1e-12);
+        inside = inside ||
+            (s.kind == mpm::PlbShape::Kind::box
+                 ? ((p.x - s.centre).cwiseAbs().array() <= s.size.array() / 2 + 1e-12).all()
+                 : (p.x - s.centre).norm() <= s.radius + 1e-12);
       ASSERT_TRUE(inside);
     }
   }
@@ -146,13 +147,13 @@ TEST(Plb, TargetsHavePlasticineLabsFigures) {
       matched[best] = true;
       const auto& ours = s.bodies[best];
       const Vec3 centre = t.plb_target.size() == 1 ? s.centre : ours.centre;
-      std::printf("  %-11s centre (%.3f, %.3f, %.3f) vs (%.3f, %.3f, %.3f): %.4f apart; box faces off by "
-                  "(%+ld %+ld %+ld)..(%+ld %+ld %+ld) cells\n",
-                  t.name.c_str(), centre.x(), centre.y(), centre.z(), theirs.centre.x(), theirs.centre.y(),
-                  theirs.centre.z(), (centre - theirs.centre).norm(), cells(ours.lo.x() - theirs.lo.x()),
-                  cells(ours.lo.y() - theirs.lo.y()), cells(ours.lo.z() - theirs.lo.z()),
-                  cells(ours.hi.x() - theirs.hi.x()), cells(ours.hi.y() - theirs.hi.y()),
-                  cells(ours.hi.z() - theirs.hi.z()));
+      std::printf(
+          "  %-11s centre (%.3f, %.3f, %.3f) vs (%.3f, %.3f, %.3f): %.4f apart; box faces off by "
+          "(%+ld %+ld %+ld)..(%+ld %+ld %+ld) cells\n",
+          t.name.c_str(), centre.x(), centre.y(), centre.z(), theirs.centre.x(), theirs.centre.y(), theirs.centre.z(),
+          (centre - theirs.centre).norm(), cells(ours.lo.x() - theirs.lo.x()), cells(ours.lo.y() - theirs.lo.y()),
+          cells(ours.lo.z() - theirs.lo.z()), cells(ours.hi.x() - theirs.hi.x()), cells(ours.hi.y() - theirs.hi.y()),
+          cells(ours.hi.z() - theirs.hi.z()));
       EXPECT_LE((centre - theirs.centre).norm(), 0.01);
       for (int a = 0; a < 3; ++a) {
         EXPECT_NEAR(ours.lo[a], theirs.lo[a], dx + 5e-4) << "lower face, axis " << a;
@@ -226,8 +227,8 @@ TEST_F(PlbHarness, EveryTaskRunsEndToEndWithItsMetricStored) {
   sqlite3* h = nullptr;
   ASSERT_EQ(sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
   sqlite3_stmt* q = nullptr;
-  sqlite3_prepare_v2(h, "SELECT count(*), sum(loss IS NOT NULL), sum(metric >= 0 AND metric <= 1) FROM evals", -1,
-                     &q, nullptr);
+  sqlite3_prepare_v2(h, "SELECT count(*), sum(loss IS NOT NULL), sum(metric >= 0 AND metric <= 1) FROM evals", -1, &q,
+                     nullptr);
   ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
   EXPECT_EQ(sqlite3_column_int(q, 0), 16);
   EXPECT_EQ(sqlite3_column_int(q, 1), 16);

@@ -85,4 +85,3 @@ TEST(PlbLong, FullHorizonGradientMatchesCentralDifferences) {
 
 }  // namespace
 }  // namespace dsb
-

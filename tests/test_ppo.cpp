@@ -35,12 +35,12 @@ TEST(PpoGae, FourStepsByHand) {
   std::vector<double> adv(4), ret(4);
   compute_gae(r, v, done, last_value, g, l, adv, ret);
   // by hand, backwards
-  const double d3 = 0.5 + g * 0.6 - 0.3;   // 0.74
+  const double d3 = 0.5 + g * 0.6 - 0.3;  // 0.74
   const double a3 = d3;
-  const double d2 = 0.0 + g * 0.3 - 0.1;   // 0.17
-  const double a2 = d2 + g * l * a3;       // 0.17 + 0.72 * 0.74 = 0.7028
-  const double d1 = -1.0 - (-0.4);         // terminal: -0.6
-  const double a1 = d1;                    // nothing flows back across the episode's end
+  const double d2 = 0.0 + g * 0.3 - 0.1;     // 0.17
+  const double a2 = d2 + g * l * a3;         // 0.17 + 0.72 * 0.74 = 0.7028
+  const double d1 = -1.0 - (-0.4);           // terminal: -0.6
+  const double a1 = d1;                      // nothing flows back across the episode's end
   const double d0 = 0.0 + g * (-0.4) - 0.2;  // -0.56
   const double a0 = d0 + g * l * a1;         // -0.56 - 0.432 = -0.992
   const double want[4] = {a0, a1, a2, a3};
@@ -135,9 +135,10 @@ TEST(PpoLossTest, GradientMatchesCentralDifferencesOnAFixedBatch) {
     ++checked;
   }
   const double normwise = std::sqrt(err2 / ref2);
-  std::printf("ppo loss gradient vs central differences (h 1e-6) over %d of %zu params: normwise %.2e, worst "
-              "|error| %.2e of max |fd| %.2e\n",
-              checked, x.size(), normwise, worst, max_abs);
+  std::printf(
+      "ppo loss gradient vs central differences (h 1e-6) over %d of %zu params: normwise %.2e, worst "
+      "|error| %.2e of max |fd| %.2e\n",
+      checked, x.size(), normwise, worst, max_abs);
   // rounding of (up - down) / 2h: eps |L| / h ~ 2e-10 per coordinate; truncation h^2 |L'''| tiny
   EXPECT_LT(normwise, 1e-6);
   EXPECT_LT(worst, 1e-6 * max_abs + 1e-9);
@@ -152,8 +153,7 @@ double best_of(const Env& env, std::int64_t budget, const std::string& optimizer
   Rng rng(seed);
   try {
     opt->minimize(f, rng);
-  } catch (const BudgetExhausted&) {
-  }
+  } catch (const BudgetExhausted&) {}
   EXPECT_EQ(f.used(), budget) << optimizer;
   if (diagnostics) *diagnostics = opt->diagnostics();
   if (losses)
@@ -267,12 +267,14 @@ TEST(RlHarness, PpoAndSacGiveTheSameResultsForAnyJobsAndPairOnlyWithRlEnvs) {
   std::string csv[2];
   for (int jobs : {1, 2}) {
     const std::string db = (dir / ("j" + std::to_string(jobs) + ".sqlite")).string();
-    auto r = testing::run_harness(dir, "--env cartpole1,flip --optimizer ppo --seeds 2 --budget 12 --quiet --jobs " +
-                                           std::to_string(jobs) + " --db " + db);
+    auto r = testing::run_harness(dir,
+                                  "--env cartpole1,flip --optimizer ppo --seeds 2 --budget 12 --quiet --jobs " +
+                                      std::to_string(jobs) + " --db " + db);
     ASSERT_EQ(r.code, 0) << r.err;
     // sac: 2 cartpole1 episodes = 200 decisions, 100 gradient steps after the random ones
-    r = testing::run_harness(dir, "--env cartpole1 --optimizer sac --seeds 2 --budget 2 --quiet --jobs " +
-                                      std::to_string(jobs) + " --db " + db);
+    r = testing::run_harness(
+        dir,
+        "--env cartpole1 --optimizer sac --seeds 2 --budget 2 --quiet --jobs " + std::to_string(jobs) + " --db " + db);
     ASSERT_EQ(r.code, 0) << r.err;
     const std::string out = (dir / ("j" + std::to_string(jobs) + ".csv")).string();
     ASSERT_EQ(testing::run_harness(dir, "export --db " + db + " --out " + out).code, 0);
@@ -285,8 +287,8 @@ TEST(RlHarness, PpoAndSacGiveTheSameResultsForAnyJobsAndPairOnlyWithRlEnvs) {
   ASSERT_EQ(plan.code, 0) << plan.err;
   // sphere-10 x the 10 non-RL optimizers + cartpole1 x all 12 (ppo and sac)
   EXPECT_NE((plan.out + plan.err).find("22 runs"), std::string::npos) << plan.out << plan.err;
-  auto bad = testing::run_harness(dir, "--env sphere-10 --optimizer ppo --seeds 1 --budget 2 --db " +
-                                           (dir / "bad.sqlite").string());
+  auto bad = testing::run_harness(
+      dir, "--env sphere-10 --optimizer ppo --seeds 1 --budget 2 --db " + (dir / "bad.sqlite").string());
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("needs an RL view"), std::string::npos) << bad.err;
   fs::remove_all(dir);

@@ -336,8 +336,7 @@ TEST(ReferenceContact, FreeFlightIsExactAndImpactsStartTogether) {
     CrosscheckSetup& setup = *owned;
     const auto ours = rollouts(setup, "ours");
     for (const std::string engine : {"mujoco", "bullet"}) {
-      if ((engine == "mujoco" && !mujoco_available()) || (engine == "bullet" && !bullet_available()))
-        continue;
+      if ((engine == "mujoco" && !mujoco_available()) || (engine == "bullet" && !bullet_available())) continue;
       const auto theirs = rollouts(setup, engine);
       for (std::size_t k = 0; k < ours.size(); ++k) {
         const ContactEvents eo = contact_events(ours[k], setup.gravity(), setup.dt());
@@ -431,8 +430,7 @@ TEST(Crosscheck, EveryToleranceHoldsAndEveryEngineIsNamed) {
   for (const auto& env : crosscheck_envs()) EXPECT_NE(table.find(env + " "), std::string::npos) << env;
   EXPECT_EQ(table.find("ours-mujoco") != std::string::npos, mujoco_available());
   EXPECT_EQ(table.find("ours-bullet") != std::string::npos, bullet_available());
-  EXPECT_EQ(table.find("mujoco-bullet") != std::string::npos,
-            mujoco_available() && bullet_available());
+  EXPECT_EQ(table.find("mujoco-bullet") != std::string::npos, mujoco_available() && bullet_available());
 }
 
 TEST(Crosscheck, OneEnvIsDeterministicAndUnknownNamesAreUsageErrors) {
@@ -449,8 +447,8 @@ TEST(Crosscheck, OneEnvIsDeterministicAndUnknownNamesAreUsageErrors) {
 
 // each setup's env is the one the harness runs: the registry's env of that name, same config
 TEST(Crosscheck, EverySetupsEnvIsTheRegistrysEnv) {
-  ASSERT_EQ(crosscheck_envs(), (std::vector<std::string>{"cartpole1", "cartpole3", "bounce",
-                                                          "pinball-1x2", "pinball-4x4"}));
+  ASSERT_EQ(crosscheck_envs(),
+            (std::vector<std::string>{"cartpole1", "cartpole3", "bounce", "pinball-1x2", "pinball-4x4"}));
   for (const auto& name : crosscheck_envs()) {
     const auto setup = make_setup(name);
     const auto env = make_env(name);

@@ -159,11 +159,11 @@ TEST_F(Reliability, AnExistingFileIsWrittenOverOnlyWithForceAndOutputsAppearWhol
   { std::ofstream(path("mine.png")) << "my picture\n"; }
   fs::create_symlink(path("mine.csv"), path("link.csv"));
   fs::create_symlink(path("nowhere.csv"), path("dangling.csv"));
-  for (const std::string& args : {"export --db " + b + " --out " + path("mine.csv"),
-                                 "export --db " + b + " --out " + path("link.csv"),
-                                 "export --db " + b + " --out " + path("dangling.csv"),
-                                 "landscape --env sphere-2 --dims 0,1 --res 3 --out " + path("mine.csv"),
-                                 "render --env bounce --x 0.1,0.2,0.3 --frames 1 --out " + path("mine.png")})
+  for (const std::string& args :
+       {"export --db " + b + " --out " + path("mine.csv"), "export --db " + b + " --out " + path("link.csv"),
+        "export --db " + b + " --out " + path("dangling.csv"),
+        "landscape --env sphere-2 --dims 0,1 --res 3 --out " + path("mine.csv"),
+        "render --env bounce --x 0.1,0.2,0.3 --frames 1 --out " + path("mine.png")})
     expect_refused(harness(args), "exists; give --force", args);
   EXPECT_EQ(read_file(path("mine.csv")), "my notes\n");
   EXPECT_EQ(read_file(path("mine.png")), "my picture\n");
@@ -211,8 +211,8 @@ TEST_F(Reliability, TheLockBelongsToTheFileNotItsName) {
   ASSERT_GT(first, 0);
   // a run 'running' with a committed prefix (commits come every 2 s; on a loaded machine the first
   // may come late, and the checks below need a journal to find intact)
-  const bool started = wait_until(db, "SELECT count(*) FROM runs WHERE status='running' AND episodes > 0", "1",
-                                  first, std::chrono::seconds(120));
+  const bool started = wait_until(db, "SELECT count(*) FROM runs WHERE status='running' AND episodes > 0", "1", first,
+                                  std::chrono::seconds(120));
   if (!started) ::kill(first, SIGKILL);
   ASSERT_TRUE(started) << "no run row 'running' with committed episodes appeared";
   fs::create_symlink(db, path("sym.sqlite"));
@@ -239,9 +239,9 @@ TEST_F(Reliability, TheLockBelongsToTheFileNotItsName) {
 
 TEST_F(Reliability, HorizonVariantsHaveOneNameEach) {
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"fluid-h05", "is written 'fluid-h5'"},       {"fluid-h005", "is written 'fluid-h5'"},
+      {"fluid-h05", "is written 'fluid-h5'"},         {"fluid-h005", "is written 'fluid-h5'"},
       {"plb-pinch-h05", "is written 'plb-pinch-h5'"}, {"fluid-h50", "name it 'fluid'"},
-      {"plb-rope-h50", "name it 'plb-rope'"},        {"fluid-h7", "a multiple of 5 from 5 to 45"},
+      {"plb-rope-h50", "name it 'plb-rope'"},         {"fluid-h7", "a multiple of 5 from 5 to 45"},
       {"fluid-h+5", "unknown env 'fluid-h+5'"},       {"plb-pinch-h", "unknown env 'plb-pinch-h'"},
   };
   for (const auto& [name, says] : cases) {
@@ -271,7 +271,8 @@ TEST_F(Reliability, AGridWithFailedRunsExitsThreeAndPlanNamesThem) {
   EXPECT_NE(p.out.find("sphere-3/ext:crash/seed 0/"), std::string::npos) << p.out;
   EXPECT_NE(p.out.find("ext:crash: closed its stdout and exited with status 3"), std::string::npos) << p.out;
   // a grid whose runs are all done exits 0
-  EXPECT_EQ(harness("--env sphere-3 --optimizer random --seeds 2 --budget 10 --quiet --db " + path("f.sqlite")).code, 0);
+  EXPECT_EQ(harness("--env sphere-3 --optimizer random --seeds 2 --budget 10 --quiet --db " + path("f.sqlite")).code,
+            0);
 }
 
 TEST_F(Reliability, TheSlurmArrayTakesFailedRunsAsResults) {
@@ -279,13 +280,13 @@ TEST_F(Reliability, TheSlurmArrayTakesFailedRunsAsResults) {
   // succeeds, so the merge that depends on it runs; the failed run is in the shard's database
   const std::string crash =
       "--ext crash='/usr/bin/python3 " + std::string(DSB_SOURCE_DIR) + "/tests/ext/test_optimizer.py crash 1'";
-  ASSERT_EQ(harness("slurm --env sphere-3 --optimizer ext:crash --seeds 1 --budget 10 " + crash +
-                    " --shards 1 --dir " + path("c"))
+  ASSERT_EQ(harness("slurm --env sphere-3 --optimizer ext:crash --seeds 1 --budget 10 " + crash + " --shards 1 --dir " +
+                    path("c"))
                 .code,
             0);
   const int status = std::system(("SLURM_ARRAY_TASK_ID=0 TMPDIR=" + dir_.string() + " bash " + path("c/array.sbatch") +
-                                   " > " + path("task.log") + " 2>&1")
-                                      .c_str());
+                                  " > " + path("task.log") + " 2>&1")
+                                     .c_str());
   const std::string log = read_file(path("task.log"));
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << log;
   EXPECT_NE(log.find("harness exit status 3"), std::string::npos) << log;
@@ -301,8 +302,8 @@ class ExternalSignals : public Reliability {
   // with a reply timeout far beyond Slurm's 30 s grace; returns the harness's pid and the
   // optimizer's (written by it once it hangs)
   std::pair<pid_t, pid_t> start_hung_grid() {
-    const std::string opt = "/usr/bin/python3 " + std::string(DSB_SOURCE_DIR) +
-                            "/tests/ext/test_optimizer.py hang-ignoring-term 1";
+    const std::string opt =
+        "/usr/bin/python3 " + std::string(DSB_SOURCE_DIR) + "/tests/ext/test_optimizer.py hang-ignoring-term 1";
     const pid_t h = start_harness("--env sphere-3 --optimizer ext:stuck --ext stuck='" + opt +
                                       "' --ext-timeout 600 --seeds 1 --budget 20 --quiet --db " + path("s.sqlite"),
                                   "TEST_OPT_PIDFILE=" + path("opt.pid"));
@@ -386,8 +387,9 @@ class ReadOnlyInputs : public Reliability {
 };
 
 TEST_F(ReadOnlyInputs, ADatabaseTheUserMayNotWrite) {
-  fs::permissions(dir_ / "ro", fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
-                                   fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+  fs::permissions(dir_ / "ro",
+                  fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read | fs::perms::group_exec |
+                      fs::perms::others_read | fs::perms::others_exec);
   fs::permissions(db_, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
   // root may write anything: the commands then run as nobody
   const std::string prefix = ::geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups" : "";
@@ -398,12 +400,13 @@ TEST_F(ReadOnlyInputs, ADatabaseTheUserMayNotWrite) {
 TEST_F(ReadOnlyInputs, AReadOnlyMount) {
   // a read-only bind mount of the database's folder in a private mount namespace (root only)
   const std::string ro = (dir_ / "ro").string();
-  if (::geteuid() != 0 || std::system(("unshare -m sh -c 'mount --bind " + ro + " " + ro + " && mount -o remount,bind,ro " +
-                                       ro + " " + ro + "' > /dev/null 2>&1")
-                                          .c_str()) != 0)
+  if (::geteuid() != 0 ||
+      std::system(("unshare -m sh -c 'mount --bind " + ro + " " + ro + " && mount -o remount,bind,ro " + ro + " " + ro +
+                   "' > /dev/null 2>&1")
+                      .c_str()) != 0)
     GTEST_SKIP() << "no private read-only mount here (needs root and mount namespaces)";
   const std::string prefix = "unshare -m sh -c 'mount --bind " + ro + " " + ro + " && mount -o remount,bind,ro " + ro +
-                             " && exec \"$0\" \"$@\"'";
+      " && exec \"$0\" \"$@\"'";
   expect_reading_works(prefix, "mount");
 }
 
@@ -411,8 +414,8 @@ TEST_F(ReadOnlyInputs, AReadOnlyMount) {
 
 TEST_F(Reliability, ThreadsAreCappedAtTheUsableCpus) {
   const int cpus = usable_cpus();
-  const auto r = harness("--env sphere-2 --optimizer random --seeds 1 --budget 3 --threads " + std::to_string(cpus + 1) +
-                         " --db " + path("t.sqlite"));
+  const auto r = harness("--env sphere-2 --optimizer random --seeds 1 --budget 3 --threads " +
+                         std::to_string(cpus + 1) + " --db " + path("t.sqlite"));
   expect_refused(r, "--threads " + std::to_string(cpus + 1) + " is more than the " + std::to_string(cpus) + " CPUs",
                  "threads");
   EXPECT_FALSE(fs::exists(path("t.sqlite")));
@@ -441,8 +444,9 @@ class StrictMerge : public Reliability {
     auto r = rows(db,
                   "SELECT env, optimizer, seed, status, episodes, best_loss, error, host FROM runs ORDER BY env, "
                   "optimizer, seed");
-    for (const auto& e : rows(db, "SELECT r.optimizer, e.episode, e.loss, e.wall_s FROM evals e JOIN runs r "
-                                  "USING(run_id) ORDER BY r.optimizer, e.episode"))
+    for (const auto& e : rows(db,
+                              "SELECT r.optimizer, e.episode, e.loss, e.wall_s FROM evals e JOIN runs r "
+                              "USING(run_id) ORDER BY r.optimizer, e.episode"))
       r.push_back(e);
     return r;
   }
@@ -521,8 +525,8 @@ TEST_F(Reliability, RangeMessagesSayWhatIsAccepted) {
   const std::string grid = "--env sphere-2 --optimizer random --seeds 1 --budget 2 --quiet --db " + path("m.sqlite");
   expect_refused(harness(grid + " --jobs -1"), "--jobs must be from 1 to 1024, or 0 for the CPUs", "--jobs");
   EXPECT_EQ(harness(grid + " --jobs 0").code, 0);  // 0 is accepted, as the message says
-  const std::string ext =
-      " --optimizer ext:r --ext r='/usr/bin/python3 " + std::string(DSB_SOURCE_DIR) + "/tests/ext/test_optimizer.py random 1'";
+  const std::string ext = " --optimizer ext:r --ext r='/usr/bin/python3 " + std::string(DSB_SOURCE_DIR) +
+      "/tests/ext/test_optimizer.py random 1'";
   expect_refused(harness("--env sphere-2 --seeds 1 --budget 2 --db " + path("e.sqlite") + ext + " --ext-timeout 0"),
                  "--ext-timeout must be seconds above 0 and at most 86400, got '0'", "--ext-timeout");
 }

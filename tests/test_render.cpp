@@ -45,9 +45,7 @@ const Disc& disc(const Scene& s, const std::string& name) {
   throw std::runtime_error("no disc " + name);
 }
 
-double distance(const ScenePoint& a, const ScenePoint& b) {
-  return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-}
+double distance(const ScenePoint& a, const ScenePoint& b) { return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); }
 
 // mean over the pairs of discs named `state` and `target` (in order) of their distance
 double mean_disc_distance(const Scene& s, const std::string& state) {

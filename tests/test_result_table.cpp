@@ -99,11 +99,11 @@ TEST_F(ResultTable, MissingAndAddedRowsFail) {
 
 TEST_F(ResultTable, MalformedBaselineExitsTwoWithOneLine) {
   const std::string h = std::string(kResultTableHeader) + "\n";
-  for (const std::string& bad : std::vector<std::string>{"not,a,header\n", h + "branin,random,x,7,a,b,1,1,1,0,1.5\n",
-                                h + "branin,random,0,7,a,b,1,1,1,0\n", h + "branin,random,0,7,a,b,1,1,1,0,1.5zz\n",
-                                h + "branin,random,0,7,a,b,1,x,1,0,1.5\n",
-                                // a table from before results versions
-                                "env,optimizer,seed,budget,env_config_hash,opt_config_hash,episode,loss\n"}) {
+  for (const std::string& bad : std::vector<std::string>{
+           "not,a,header\n", h + "branin,random,x,7,a,b,1,1,1,0,1.5\n", h + "branin,random,0,7,a,b,1,1,1,0\n",
+           h + "branin,random,0,7,a,b,1,1,1,0,1.5zz\n", h + "branin,random,0,7,a,b,1,x,1,0,1.5\n",
+           // a table from before results versions
+           "env,optimizer,seed,budget,env_config_hash,opt_config_hash,episode,loss\n"}) {
     { std::ofstream(csv_) << bad; }
     EXPECT_EQ(check(), 2) << bad;
     EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << err_;

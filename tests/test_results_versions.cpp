@@ -114,9 +114,9 @@ TEST_F(ResultsVersionsTest, ADatabaseOfOtherVersionsResumesNothingAndEveryComman
   EXPECT_EQ(resumed.code, 0) << resumed.err;
   EXPECT_EQ(resumed.err.find("resumed"), std::string::npos) << resumed.err;
   const std::string current = now.text();
-  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status='done' AND budget=30 AND results_versions='" +
-                           current + "'"),
-            "1");
+  EXPECT_EQ(
+      scalar(db, "SELECT count(*) FROM runs WHERE status='done' AND budget=30 AND results_versions='" + current + "'"),
+      "1");
   // the stale runs are byte for byte as they were
   EXPECT_EQ(testing::rows(db, "SELECT * FROM runs WHERE run_id <= 9 ORDER BY run_id"), stale_rows);
   EXPECT_EQ(testing::rows(db, "SELECT * FROM evals WHERE run_id <= 9 ORDER BY run_id, episode"), stale_evals);

@@ -34,9 +34,9 @@ TEST(FailedEpisodeLoss, PpoDefaultsKeepPposRule) {
   EpisodeLosses e(dsb::PpoConfig{}.failed_loss, 20);
   EXPECT_EQ(e.finish_episode(kInf), ppo_rule(false, 0.0));  // before any finite loss: 2
   EXPECT_EQ(e.finish_episode(0.3), 0.3);
-  EXPECT_EQ(e.finish_episode(kNaN), ppo_rule(true, 0.3));    // 0.6: below sac's floor of 1
+  EXPECT_EQ(e.finish_episode(kNaN), ppo_rule(true, 0.3));  // 0.6: below sac's floor of 1
   EXPECT_EQ(e.finish_episode(0.1), 0.1);
-  EXPECT_EQ(e.finish_episode(-kInf), ppo_rule(true, 0.3));   // the largest, not the last
+  EXPECT_EQ(e.finish_episode(-kInf), ppo_rule(true, 0.3));  // the largest, not the last
   EXPECT_EQ(e.episodes(), 5);
   EXPECT_EQ(e.failed(), 3);
 }
@@ -46,9 +46,9 @@ TEST(FailedEpisodeLoss, SacDefaultsKeepSacsRule) {
   EpisodeLosses e(cfg.failed_loss(), 1);
   EXPECT_EQ(e.finish_episode(kNaN), sac_rule(-kInf, 2.0, 1.0));  // 1
   EXPECT_EQ(e.finish_episode(0.3), 0.3);
-  EXPECT_EQ(e.finish_episode(kInf), sac_rule(0.3, 2.0, 1.0));    // the floor: 1
+  EXPECT_EQ(e.finish_episode(kInf), sac_rule(0.3, 2.0, 1.0));  // the floor: 1
   EXPECT_EQ(e.finish_episode(4.0), 4.0);
-  EXPECT_EQ(e.finish_episode(kInf), sac_rule(4.0, 2.0, 1.0));    // 8
+  EXPECT_EQ(e.finish_episode(kInf), sac_rule(4.0, 2.0, 1.0));  // 8
   dsb::SacConfig other;
   other.failed_loss_factor = 3.0;
   other.failed_loss_floor = 5.0;
@@ -69,7 +69,8 @@ TEST(FailedEpisodeLoss, ValidationNamesTheField) {
   };
   EXPECT_NE(message({.factor = 0.5, .floor = 0.0, .before_any = 2.0}).find("'failed_loss_factor'"), std::string::npos);
   EXPECT_NE(message({.factor = 2.0, .floor = -1.0, .before_any = 2.0}).find("'failed_loss_floor'"), std::string::npos);
-  EXPECT_NE(message({.factor = 2.0, .floor = 0.0, .before_any = 0.0}).find("'failed_loss_before_any'"), std::string::npos);
+  EXPECT_NE(message({.factor = 2.0, .floor = 0.0, .before_any = 0.0}).find("'failed_loss_before_any'"),
+            std::string::npos);
   EXPECT_EQ(message({.factor = 2.0, .floor = 0.0, .before_any = 2.0}), "");
   dsb::SacConfig sac;
   sac.failed_loss_floor = 0.0;  // sac's floor is its stand-in before any finite loss

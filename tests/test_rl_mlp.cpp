@@ -42,8 +42,7 @@ Eigen::MatrixXd reference_forward(const Mlp& net, const Eigen::MatrixXd& x, doub
     Eigen::MatrixXd z = (w * a).colwise() + b;
     if (l == L - 1) return z;
     mz = std::min(mz, z.cwiseAbs().minCoeff());
-    a = net.activation() == Activation::tanh ? Eigen::MatrixXd(z.array().tanh())
-                                             : Eigen::MatrixXd(z.cwiseMax(0.0));
+    a = net.activation() == Activation::tanh ? Eigen::MatrixXd(z.array().tanh()) : Eigen::MatrixXd(z.cwiseMax(0.0));
     if (min_abs_z) *min_abs_z = mz;
   }
   return a;
@@ -66,8 +65,8 @@ GradErr compare(const std::vector<double>& ga, const std::vector<double>& gf) {
 }
 
 // L = sum(R .* net(x)); analytic dL/dparams, dL/dx vs central differences with step h
-void check_mlp_gradient(Mlp& net, const Eigen::MatrixXd& x, const Eigen::MatrixXd& r, double h,
-                        const char* name, double tol_normwise, double tol_max) {
+void check_mlp_gradient(Mlp& net, const Eigen::MatrixXd& x, const Eigen::MatrixXd& r, double h, const char* name,
+                        double tol_normwise, double tol_max) {
   auto loss = [&](const Eigen::MatrixXd& xx) { return (r.array() * net.forward(xx).array()).sum(); };
   MlpCache cache;
   net.forward(x, &cache);
@@ -94,8 +93,8 @@ void check_mlp_gradient(Mlp& net, const Eigen::MatrixXd& x, const Eigen::MatrixX
     xf[i] = (loss(xp) - loss(xm)) / (2 * h);
   }
   const GradErr ep = compare(ga, gf), ex = compare(xa, xf);
-  std::printf("%s: %zu params, h %.0e: param grad normwise %.3e max %.3e; input grad normwise %.3e max %.3e\n",
-              name, net.param_count(), h, ep.normwise, ep.max_rel, ex.normwise, ex.max_rel);
+  std::printf("%s: %zu params, h %.0e: param grad normwise %.3e max %.3e; input grad normwise %.3e max %.3e\n", name,
+              net.param_count(), h, ep.normwise, ep.max_rel, ex.normwise, ex.max_rel);
   EXPECT_LT(ep.normwise, tol_normwise);
   EXPECT_LT(ep.max_rel, tol_max);
   EXPECT_LT(ex.normwise, tol_normwise);
@@ -182,7 +181,8 @@ TEST(RlMlp, OrthogonalInit) {
     worst = std::max(worst, e);
     EXPECT_LT(e, 1e-12) << "layer " << l;
     if (w.rows() == w.cols()) {
-      EXPECT_LT((w * w.transpose() - gain * gain * Eigen::MatrixXd::Identity(w.rows(), w.rows())).cwiseAbs().maxCoeff(), 1e-12);
+      EXPECT_LT((w * w.transpose() - gain * gain * Eigen::MatrixXd::Identity(w.rows(), w.rows())).cwiseAbs().maxCoeff(),
+                1e-12);
     }
     EXPECT_EQ(net.bias(l).cwiseAbs().maxCoeff(), 0.0);
   }
@@ -237,8 +237,8 @@ TEST(RlMlp, TorchDefaultInit) {
   const double mean = w.mean();
   const double var = (w.array() - mean).square().sum() / (n - 1);
   const double sd_mean = b / std::sqrt(3 * n), sd_var = b * b * std::sqrt(4.0 / 45.0) / std::sqrt(n);
-  std::printf("torch init 256x256 (b = 1/16): mean %.3e (%.2f sd), variance %.6e vs b^2/3 = %.6e (%.2f sd)\n",
-              mean, mean / sd_mean, var, b * b / 3, (var - b * b / 3) / sd_var);
+  std::printf("torch init 256x256 (b = 1/16): mean %.3e (%.2f sd), variance %.6e vs b^2/3 = %.6e (%.2f sd)\n", mean,
+              mean / sd_mean, var, b * b / 3, (var - b * b / 3) / sd_var);
   EXPECT_LT(std::abs(mean), 5 * sd_mean);
   EXPECT_LT(std::abs(var - b * b / 3), 5 * sd_var);
 }
@@ -346,7 +346,8 @@ TEST(RlMlp, SquashedGaussianDensityIntegrates) {
     for (int k = 0; k <= n; ++k) {
       const double e = lo + k * step;
       const double w = (k == 0 || k == n) ? 1.0 : (k % 2 ? 4.0 : 2.0);
-      const SquashedGaussian g = squashed_gaussian(std::vector<double>{m}, std::vector<double>{ls}, std::vector<double>{e});
+      const SquashedGaussian g =
+          squashed_gaussian(std::vector<double>{m}, std::vector<double>{ls}, std::vector<double>{e});
       // p(a) da/de, da/de = (1 - a^2) s
       integral += w * std::exp(g.log_prob) * g.da_dmean[0] * s;
     }
@@ -355,8 +356,9 @@ TEST(RlMlp, SquashedGaussianDensityIntegrates) {
     const double predicted = d * (1 + ec2) / 2;
     const double r_bound = d * d * (3 + 4 * ec2 + std::cosh(4 * m) * std::exp(8 * s * s)) / 8;
     const double deficit = 1 - integral;
-    std::printf("squashed density m %.1f log_std %.1f: integral 1 - %.6e, predicted deficit %.6e, diff %.3e (bound %.3e)\n",
-                m, ls, deficit, predicted, deficit - predicted, r_bound + 1e-12);
+    std::printf(
+        "squashed density m %.1f log_std %.1f: integral 1 - %.6e, predicted deficit %.6e, diff %.3e (bound %.3e)\n", m,
+        ls, deficit, predicted, deficit - predicted, r_bound + 1e-12);
     // 0 <= predicted - deficit = r <= d^2 E[cosh^4 u], plus 1e-12 for quadrature and rounding
     EXPECT_LE(deficit, predicted + 1e-12);
     EXPECT_GE(deficit, predicted - r_bound - 1e-12);
@@ -398,9 +400,12 @@ TEST(RlMlp, SquashedGaussianDerivatives) {
   EXPECT_LT(worst, 1e-7);
 
   // log_std outside [-20, 2] is clamped: same draw as at the bound, zero derivative
-  const SquashedGaussian hi = squashed_gaussian(std::vector<double>{0.1}, std::vector<double>{2.5}, std::vector<double>{0.3});
-  const SquashedGaussian at = squashed_gaussian(std::vector<double>{0.1}, std::vector<double>{2.0}, std::vector<double>{0.3});
-  const SquashedGaussian lo = squashed_gaussian(std::vector<double>{0.1}, std::vector<double>{-25.0}, std::vector<double>{0.3});
+  const SquashedGaussian hi =
+      squashed_gaussian(std::vector<double>{0.1}, std::vector<double>{2.5}, std::vector<double>{0.3});
+  const SquashedGaussian at =
+      squashed_gaussian(std::vector<double>{0.1}, std::vector<double>{2.0}, std::vector<double>{0.3});
+  const SquashedGaussian lo =
+      squashed_gaussian(std::vector<double>{0.1}, std::vector<double>{-25.0}, std::vector<double>{0.3});
   EXPECT_EQ(hi.log_prob, at.log_prob);
   EXPECT_EQ(hi.a[0], at.a[0]);
   EXPECT_EQ(hi.da_dlog_std[0], 0.0);

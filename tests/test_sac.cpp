@@ -68,8 +68,7 @@ SacRun run_sac(std::uint64_t seed, std::int64_t budget, const SacConfig& cfg = {
   const auto t0 = std::chrono::steady_clock::now();
   try {
     opt->minimize(f, rng);
-  } catch (const BudgetExhausted&) {
-  }
+  } catch (const BudgetExhausted&) {}
   SacRun r;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r.best = f.best_loss();
@@ -174,8 +173,7 @@ TEST(SacMath, EntropyCoefficientLossGradientAndOneAdamStep) {
   double log_alpha = 0.0;
   adam.step(std::span<double>(&log_alpha, 1), std::span<const double>(&g, 1));
   const double hand = -3e-4 * 2.0 / (2.0 + 1e-8);
-  std::printf("log alpha after one step = %.17g (hand %.17g), alpha = %.17g\n", log_alpha, hand,
-              std::exp(log_alpha));
+  std::printf("log alpha after one step = %.17g (hand %.17g), alpha = %.17g\n", log_alpha, hand, std::exp(log_alpha));
   EXPECT_NEAR(log_alpha, hand, 1e-18);
 }
 
@@ -220,8 +218,8 @@ TEST_F(SacGrad, ActorLossGradientMatchesCentralDifferences) {
     gf[i] = (lp - lm) / (2 * h);
   }
   const auto [normwise, maxrel] = grad_error(ga, gf);
-  std::printf("actor loss %.6f, %zu params: |g - fd| / |fd| = %.3g, max rel = %.3g\n", loss, ga.size(),
-              normwise, maxrel);
+  std::printf("actor loss %.6f, %zu params: |g - fd| / |fd| = %.3g, max rel = %.3g\n", loss, ga.size(), normwise,
+              maxrel);
   EXPECT_LT(normwise, 1e-6);
   EXPECT_LT(maxrel, 1e-6);
 }
@@ -253,8 +251,8 @@ TEST_F(SacGrad, CriticLossGradientMatchesCentralDifferences) {
       gf[i] = (lp - lm) / (2 * h);
     }
     const auto [normwise, maxrel] = grad_error(ga[k], gf);
-    std::printf("critic %d: loss %.6f, %zu params: |g - fd| / |fd| = %.3g, max rel = %.3g\n", k, loss,
-                gf.size(), normwise, maxrel);
+    std::printf("critic %d: loss %.6f, %zu params: |g - fd| / |fd| = %.3g, max rel = %.3g\n", k, loss, gf.size(),
+                normwise, maxrel);
     EXPECT_LT(normwise, 1e-6);
     EXPECT_LT(maxrel, 1e-6);
   }
@@ -318,10 +316,12 @@ TEST(SacRun, FailedEpisodesWithNanObservationsKeepTheNetworksFinite) {
   auto opt = make_sac(cfg);
   EXPECT_THROW(opt->minimize(f, rng), BudgetExhausted);
   const nlohmann::json d = opt->diagnostics();
-  std::printf("40 episodes: %lld failed, %lld observation components sanitized, alpha %.4g, last critic loss %s, "
-              "best loss %.4g\n",
-              static_cast<long long>(f.failed_episodes()), static_cast<long long>(d["observations_sanitized"].get<std::int64_t>()),
-              d["alpha"].get<double>(), d["last_critic_loss"].dump().c_str(), f.best_loss());
+  std::printf(
+      "40 episodes: %lld failed, %lld observation components sanitized, alpha %.4g, last critic loss %s, "
+      "best loss %.4g\n",
+      static_cast<long long>(f.failed_episodes()),
+      static_cast<long long>(d["observations_sanitized"].get<std::int64_t>()), d["alpha"].get<double>(),
+      d["last_critic_loss"].dump().c_str(), f.best_loss());
   EXPECT_EQ(f.used(), 40);
   EXPECT_GT(f.failed_episodes(), 0);
   EXPECT_EQ(d["failed_episodes"], f.failed_episodes());
@@ -357,23 +357,24 @@ void sac_beats_random_search(std::int64_t budget, const SacConfig& cfg) {
     Rng rng(s);
     try {
       make_optimizer("random")->minimize(f, rng);
-    } catch (const BudgetExhausted&) {
-    }
+    } catch (const BudgetExhausted&) {}
     rand_best.push_back(f.best_loss());
     double mean = 0.0;
     for (const auto& e : f.evals()) mean += e.loss / static_cast<double>(f.evals().size());
     rand_mean.push_back(mean);
     const auto at = [&](std::size_t e) { return r.best_at[std::min(e, r.best_at.size()) - 1]; };
-    std::printf("seed %llu: sac best after 50/100/150/200/250/300 episodes %.3g %.3g %.3g %.3g %.3g %.3g, mean of "
-                "the last 30 %.3g, alpha %.3g; random best %.3g\n",
-                static_cast<unsigned long long>(s), at(50), at(100), at(150), at(200), at(250), at(300), last,
-                r.diagnostics["alpha"].get<double>(), f.best_loss());
+    std::printf(
+        "seed %llu: sac best after 50/100/150/200/250/300 episodes %.3g %.3g %.3g %.3g %.3g %.3g, mean of "
+        "the last 30 %.3g, alpha %.3g; random best %.3g\n",
+        static_cast<unsigned long long>(s), at(50), at(100), at(150), at(200), at(250), at(300), last,
+        r.diagnostics["alpha"].get<double>(), f.best_loss());
   }
   const double ms = median(sac_best), ml = median(sac_last), mr = median(rand_best), mm = median(rand_mean);
-  std::printf("medians over 5 seeds, %lld episodes, batch %d: sac best %.4g (last-30 mean %.4g), random best %.4g "
-              "(mean %.4g); %.2f ms per gradient step (3x64 nets, incl. env steps), %.1f s for the 5 SAC runs\n",
-              static_cast<long long>(budget), cfg.batch_size, ms, ml, mr, mm,
-              1e3 * seconds / static_cast<double>(grad_steps), seconds);
+  std::printf(
+      "medians over 5 seeds, %lld episodes, batch %d: sac best %.4g (last-30 mean %.4g), random best %.4g "
+      "(mean %.4g); %.2f ms per gradient step (3x64 nets, incl. env steps), %.1f s for the 5 SAC runs\n",
+      static_cast<long long>(budget), cfg.batch_size, ms, ml, mr, mm, 1e3 * seconds / static_cast<double>(grad_steps),
+      seconds);
   EXPECT_LT(ms, mr);
   // the policy itself improved: its recent episodes are well below a random policy's mean loss
   EXPECT_LT(ml, 0.8 * mm);

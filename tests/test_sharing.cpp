@@ -36,8 +36,9 @@ class Sharing : public testing::TempDirTest {
                   "SELECT env, optimizer, seed, status, episodes, failed_episodes, best_loss, best_x, "
                   "seed_free_episodes, seed_free_calls, diagnostics FROM runs ORDER BY env, optimizer, seed");
     for (const auto& e :
-         rows(db, "SELECT r.env, r.optimizer, r.seed, e.episode, e.loss, e.best_loss, e.used_grad, e.failed, e.metric "
-                  "FROM evals e JOIN runs r USING(run_id) ORDER BY r.env, r.optimizer, r.seed, e.episode"))
+         rows(db,
+              "SELECT r.env, r.optimizer, r.seed, e.episode, e.loss, e.best_loss, e.used_grad, e.failed, e.metric "
+              "FROM evals e JOIN runs r USING(run_id) ORDER BY r.env, r.optimizer, r.seed, e.episode"))
       r.push_back(e);
     return r;
   }
@@ -71,21 +72,24 @@ TEST_F(Sharing, TheDatabaseSaysWhichEpisodesWereSharedAndFromWhere) {
   ASSERT_EQ(harness(kGrid + " --db " + path("s.sqlite")).code, 0);
   const std::string db = path("s.sqlite");
   // gd never draws: seeds 1 and 2 are seed 0's run, replayed whole
-  EXPECT_EQ(rows(db, "SELECT env, seed, seed_free_episodes, shared_episodes, shared_from_seed FROM runs WHERE "
-                     "optimizer='gd' ORDER BY env, seed"),
-            (std::vector<std::string>{"bounce|0|120|0|NULL", "bounce|1|120|120|0", "bounce|2|120|120|0",
-                                      "cartpole1|0|120|0|NULL", "cartpole1|1|120|120|0", "cartpole1|2|120|120|0",
-                                      "rastrigin-10|0|120|0|NULL", "rastrigin-10|1|120|120|0",
-                                      "rastrigin-10|2|120|120|0"}));
+  EXPECT_EQ(
+      rows(db,
+           "SELECT env, seed, seed_free_episodes, shared_episodes, shared_from_seed FROM runs WHERE "
+           "optimizer='gd' ORDER BY env, seed"),
+      (std::vector<std::string>{"bounce|0|120|0|NULL", "bounce|1|120|120|0", "bounce|2|120|120|0",
+                                "cartpole1|0|120|0|NULL", "cartpole1|1|120|120|0", "cartpole1|2|120|120|0",
+                                "rastrigin-10|0|120|0|NULL", "rastrigin-10|1|120|120|0", "rastrigin-10|2|120|120|0"}));
   // random draws before its first episode: nothing to share
-  EXPECT_EQ(scalar(db, "SELECT max(seed_free_episodes) || ' ' || max(shared_episodes) FROM runs WHERE "
-                       "optimizer='random'"),
+  EXPECT_EQ(scalar(db,
+                   "SELECT max(seed_free_episodes) || ' ' || max(shared_episodes) FROM runs WHERE "
+                   "optimizer='random'"),
             "0 0");
   // the NLopt methods share exactly the episodes before the first restart's draw: the later
   // seeds' shared episodes are the lead's seed-free ones, and their own seed-free prefix agrees
-  for (const auto& r : rows(db, "SELECT f.env, f.optimizer, f.seed, f.shared_episodes, l.seed_free_episodes, "
-                                "f.seed_free_episodes, f.shared_from_seed FROM runs f JOIN runs l ON l.env=f.env AND "
-                                "l.optimizer=f.optimizer AND l.seed=0 WHERE f.optimizer LIKE 'nlopt-%' AND f.seed>0")) {
+  for (const auto& r : rows(db,
+                            "SELECT f.env, f.optimizer, f.seed, f.shared_episodes, l.seed_free_episodes, "
+                            "f.seed_free_episodes, f.shared_from_seed FROM runs f JOIN runs l ON l.env=f.env AND "
+                            "l.optimizer=f.optimizer AND l.seed=0 WHERE f.optimizer LIKE 'nlopt-%' AND f.seed>0")) {
     const auto parts = [&] {
       std::vector<std::string> p;
       std::size_t a = 0;
@@ -101,8 +105,9 @@ TEST_F(Sharing, TheDatabaseSaysWhichEpisodesWereSharedAndFromWhere) {
   // one kept prefix per group that has one, the journal of the lead's seed-free episodes
   EXPECT_EQ(scalar(db, "SELECT count(DISTINCT run_id) FROM prefix"),
             scalar(db, "SELECT count(*) FROM runs WHERE seed=0 AND seed_free_episodes > 0"));
-  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs r WHERE (SELECT count(*) FROM prefix p WHERE p.run_id=r.run_id) "
-                       "NOT IN (0, r.seed_free_calls)"),
+  EXPECT_EQ(scalar(db,
+                   "SELECT count(*) FROM runs r WHERE (SELECT count(*) FROM prefix p WHERE p.run_id=r.run_id) "
+                   "NOT IN (0, r.seed_free_calls)"),
             "0");
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM replay"), "0");
 }
@@ -127,14 +132,16 @@ TEST_F(Sharing, ALaterSeedOfAnEarlierGridSharesAndAnInterruptedSharingRunResumes
   const auto resumed = harness(one + " --seeds 3 --db " + path("s.sqlite"));
   ASSERT_EQ(resumed.code, 0) << resumed.err;
   EXPECT_EQ(results(path("s.sqlite")), results(path("ref.sqlite")));
-  EXPECT_EQ(rows(path("s.sqlite"), "SELECT optimizer, seed, shared_episodes, shared_from_seed FROM runs WHERE seed>0 "
-                                   "ORDER BY optimizer, seed"),
+  EXPECT_EQ(rows(path("s.sqlite"),
+                 "SELECT optimizer, seed, shared_episodes, shared_from_seed FROM runs WHERE seed>0 "
+                 "ORDER BY optimizer, seed"),
             (std::vector<std::string>{"gd|1|120|0", "gd|2|120|0", "nlopt-lbfgs|1|" + lbfgs_free + "|0",
                                       "nlopt-lbfgs|2|" + lbfgs_free + "|0"}));
 }
 
 TEST_F(Sharing, PlanCountsSharedEpisodesAsFree) {
-  const std::string grid = "plan --env cartpole1 --optimizer gd,random --seeds 5 --budget 1000 --db " + path("none.sqlite");
+  const std::string grid =
+      "plan --env cartpole1 --optimizer gd,random --seeds 5 --budget 1000 --db " + path("none.sqlite");
   const auto p = harness(grid);
   ASSERT_EQ(p.code, 0) << p.err;
   // gd's seeds 1-4 replay seed 0's whole run

@@ -87,8 +87,8 @@ class SlurmScripts : public testing::TempDirTest {
   // bash SCRIPT as a Slurm node runs it (task `task`, or the merge when task < 0): exit code, log
   int run_script(const std::string& script, int task, std::string* log) {
     fs::create_directories(dir_ / "node");
-    const std::string env = (task >= 0 ? "SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " " : "") + "TMPDIR=" +
-                            (dir_ / "node").string();
+    const std::string env =
+        (task >= 0 ? "SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " " : "") + "TMPDIR=" + (dir_ / "node").string();
     const int status = std::system((env + " bash '" + script + "' > " + path("script.log") + " 2>&1").c_str());
     *log = read_file(path("script.log"));
     return exit_code(status);
@@ -235,9 +235,9 @@ class SlurmTaskCopyBack : public SlurmScripts {
     const std::string pidfile = path("opt.pid");
     fs::remove(pidfile);
     fs::create_directories(dir_ / "node");
-    const pid_t task = start_shell("SLURM_ARRAY_TASK_ID=0 TMPDIR=" + (dir_ / "node").string() +
-                                   " TEST_OPT_PIDFILE=" + pidfile + " exec bash " + work("d/array.sbatch") + " > " +
-                                   path("task.log") + " 2>&1");
+    const pid_t task =
+        start_shell("SLURM_ARRAY_TASK_ID=0 TMPDIR=" + (dir_ / "node").string() + " TEST_OPT_PIDFILE=" + pidfile +
+                    " exec bash " + work("d/array.sbatch") + " > " + path("task.log") + " 2>&1");
     const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(120);  // a bound, not a timing
     while (!fs::exists(pidfile) || read_file(pidfile).empty()) {
       if (std::chrono::steady_clock::now() > end || ::waitpid(task, nullptr, WNOHANG) != 0) {

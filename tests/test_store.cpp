@@ -40,9 +40,7 @@ class StoreTest : public dsb::testing::TempDirTest {
     r.failed_episodes = 1;
     r.best_loss = 0.5;
     r.best_x = {0.25, -0.5};
-    r.evals = {{0, 2.0, 2.0, false, 0.1},
-               {1, std::nan(""), 2.0, true, 0.1},
-               {2, 0.5, 0.5, false, 0.1}};
+    r.evals = {{0, 2.0, 2.0, false, 0.1}, {1, std::nan(""), 2.0, true, 0.1}, {2, 0.5, 0.5, false, 0.1}};
     return r;
   }
   std::string query(const std::string& sql) {
@@ -58,10 +56,9 @@ class StoreTest : public dsb::testing::TempDirTest {
 
 // the canonical text behind config hashes, as common/config_hash.hpp documents it
 TEST(ConfigHash, CanonicalJsonSortsKeysAndPrintsRoundTripDoubles) {
-  const nlohmann::json j = {{"b", 0.1},  {"a", 1.0},      {"c", 1e-9},     {"d", 1.0 / 3.0},
-                            {"k", 5},    {"n", std::nan("")}, {"i", INFINITY}};
-  EXPECT_EQ(canonical_json(j),
-            R"({"a":1.0,"b":0.1,"c":1e-09,"d":0.3333333333333333,"i":null,"k":5,"n":null})");
+  const nlohmann::json j = {{"b", 0.1}, {"a", 1.0},          {"c", 1e-9},    {"d", 1.0 / 3.0},
+                            {"k", 5},   {"n", std::nan("")}, {"i", INFINITY}};
+  EXPECT_EQ(canonical_json(j), R"({"a":1.0,"b":0.1,"c":1e-09,"d":0.3333333333333333,"i":null,"k":5,"n":null})");
   // every double reads back exactly, so neighbouring doubles hash apart
   const double x = 0.1, next = std::nextafter(x, 1.0);
   EXPECT_EQ(std::stod(canonical_json(nlohmann::json(next))), next);
@@ -314,7 +311,10 @@ TEST_F(StoreTest, AFailedMigrationStepRollsBackTheWholeChain) {
   write_version1_file(path_);
   // a version-1 file that already has a column named like version 2's evals.metric (extra
   // columns are allowed): the second statement of the step fails after the first one succeeded
-  { Database db(path_); db.exec("ALTER TABLE evals ADD COLUMN metric TEXT"); }
+  {
+    Database db(path_);
+    db.exec("ALTER TABLE evals ADD COLUMN metric TEXT");
+  }
   EXPECT_THROW(Store(path_, {}), StoreError);
   EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "1;");
   EXPECT_EQ(query("SELECT count(*) FROM pragma_table_info('runs') WHERE name='diagnostics'"), "0;");
@@ -333,7 +333,8 @@ TEST_F(StoreTest, ForeignDatabasesAreRefusedAndLeftAlone) {
       {"tables of our names, no meta", "CREATE TABLE runs(id INTEGER, name TEXT); CREATE TABLE evals(x REAL);",
        "no 'meta' table"},
       {"an unrelated table", "CREATE TABLE users(id INTEGER PRIMARY KEY, email TEXT);", "no 'meta' table"},
-      {"meta without schema_version", "CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT); INSERT INTO meta VALUES ('owner', 'x');",
+      {"meta without schema_version",
+       "CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT); INSERT INTO meta VALUES ('owner', 'x');",
        "no meta.schema_version"},
       {"meta of another shape", "CREATE TABLE meta(name TEXT, version INTEGER);", "table 'meta' has no column 'key'"},
       {"a version that is not a number",
@@ -350,13 +351,17 @@ TEST_F(StoreTest, ForeignDatabasesAreRefusedAndLeftAlone) {
   };
   for (const auto& c : cases) {
     const std::string path = (dir_ / (std::string(c.name) + ".sqlite")).string();
-    { Database db(path); db.exec(c.sql); }
+    {
+      Database db(path);
+      db.exec(c.sql);
+    }
     const std::string before = testing::read_file(path);
     try {
       Store store(path, {});
       ADD_FAILURE() << c.name << ": opened";
     } catch (const StoreError& e) {
-      EXPECT_NE(std::string(e.what()).find("is not a harness database"), std::string::npos) << c.name << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find("is not a harness database"), std::string::npos)
+          << c.name << ": " << e.what();
       EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << c.name << ": " << e.what();
     }
     EXPECT_EQ(testing::read_file(path), before) << c.name;
@@ -366,9 +371,10 @@ TEST_F(StoreTest, ForeignDatabasesAreRefusedAndLeftAlone) {
 
 TEST_F(StoreTest, ARunningRunKeepsItsCommittedEpisodesAndJournalUntilItIsDone) {
   const double nan_payload = std::bit_cast<double>(0x7ff8000000000123ULL);  // a NaN with payload bits
-  std::vector<ReplayEntry> journal = {{ReplayKind::value_and_grad, 0x8000000000000001ULL, {0.5, nan_payload, 1e-3, -0.0}},
-                                      {ReplayKind::rl_reset, 42, {}},
-                                      {ReplayKind::rl_step, 7, {1.0, std::numeric_limits<double>::infinity()}}};
+  std::vector<ReplayEntry> journal = {
+      {ReplayKind::value_and_grad, 0x8000000000000001ULL, {0.5, nan_payload, 1e-3, -0.0}},
+      {ReplayKind::rl_reset, 42, {}},
+      {ReplayKind::rl_step, 7, {1.0, std::numeric_limits<double>::infinity()}}};
   const std::vector<EvalRecord> evals = {{0, 2.0, 2.0, true, 0.1}, {1, std::nan(""), 2.0, false, 0.1}};
   {
     Store store(path_, {"0.1.0", "abc", "host"});
@@ -474,7 +480,10 @@ TEST_F(StoreTest, ASecondStoreOnTheSameFileIsRefusedUntilTheFirstCloses) {
 }
 
 TEST_F(StoreTest, ASqliteFileWithoutTablesIsNotStamped) {
-  { Database db(path_); db.exec("PRAGMA user_version=5; CREATE TABLE t(x); DROP TABLE t;"); }
+  {
+    Database db(path_);
+    db.exec("PRAGMA user_version=5; CREATE TABLE t(x); DROP TABLE t;");
+  }
   const std::string before = testing::read_file(path_);
   ASSERT_FALSE(before.empty());
   try {

@@ -118,8 +118,9 @@ TEST(SwingModel, StableOverTheStiffnessRangeAndPatchesCoverTheCloth) {
   // the held corners are the front edge's
   ASSERT_EQ(m.cloth.anchors.size(), 2u);
   EXPECT_EQ(m.cloth.rest_position[m.cloth.anchors[0].vertex].z(), 0.0);
-  EXPECT_NEAR(m.cloth.rest_position[m.cloth.anchors[1].vertex].x() - m.cloth.rest_position[m.cloth.anchors[0].vertex].x(),
-              0.2, 1e-12);
+  EXPECT_NEAR(
+      m.cloth.rest_position[m.cloth.anchors[1].vertex].x() - m.cloth.rest_position[m.cloth.anchors[0].vertex].x(), 0.2,
+      1e-12);
 }
 
 TEST(SwingModel, TheSwingThrowsTheClothOntoTheFloor) {
@@ -139,12 +140,16 @@ TEST(SwingModel, TheSwingThrowsTheClothOntoTheFloor) {
       }
       const auto pattern = env.contact_pattern(x);
       const long contacts = std::count(pattern.begin(), pattern.end(), 1);
-      std::printf("%s x = %s: final heights [%.4f, %.4f] m (mean %.4f), mean z %.3f m, %ld contact vertex-steps\n", name.c_str(),
-                  corner == 0.0 ? "reference" : corner < 0 ? "-1" : "+1", lowest, highest, y, z, contacts);
-      EXPECT_GT(lowest, -0.01);   // no vertex far into the floor (one step's travel at most)
-      EXPECT_LT(y, 0.02);         // lying on the floor (no self-collision: a fold may stand up a little)
+      std::printf("%s x = %s: final heights [%.4f, %.4f] m (mean %.4f), mean z %.3f m, %ld contact vertex-steps\n",
+                  name.c_str(),
+                  corner == 0.0    ? "reference"
+                      : corner < 0 ? "-1"
+                                   : "+1",
+                  lowest, highest, y, z, contacts);
+      EXPECT_GT(lowest, -0.01);  // no vertex far into the floor (one step's travel at most)
+      EXPECT_LT(y, 0.02);        // lying on the floor (no self-collision: a fold may stand up a little)
       EXPECT_LT(highest, 0.1);
-      EXPECT_GT(z, 0.05);         // thrown forward: the cloth started at mean z = -0.1
+      EXPECT_GT(z, 0.05);  // thrown forward: the cloth started at mean z = -0.1
       EXPECT_GT(contacts, 1000);
     }
   }
@@ -168,9 +173,9 @@ TEST(SwingModel, StretchDuringTheSwingStaysModest) {
         if (sp.kind == cloth::SpringKind::structural)
           worst = std::max(worst, ((xt[sp.j] - xt[sp.i]).norm() - sp.rest_length) / sp.rest_length);
     }
-    std::printf("every patch at x = %+.0f (k = %.1f N/m): largest structural strain while held %.3f\n", x,
-                k[0], worst);
-    EXPECT_LT(worst, 0.6);  // measured 0.56, 0.27, 0.15: a stretchy cloth at the soft end (docs/engine-cloth.md "swing")
+    std::printf("every patch at x = %+.0f (k = %.1f N/m): largest structural strain while held %.3f\n", x, k[0], worst);
+    EXPECT_LT(worst,
+              0.6);  // measured 0.56, 0.27, 0.15: a stretchy cloth at the soft end (docs/engine-cloth.md "swing")
   }
 }
 
@@ -220,9 +225,10 @@ TEST(SwingGradient, MatchesCentralDifferencesAwayFromContactSwitches) {
                             << " central " << r.coordinates[r.worst_coordinate].differences.central;
       worst = std::max(worst, r.worst_relative_error);
     }
-    std::printf("%s: gradient vs central differences (h 1e-7) at %d points, worst relative error %.2e; %d points "
-                "skipped (contact switch within +-h)\n",
-                name.c_str(), accepted, worst, skipped);
+    std::printf(
+        "%s: gradient vs central differences (h 1e-7) at %d points, worst relative error %.2e; %d points "
+        "skipped (contact switch within +-h)\n",
+        name.c_str(), accepted, worst, skipped);
     EXPECT_EQ(accepted, 3) << name;
   }
 }
@@ -346,7 +352,8 @@ TEST(SwingTiming, ForwardAndGradientEpisodes) {
     t0 = clock::now();
     for (int r = 0; r < reps; ++r) env.loss_and_grad(x, g, *ws, serial_team());
     const double grad = std::chrono::duration<double, std::milli>(clock::now() - t0).count() / reps;
-    std::printf("%s: forward %.2f ms, gradient %.2f ms per episode (ratio %.2f)\n", name.c_str(), fwd, grad, grad / fwd);
+    std::printf("%s: forward %.2f ms, gradient %.2f ms per episode (ratio %.2f)\n", name.c_str(), fwd, grad,
+                grad / fwd);
   }
 }
 

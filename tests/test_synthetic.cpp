@@ -34,8 +34,7 @@ std::vector<std::string> covered_names() {
   std::vector<std::string> names;
   for (const char* f : {"sphere", "rosenbrock", "rastrigin", "ackley", "styblinski"})
     for (int d : {1, 2, 5, 10})
-      if (!(d == 1 && std::string(f) == "rosenbrock"))
-        names.push_back(std::string(f) + "-" + std::to_string(d));
+      if (!(d == 1 && std::string(f) == "rosenbrock")) names.push_back(std::string(f) + "-" + std::to_string(d));
   names.push_back("branin");
   names.push_back("hartmann6");
   return names;
@@ -58,19 +57,17 @@ std::vector<double> to_normalized(const std::string& name, const std::vector<dou
 // rounding of (z - z*) + z*)
 std::unique_ptr<dsb::Env> make_unshifted(const std::string& name) {
   auto config = *dsb::synthetic_config_from_name(name);
-  const double z_star = config.function == "rosenbrock"   ? 1.0
-                        : config.function == "styblinski" ? -2.903534027771178
-                                                          : 0.0;
+  const double z_star = config.function == "rosenbrock" ? 1.0
+      : config.function == "styblinski"                 ? -2.903534027771178
+                                                        : 0.0;
   config.x_opt.assign(config.dim, z_star);
   return dsb::make_synthetic_env(name, config);
 }
 
 // sphere-10's x_opt rounded to 3 decimals, as docs/envs.md quotes it
-const std::string kSphere10XoptQuoted =
-    "3.645, -0.705, 2.918, 0.974, -3.471, -3.426, 3.353, 3.285, 1.955, 2.000";
+const std::string kSphere10XoptQuoted = "3.645, -0.705, 2.918, 0.974, -3.471, -3.426, 3.353, 3.285, 1.955, 2.000";
 
-const std::vector<std::string> kShifted = {"sphere", "rosenbrock", "rastrigin", "ackley",
-                                           "styblinski"};
+const std::vector<std::string> kShifted = {"sphere", "rosenbrock", "rastrigin", "ackley", "styblinski"};
 
 double max_abs(const std::vector<double>& v) {
   double m = 0.0;
@@ -83,11 +80,10 @@ double max_abs(const std::vector<double>& v) {
 
 TEST(SyntheticNames, FamiliesInOrderWithGridMembers) {
   const auto families = dsb::synthetic_families();
-  const std::vector<std::string> patterns = {"sphere-D",  "rosenbrock-D", "rastrigin-D",
-                                             "ackley-D",  "styblinski-D", "branin",
-                                             "hartmann6"};
-  const std::vector<std::string> grid = {"sphere-10", "rosenbrock-10", "rastrigin-10",
-                                         "ackley-10", "styblinski-10", "branin", "hartmann6"};
+  const std::vector<std::string> patterns = {"sphere-D",     "rosenbrock-D", "rastrigin-D", "ackley-D",
+                                             "styblinski-D", "branin",       "hartmann6"};
+  const std::vector<std::string> grid = {"sphere-10",     "rosenbrock-10", "rastrigin-10", "ackley-10",
+                                         "styblinski-10", "branin",        "hartmann6"};
   ASSERT_EQ(families.size(), patterns.size());
   for (std::size_t i = 0; i < families.size(); ++i) {
     EXPECT_EQ(families[i].pattern, patterns[i]);
@@ -123,10 +119,9 @@ TEST(SyntheticNames, MembersHaveTheirDimension) {
 
 TEST(SyntheticNames, MalformedMembersThrowUsageErrorNamingTheName) {
   for (const std::string bad :
-       {"sphere-0", "sphere-abc", "sphere-10x", "sphere-", "sphere--3", "sphere-+3",
-        "sphere-010", "sphere- 3", "sphere-3.0", "sphere-10001", "sphere-99999",
-        "sphere-99999999999999999999999", "rosenbrock-1", "rosenbrock-0", "rastrigin-0",
-        "ackley-x", "styblinski-0"}) {
+       {"sphere-0", "sphere-abc", "sphere-10x", "sphere-", "sphere--3", "sphere-+3", "sphere-010", "sphere- 3",
+        "sphere-3.0", "sphere-10001", "sphere-99999", "sphere-99999999999999999999999", "rosenbrock-1", "rosenbrock-0",
+        "rastrigin-0", "ackley-x", "styblinski-0"}) {
     SCOPED_TRACE(bad);
     // through the families directly ...
     bool thrown = false;
@@ -146,11 +141,10 @@ TEST(SyntheticNames, MalformedMembersThrowUsageErrorNamingTheName) {
 }
 
 TEST(SyntheticNames, UnrelatedNamesAreNotClaimed) {
-  for (const std::string other : {"", "sphere", "Sphere-3", "spheres-3", "branin2", "branin-2",
-                                  "hartmann", "hartmann6-6", "cartpole", "ackley"}) {
+  for (const std::string other : {"", "sphere", "Sphere-3", "spheres-3", "branin2", "branin-2", "hartmann",
+                                  "hartmann6-6", "cartpole", "ackley"}) {
     SCOPED_TRACE(other);
-    for (const auto& family : dsb::synthetic_families())
-      EXPECT_EQ(family.try_make(other), nullptr) << family.pattern;
+    for (const auto& family : dsb::synthetic_families()) EXPECT_EQ(family.try_make(other), nullptr) << family.pattern;
     EXPECT_FALSE(dsb::synthetic_config_from_name(other).has_value());
     EXPECT_FALSE(dsb::synthetic_known_optimum(other).has_value());
   }
@@ -170,8 +164,8 @@ TEST(SyntheticNames, RegistryBuildsThemAndGridListsThem) {
 
   const auto grid = dsb::grid_env_names();
   std::size_t last = 0;
-  for (const std::string name : {"sphere-10", "rosenbrock-10", "rastrigin-10", "ackley-10",
-                                 "styblinski-10", "branin", "hartmann6"}) {
+  for (const std::string name :
+       {"sphere-10", "rosenbrock-10", "rastrigin-10", "ackley-10", "styblinski-10", "branin", "hartmann6"}) {
     const auto it = std::find(grid.begin(), grid.end(), name);
     ASSERT_NE(it, grid.end()) << name;
     const auto pos = static_cast<std::size_t>(it - grid.begin());
@@ -209,7 +203,9 @@ TEST(SyntheticValues, HandComputedPoints) {
       // z = 1: 10 D + D (1 - 10) = D; df/dz = 2
       {"rastrigin-3", {0.2, 0.2, 0.2}, 3.0, {10.0, 10.0, 10.0}},
       // z = 1, r = 1: 20 (1 - e^-0.2); df/dz_i = 4 e^-0.2 z_i / (D r) = e^-0.2 for D = 4
-      {"ackley-4", {0.2, 0.2, 0.2, 0.2}, 3.6253849384403636,
+      {"ackley-4",
+       {0.2, 0.2, 0.2, 0.2},
+       3.6253849384403636,
        {4.093653765389909, 4.093653765389909, 4.093653765389909, 4.093653765389909}},
       // z = 1: 0.5 (1 - 16 + 5) per coordinate; df/dz = 0.5 (4 - 32 + 5)
       {"styblinski-2", {0.2, 0.2}, -10.0, {-57.5, -57.5}},
@@ -326,8 +322,7 @@ TEST(SyntheticOptimum, DocumentedValueAndZeroGradient) {
     const double value_tol = rounded ? 1e-10 : 1e-12 * std::max(1.0, std::abs(opt->value));
     const double grad_tol = rounded ? 1e-5 : 1e-9;
     std::vector<std::vector<double>> minimizers = {opt->x_physical};
-    minimizers.insert(minimizers.end(), opt->other_minimizers.begin(),
-                      opt->other_minimizers.end());
+    minimizers.insert(minimizers.end(), opt->other_minimizers.begin(), opt->other_minimizers.end());
     for (const auto& z : minimizers) {
       ASSERT_EQ(static_cast<int>(z.size()), env->dim());
       const auto x = to_normalized(name, z);
@@ -491,8 +486,7 @@ TEST(SyntheticConfig, ConfigDescribesTheBox) {
   EXPECT_EQ(sphere.at("dim"), 10);
   EXPECT_EQ(sphere.at("lower").get<std::vector<double>>(), std::vector<double>(10, -5.0));
   EXPECT_EQ(sphere.at("upper").get<std::vector<double>>(), std::vector<double>(10, 5.0));
-  EXPECT_EQ(sphere.at("x_opt").get<std::vector<double>>(),
-            dsb::synthetic_config_from_name("sphere-10")->x_opt);
+  EXPECT_EQ(sphere.at("x_opt").get<std::vector<double>>(), dsb::synthetic_config_from_name("sphere-10")->x_opt);
   const auto branin = make("branin")->config();
   EXPECT_FALSE(branin.contains("x_opt"));  // not shifted: the classic config, unchanged
   EXPECT_FALSE(make("hartmann6")->config().contains("x_opt"));
@@ -501,8 +495,7 @@ TEST(SyntheticConfig, ConfigDescribesTheBox) {
   const auto hartmann = make("hartmann6")->config();
   EXPECT_EQ(hartmann.at("lower").get<std::vector<double>>(), std::vector<double>(6, 0.0));
   EXPECT_EQ(hartmann.at("upper").get<std::vector<double>>(), std::vector<double>(6, 1.0));
-  EXPECT_EQ(dsb::synthetic_config_from_name("rastrigin-5")->to_json(),
-            make("rastrigin-5")->config());
+  EXPECT_EQ(dsb::synthetic_config_from_name("rastrigin-5")->to_json(), make("rastrigin-5")->config());
 }
 
 TEST(SyntheticConfig, HashDistinguishesEnvsAndIsStable) {
@@ -512,8 +505,7 @@ TEST(SyntheticConfig, HashDistinguishesEnvsAndIsStable) {
   EXPECT_EQ(h10, dsb::config_hash(dsb::make_env("sphere-10")->config()));
   EXPECT_NE(h10, dsb::config_hash(make("sphere-11")->config()));
   EXPECT_NE(h10, dsb::config_hash(make("rastrigin-10")->config()));
-  EXPECT_NE(dsb::config_hash(make("branin")->config()),
-            dsb::config_hash(make("hartmann6")->config()));
+  EXPECT_NE(dsb::config_hash(make("branin")->config()), dsb::config_hash(make("hartmann6")->config()));
   // x_opt is part of the hash
   auto moved = *dsb::synthetic_config_from_name("sphere-10");
   moved.x_opt[3] += 0.25;

@@ -39,7 +39,9 @@ using namespace dsb::mpm;
 
 class NoLoss : public EpisodeObjective {
  public:
-  double step_loss(int, const std::vector<Particle>&, const std::vector<Pose>&, ThreadTeam&) const override { return 0.0; }
+  double step_loss(int, const std::vector<Particle>&, const std::vector<Pose>&, ThreadTeam&) const override {
+    return 0.0;
+  }
   void step_loss_adjoint(int, const std::vector<Particle>&, const std::vector<Pose>&, std::vector<ParticleAdjoint>&,
                          std::vector<PoseAdjoint>&, ThreadTeam&) const override {}
 };
@@ -67,7 +69,8 @@ NodeGrid generate(const PlbTask& task, ThreadTeam& team) {
   NodeGrid g;
   g.n = model.layout.n;
   g.values.assign(model.layout.nodes(), 0.0);
-  for (int b : bins.active) for_each_node_of_block(model.layout, b, [&](int, int, int, int n) { g.values[n] = mass[n]; });
+  for (int b : bins.active)
+    for_each_node_of_block(model.layout, b, [&](int, int, int, int n) { g.values[n] = mass[n]; });
   if (model.particles() != kPlbTargetParticles) {
     const double scale = static_cast<double>(kPlbTargetParticles) / model.particles();
     for (double& v : g.values) v *= scale;
@@ -79,32 +82,36 @@ NodeGrid generate(const PlbTask& task, ThreadTeam& team) {
 // the nearest of theirs by centre)
 void describe(const PlbTask& task, const NodeGrid& g, double dx, int pad) {
   const TargetShape s = describe_target_shape(g, pad, dx);
-  std::printf("%-11s mass %.4f, centre (%.3f, %.3f, %.3f), cells above 1%% of the max [%.3f, %.3f, %.3f]..[%.3f, %.3f, "
-              "%.3f], %zu bod%s\n",
-              task.name.c_str(), s.mass, s.centre.x(), s.centre.y(), s.centre.z(), s.lo.x(), s.lo.y(), s.lo.z(),
-              s.hi.x(), s.hi.y(), s.hi.z(), s.bodies.size(), s.bodies.size() == 1 ? "y" : "ies");
+  std::printf(
+      "%-11s mass %.4f, centre (%.3f, %.3f, %.3f), cells above 1%% of the max [%.3f, %.3f, %.3f]..[%.3f, %.3f, "
+      "%.3f], %zu bod%s\n",
+      task.name.c_str(), s.mass, s.centre.x(), s.centre.y(), s.centre.z(), s.lo.x(), s.lo.y(), s.lo.z(), s.hi.x(),
+      s.hi.y(), s.hi.z(), s.bodies.size(), s.bodies.size() == 1 ? "y" : "ies");
   for (const auto& b : s.bodies) {
     const PlbTargetBody* near = nullptr;
     for (const auto& t : task.plb_target)
       if (!near || (t.centre - b.centre).norm() < (near->centre - b.centre).norm()) near = &t;
     const Vec3 c = task.plb_target.size() == 1 ? s.centre : b.centre;  // a single body: the whole centre
-    std::printf("%-11s   ours   centre (%.3f, %.3f, %.3f) box [%.3f, %.3f, %.3f]..[%.3f, %.3f, %.3f] (%ld cells, mass "
-                "%.4f)\n",
-                "", c.x(), c.y(), c.z(), b.lo.x(), b.lo.y(), b.lo.z(), b.hi.x(), b.hi.y(), b.hi.z(), b.cells, b.mass);
+    std::printf(
+        "%-11s   ours   centre (%.3f, %.3f, %.3f) box [%.3f, %.3f, %.3f]..[%.3f, %.3f, %.3f] (%ld cells, mass "
+        "%.4f)\n",
+        "", c.x(), c.y(), c.z(), b.lo.x(), b.lo.y(), b.lo.z(), b.hi.x(), b.hi.y(), b.hi.z(), b.cells, b.mass);
     if (!near) continue;
     const Vec3 dlo = (b.lo - near->lo) / dx, dhi = (b.hi - near->hi) / dx;
-    std::printf("%-11s   theirs centre (%.3f, %.3f, %.3f) box [%.3f, %.3f, %.3f]..[%.3f, %.3f, %.3f]; centre %.4f apart, "
-                "faces off by (%+.1f %+.1f %+.1f)..(%+.1f %+.1f %+.1f) cells, box IoU %.3f\n",
-                "", near->centre.x(), near->centre.y(), near->centre.z(), near->lo.x(), near->lo.y(), near->lo.z(),
-                near->hi.x(), near->hi.y(), near->hi.z(), (c - near->centre).norm(), dlo.x(), dlo.y(), dlo.z(), dhi.x(),
-                dhi.y(), dhi.z(), box_iou(b.lo, b.hi, near->lo, near->hi, dx));
+    std::printf(
+        "%-11s   theirs centre (%.3f, %.3f, %.3f) box [%.3f, %.3f, %.3f]..[%.3f, %.3f, %.3f]; centre %.4f apart, "
+        "faces off by (%+.1f %+.1f %+.1f)..(%+.1f %+.1f %+.1f) cells, box IoU %.3f\n",
+        "", near->centre.x(), near->centre.y(), near->centre.z(), near->lo.x(), near->lo.y(), near->lo.z(),
+        near->hi.x(), near->hi.y(), near->hi.z(), (c - near->centre).norm(), dlo.x(), dlo.y(), dlo.z(), dhi.x(),
+        dhi.y(), dhi.z(), box_iou(b.lo, b.hi, near->lo, near->hi, dx));
   }
 }
 
 // --figures: one Markdown row per body of PlasticineLab's target
 void figures(const std::string& dir, const std::string& only) {
-  std::printf("| task | centre of mass: ours / PlasticineLab's (apart) | box of the cells above 1%% of the max: ours / "
-              "PlasticineLab's | faces off (cells) | box IoU | mass: ours / PlasticineLab's |\n|---|---|---|---|---|---|\n");
+  std::printf(
+      "| task | centre of mass: ours / PlasticineLab's (apart) | box of the cells above 1%% of the max: ours / "
+      "PlasticineLab's | faces off (cells) | box IoU | mass: ours / PlasticineLab's |\n|---|---|---|---|---|---|\n");
   auto v3 = [](const Vec3& v) {
     char b[64];
     std::snprintf(b, sizeof b, "(%.3f, %.3f, %.3f)", v.x(), v.y(), v.z());
@@ -128,8 +135,7 @@ void figures(const std::string& dir, const std::string& only) {
                   v3(ours->lo).c_str(), v3(ours->hi).c_str(), v3(theirs.lo).c_str(), v3(theirs.hi).c_str(),
                   std::lround(dlo.x()), std::lround(dlo.y()), std::lround(dlo.z()), std::lround(dhi.x()),
                   std::lround(dhi.y()), std::lround(dhi.z()), box_iou(ours->lo, ours->hi, theirs.lo, theirs.hi, dx),
-                  task.plb_target.size() == 1 ? s.mass : ours->mass,
-                  task.plb_target.size() == 1 ? "0.6104" : "0.203");
+                  task.plb_target.size() == 1 ? s.mass : ours->mass, task.plb_target.size() == 1 ? "0.6104" : "0.203");
     }
   }
 }
@@ -204,10 +210,11 @@ int compare(const std::string& assets, const std::string& only) {
       either += in_a || in_b;
     }
     const double d = std::hypot(a.centre[0] - b.centre[0], a.centre[1] - b.centre[1], a.centre[2] - b.centre[2]);
-    std::printf("%-11s centre of mass %.3f apart; overlap (IoU of nodes > %g) %.3f (%ld of %ld); mass ratio "
-                "theirs/ours %.3f\n",
-                "", d, kInside, either > 0 ? static_cast<double>(both) / static_cast<double>(either) : 0.0, both,
-                either, b.mass / a.mass);
+    std::printf(
+        "%-11s centre of mass %.3f apart; overlap (IoU of nodes > %g) %.3f (%ld of %ld); mass ratio "
+        "theirs/ours %.3f\n",
+        "", d, kInside, either > 0 ? static_cast<double>(both) / static_cast<double>(either) : 0.0, both, either,
+        b.mass / a.mass);
   }
   if (found == 0) {
     std::fprintf(stderr, "plb_targets: no PlasticineLab target file (e.g. Pinch3D-v1.npy) in %s\n", assets.c_str());
@@ -221,15 +228,21 @@ int compare(const std::string& assets, const std::string& only) {
 int main(int argc, char** argv) {
   std::string out, check, assets, figures_dir, only;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--out")) out = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--figures")) figures_dir = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--check")) check = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--compare")) assets = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--task")) only = argv[i + 1];
+    if (!std::strcmp(argv[i], "--out"))
+      out = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--figures"))
+      figures_dir = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--check"))
+      check = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--compare"))
+      assets = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--task"))
+      only = argv[i + 1];
   }
   const int modes = int{!out.empty()} + int{!check.empty()} + int{!assets.empty()} + int{!figures_dir.empty()};
   if (modes != 1) {
-    std::fprintf(stderr, "usage: plb_targets --out DIR | --check DIR | --figures DIR | --compare ASSETS_DIR [--task NAME]\n");
+    std::fprintf(stderr,
+                 "usage: plb_targets --out DIR | --check DIR | --figures DIR | --compare ASSETS_DIR [--task NAME]\n");
     return 2;
   }
   if (!figures_dir.empty()) {
@@ -263,8 +276,9 @@ int main(int argc, char** argv) {
       } else {
         const NodeGrid stored = read_grid_gz(check + name);
         const bool same = stored.n == g.n && stored.values.size() == g.values.size() &&
-                          std::memcmp(stored.values.data(), g.values.data(), g.values.size() * sizeof(double)) == 0;
-        std::printf("%-11s %s\n", "", same ? "stored target equals a fresh generation" : "DIFFERS from a fresh generation");
+            std::memcmp(stored.values.data(), g.values.data(), g.values.size() * sizeof(double)) == 0;
+        std::printf("%-11s %s\n", "",
+                    same ? "stored target equals a fresh generation" : "DIFFERS from a fresh generation");
         differing += same ? 0 : 1;
       }
     }

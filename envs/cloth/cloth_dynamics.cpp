@@ -159,9 +159,9 @@ void cloth_step_adjoint(const ClothModel& m, const ClothInputs& in, ClothTape& t
       const Vec3 w = vin[k] - q.velocity;
       const double wn = w.dot(nrm);
       const double obn = ob.dot(nrm);
-      const Vec3 vin_bar = keep * (ob - obn * nrm);            // c (I - n n^T) ob
-      const Vec3 u_bar = ob - vin_bar;                         // (I - c (I - n n^T)) ob
-      const Vec3 n_bar = -keep * (obn * w + wn * ob);          // -c (w n^T + w_n I) ob
+      const Vec3 vin_bar = keep * (ob - obn * nrm);    // c (I - n n^T) ob
+      const Vec3 u_bar = ob - vin_bar;                 // (I - c (I - n n^T)) ob
+      const Vec3 n_bar = -keep * (obn * w + wn * ob);  // -c (w n^T + w_n I) ob
       adj.x[i] += q.dnormal_dx.transpose() * n_bar + q.dvelocity_dx.transpose() * u_bar;
       if (m.surfaces[k]->param_count() > 0)
         m.surfaces[k]->sample_adjoint(t, x_t[i], n_bar, u_bar, grad.surface_params[k]);
@@ -224,8 +224,7 @@ void ClothTape::reset(int vertices, int springs, int steps) {
   if (scratch_.size() < std::size_t(vertices)) scratch_.resize(vertices);
 }
 
-ClothState cloth_rollout(const ClothModel& m, const ClothInputs& in, const ClothState& s0, int steps,
-                         ClothTape& tape) {
+ClothState cloth_rollout(const ClothModel& m, const ClothInputs& in, const ClothState& s0, int steps, ClothTape& tape) {
   check_inputs(m, in);
   if (in.anchor_path.size() < std::size_t(path_rows_needed(m, steps)) * m.anchors.size())
     throw std::invalid_argument("cloth: anchor_path has fewer rows than the episode reads");
@@ -243,10 +242,10 @@ ClothState cloth_rollout(const ClothModel& m, const ClothInputs& in, const Cloth
   return s;
 }
 
-void cloth_rollout_adjoint(const ClothModel& m, const ClothInputs& in, ClothTape& tape, const ClothAdjoint& final_bar,
-                           const std::function<void(int t, std::span<const Vec3> x, std::span<const Vec3> v,
-                                                    ClothAdjoint& adj)>& per_step,
-                           ClothGradient& grad) {
+void cloth_rollout_adjoint(
+    const ClothModel& m, const ClothInputs& in, ClothTape& tape, const ClothAdjoint& final_bar,
+    const std::function<void(int t, std::span<const Vec3> x, std::span<const Vec3> v, ClothAdjoint& adj)>& per_step,
+    ClothGradient& grad) {
   check_inputs(m, in);
   const int T = tape.steps();
   grad.stiffness.assign(m.springs.size(), 0.0);

@@ -55,8 +55,8 @@ struct StepRecord {
 
 // Spring and gravity forces f_i (n) at state s (anchors not pinned here): the forces step's.
 // When `lengths` (n_springs) is given it receives each spring's length and inverse.
-void cloth_forces(const ClothModel& m, std::span<const double> stiffness, const ClothState& s,
-                  std::span<Vec3> f, std::span<SpringLength> lengths = {});
+void cloth_forces(const ClothModel& m, std::span<const double> stiffness, const ClothState& s, std::span<Vec3> f,
+                  std::span<SpringLength> lengths = {});
 
 // One step t in place. `force` is scratch (n); `record`, when given, receives what the reverse
 // pass needs.
@@ -71,10 +71,10 @@ struct ClothAdjoint {
 
 // dLoss/d(episode inputs and initial state)
 struct ClothGradient {
-  std::vector<Vec3> x0, v0;        // initial positions and velocities (n), (n)
-  std::vector<double> stiffness;   // per spring, N/m: dLoss/dk; dLoss/dlog k = k dLoss/dk (n_springs)
-  std::vector<double> damping;     // per spring dashpot, N s/m (n_springs)
-  std::vector<Vec3> anchor_path;   // same shape as the path table given to the episode
+  std::vector<Vec3> x0, v0;                         // initial positions and velocities (n), (n)
+  std::vector<double> stiffness;                    // per spring, N/m: dLoss/dk; dLoss/dlog k = k dLoss/dk (n_springs)
+  std::vector<double> damping;                      // per spring dashpot, N s/m (n_springs)
+  std::vector<Vec3> anchor_path;                    // same shape as the path table given to the episode
   std::vector<std::vector<double>> surface_params;  // per surface (param_count each)
 };
 
@@ -88,7 +88,7 @@ class ClothTape {
   void reset(int vertices, int springs, int steps);
   int steps() const { return steps_; }
   int vertices() const { return n_; }
-  std::span<Vec3> x(int t) { return {x_.data() + std::size_t(t) * n_, std::size_t(n_)}; }   // after pinning
+  std::span<Vec3> x(int t) { return {x_.data() + std::size_t(t) * n_, std::size_t(n_)}; }  // after pinning
   std::span<Vec3> v(int t) { return {v_.data() + std::size_t(t) * n_, std::size_t(n_)}; }
   std::span<Vec3> pre_contact_v(int t) { return {vp_.data() + std::size_t(t) * n_, std::size_t(n_)}; }
   std::span<const Vec3> x(int t) const { return {x_.data() + std::size_t(t) * n_, std::size_t(n_)}; }
@@ -117,8 +117,7 @@ class ClothTape {
 
 // Runs `steps` steps from s0, recording every state on the tape (tape.x(t), tape.v(t) is the
 // state at time t; x(t) of a held anchor is its pinned position). Returns the final state.
-ClothState cloth_rollout(const ClothModel& m, const ClothInputs& in, const ClothState& s0, int steps,
-                         ClothTape& tape);
+ClothState cloth_rollout(const ClothModel& m, const ClothInputs& in, const ClothState& s0, int steps, ClothTape& tape);
 
 // Reverse of step t of the episode on `tape` (the state it started from after pinning and its
 // record; surfaces are sampled again only where they acted). `adj` holds dLoss/d(state after the
@@ -131,10 +130,10 @@ void cloth_step_adjoint(const ClothModel& m, const ClothInputs& in, ClothTape& t
 // `per_step` is given it is called at every t = T, T-1, ..., 0 with the state at time t and may
 // add dLoss/d(state at t) to `adj` (at t = T on top of final_bar). `grad` is resized and filled
 // (anchor_path like in.anchor_path).
-void cloth_rollout_adjoint(const ClothModel& m, const ClothInputs& in, ClothTape& tape, const ClothAdjoint& final_bar,
-                           const std::function<void(int t, std::span<const Vec3> x, std::span<const Vec3> v,
-                                                    ClothAdjoint& adj)>& per_step,
-                           ClothGradient& grad);
+void cloth_rollout_adjoint(
+    const ClothModel& m, const ClothInputs& in, ClothTape& tape, const ClothAdjoint& final_bar,
+    const std::function<void(int t, std::span<const Vec3> x, std::span<const Vec3> v, ClothAdjoint& adj)>& per_step,
+    ClothGradient& grad);
 
 // Mechanical energy: kinetic, spring (1/2 k (l - L0)^2 summed) and gravity (-m g . x) terms, J.
 struct ClothEnergy {

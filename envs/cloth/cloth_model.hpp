@@ -21,10 +21,10 @@ using Mat3 = Eigen::Matrix3d;
 enum class SpringKind { structural, shear, bending, other };
 
 struct Spring {
-  int i = 0, j = 0;            // vertex indices, i != j
-  double rest_length = 0.0;    // m, > 0
-  double stiffness = 0.0;      // N/m: the default; an episode may override it (ClothInputs)
-  double damping = 0.0;        // N s/m, dashpot along the spring
+  int i = 0, j = 0;          // vertex indices, i != j
+  double rest_length = 0.0;  // m, > 0
+  double stiffness = 0.0;    // N/m: the default; an episode may override it (ClothInputs)
+  double damping = 0.0;      // N s/m, dashpot along the spring
   SpringKind kind = SpringKind::other;
 };
 
@@ -42,11 +42,11 @@ struct Anchor {
 // the unit outward normal and its Jacobian, and the surface's own velocity at x (moving surfaces,
 // e.g. a pan) and its Jacobian. A rigidly moving surface has dvelocity_dx = [omega]_x.
 struct SurfaceSample {
-  double distance = 0.0;                // m, signed: <= 0 means at or inside the surface
-  Vec3 normal = Vec3::UnitY();          // unit, pointing to the free side (3)
-  Mat3 dnormal_dx = Mat3::Zero();       // d normal / d x (3 x 3)
-  Vec3 velocity = Vec3::Zero();         // m/s, of the surface point at x (3)
-  Mat3 dvelocity_dx = Mat3::Zero();     // d velocity / d x (3 x 3)
+  double distance = 0.0;             // m, signed: <= 0 means at or inside the surface
+  Vec3 normal = Vec3::UnitY();       // unit, pointing to the free side (3)
+  Mat3 dnormal_dx = Mat3::Zero();    // d normal / d x (3 x 3)
+  Vec3 velocity = Vec3::Zero();      // m/s, of the surface point at x (3)
+  Mat3 dvelocity_dx = Mat3::Zero();  // d velocity / d x (3 x 3)
 };
 
 // A contact surface. Static surfaces implement sample() only. A surface driven by parameters of
@@ -77,13 +77,13 @@ class PlaneSurface final : public ContactSurface {
 };
 
 struct ClothModel {
-  std::vector<Vec3> rest_position;  // m (n): also the default initial positions
-  std::vector<double> mass;         // kg (n), > 0
-  std::vector<Spring> springs;      // (n_springs), in a fixed order: the order of every sum
-  std::vector<Anchor> anchors;      // (n_anchors), distinct vertices
+  std::vector<Vec3> rest_position;                              // m (n): also the default initial positions
+  std::vector<double> mass;                                     // kg (n), > 0
+  std::vector<Spring> springs;                                  // (n_springs), in a fixed order: the order of every sum
+  std::vector<Anchor> anchors;                                  // (n_anchors), distinct vertices
   std::vector<std::shared_ptr<const ContactSurface>> surfaces;  // applied in this order
-  Vec3 gravity = Vec3(0.0, -9.81, 0.0);  // m/s^2
-  double dt = 1e-3;                      // s, symplectic Euler step
+  Vec3 gravity = Vec3(0.0, -9.81, 0.0);                         // m/s^2
+  double dt = 1e-3;                                             // s, symplectic Euler step
   // global velocity damping (1/s): v is multiplied by exp(-damping dt) each step (DiffTaichi)
   double damping = 0.0;
   // contact: the tangential part of the relative velocity of a vertex in contact is multiplied
@@ -117,11 +117,11 @@ Vec3 centre_of_mass(const ClothModel& m, std::span<const Vec3> x);
 // this order: structural (horizontal row by row, then vertical), shear (both diagonals of each
 // cell), bending (two apart, horizontal then vertical). Mass total_mass / (W H) per vertex.
 struct GridSpec {
-  int cols = 5, rows = 5;                 // W, H >= 2
-  double width = 0.2, height = 0.2;       // m
+  int cols = 5, rows = 5;            // W, H >= 2
+  double width = 0.2, height = 0.2;  // m
   Vec3 origin = Vec3::Zero();
-  Vec3 axis_u = Vec3::UnitX(), axis_v = Vec3::UnitZ();  // unit, orthogonal
-  double total_mass = 0.1;                // kg
+  Vec3 axis_u = Vec3::UnitX(), axis_v = Vec3::UnitZ();                                    // unit, orthogonal
+  double total_mass = 0.1;                                                                // kg
   double structural_stiffness = 100.0, shear_stiffness = 50.0, bending_stiffness = 20.0;  // N/m
   double structural_damping = 0.0, shear_damping = 0.0, bending_damping = 0.0;            // N s/m
 };

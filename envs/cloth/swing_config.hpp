@@ -45,8 +45,8 @@ struct SwingConfig {
   double damping = 1.0;
   double gravity = 9.81;  // m/s^2 along -y
 
-  double dt = 5e-4;        // s, symplectic Euler
-  double duration = 0.8;   // s (1,600 steps)
+  double dt = 5e-4;       // s, symplectic Euler
+  double duration = 0.8;  // s (1,600 steps)
 
   // swing of the two held corners, from their start p0 with tau = min(t / swing_time, 1):
   //   p(t) = p0 + (0, lift sin(pi tau), forward (1 - cos(pi tau)) / 2)
@@ -57,7 +57,7 @@ struct SwingConfig {
   double lift = 0.15;         // m along +y
   double release_time = 0.3;  // s
 
-  double floor_height = 0.0;     // m, floor plane y = floor_height
+  double floor_height = 0.0;  // m, floor plane y = floor_height
   // contact: the seed's velocity projection on the contact plane (1 = frictionless: only the
   // inward normal part is removed)
   double tangential_keep = 1.0;
@@ -70,8 +70,8 @@ struct SwingConfig {
                                              -0.4, 0.6,  0.1, -0.6, 0.4, -0.1, 0.8,  -0.3};
   std::array<double, 3> velocity_reference = {0.2, 0.4, -0.3};
 
-  int steps() const;          // round(duration / dt)
-  int release_step() const;   // round(release_time / dt)
+  int steps() const;         // round(duration / dt)
+  int release_step() const;  // round(release_time / dt)
   // throws ConfigError("swing", field, why)
   void validate() const;
   nlohmann::json to_json() const;

@@ -96,9 +96,9 @@ SwingModel build_swing_model(const SwingConfig& cfg, SwingParams params) {
     const int pc = std::min(kPatches - 1, kPatches * (ci + cj) / (2 * (W - 1)));
     const int pr = std::min(kPatches - 1, kPatches * (ri + rj) / (2 * (H - 1)));
     m.spring_patch[s] = pr * kPatches + pc;
-    m.spring_ratio[s] = sp.kind == SpringKind::shear     ? cfg.shear_ratio
-                        : sp.kind == SpringKind::bending ? cfg.bending_ratio
-                                                         : 1.0;
+    m.spring_ratio[s] = sp.kind == SpringKind::shear ? cfg.shear_ratio
+        : sp.kind == SpringKind::bending             ? cfg.bending_ratio
+                                                     : 1.0;
   }
   m.log_k_low = dm::log(cfg.k_low);
   m.log_k_high = dm::log(cfg.k_high);
@@ -106,8 +106,8 @@ SwingModel build_swing_model(const SwingConfig& cfg, SwingParams params) {
   stiffness_of(m, middle, m.fixed_stiffness);
   // targets: the final state at the reference params, by the loss path's own forward episode
   std::vector<double> ref = params == SwingParams::stiffness
-                                ? cfg.stiffness_reference
-                                : std::vector<double>(cfg.velocity_reference.begin(), cfg.velocity_reference.end());
+      ? cfg.stiffness_reference
+      : std::vector<double>(cfg.velocity_reference.begin(), cfg.velocity_reference.end());
   std::vector<double> k;
   if (params == SwingParams::stiffness)
     stiffness_of(m, ref, k);
@@ -117,7 +117,8 @@ SwingModel build_swing_model(const SwingConfig& cfg, SwingParams params) {
   initial_state_of(cfg, params, m, ref, s);
   std::vector<Vec3> force;
   run_forward(m, k, s, force);
-  if (!finite_state(s)) throw ConfigError("swing", "stiffness_reference/velocity_reference", "the reference episode blew up");
+  if (!finite_state(s))
+    throw ConfigError("swing", "stiffness_reference/velocity_reference", "the reference episode blew up");
   m.target = s.x;
   m.target_com = centre_of_mass(c, s.x);
   return m;
@@ -190,17 +191,20 @@ class SwingRl : public RlEnv {
 std::unique_ptr<RlEnv> SwingEnv::make_rl() const { return std::make_unique<SwingRl>(*this); }
 
 SwingEnv::SwingEnv(std::string name, SwingParams params, SwingLoss loss, SwingConfig cfg)
-    : Env(swing_info(std::move(name), params, cfg)), cfg_(std::move(cfg)), params_(params), loss_(loss),
+    : Env(swing_info(std::move(name), params, cfg)),
+      cfg_(std::move(cfg)),
+      params_(params),
+      loss_(loss),
       model_([c = cfg_, params] { return build_swing_model(c, params); }) {}
 
 nlohmann::json SwingEnv::config() const {
   nlohmann::json j = cfg_.to_json();
   j["params"] = params_ == SwingParams::stiffness
-                    ? "16 patch log-stiffnesses: log k = log k_low + (x + 1) / 2 (log k_high - log k_low)"
-                    : "initial velocity of every vertex: v = v_low + (x + 1) / 2 (v_high - v_low)";
-  j["loss"] = loss_ == SwingLoss::single   ? "|final centre of mass - target centre of mass|"
-              : loss_ == SwingLoss::corner ? "mean over the 4 corners of |final x - target x|"
-                                           : "mean over all vertices of |final x - target x|";
+      ? "16 patch log-stiffnesses: log k = log k_low + (x + 1) / 2 (log k_high - log k_low)"
+      : "initial velocity of every vertex: v = v_low + (x + 1) / 2 (v_high - v_low)";
+  j["loss"] = loss_ == SwingLoss::single ? "|final centre of mass - target centre of mass|"
+      : loss_ == SwingLoss::corner       ? "mean over the 4 corners of |final x - target x|"
+                                         : "mean over all vertices of |final x - target x|";
   j["target"] = "final state of the rollout at the reference params (loss 0 there)";
   return j;
 }
@@ -259,8 +263,7 @@ double SwingEnv::final_loss(const ClothState& s) const {
   if (!finite_state(s)) return std::numeric_limits<double>::quiet_NaN();
   const SwingModel& m = model();
   switch (loss_) {
-    case SwingLoss::single:
-      return (centre_of_mass(m.cloth, s.x) - m.target_com).norm();
+    case SwingLoss::single: return (centre_of_mass(m.cloth, s.x) - m.target_com).norm();
     case SwingLoss::corner: {
       double sum = 0.0;
       for (int v : m.corners) sum += (s.x[v] - m.target[v]).norm();

@@ -47,16 +47,16 @@ enum class SwingLoss { single, corner, mesh };
 // constants of one task, built from a validated config
 struct SwingModel {
   ClothModel cloth;
-  std::vector<Vec3> anchor_path;    // (steps + 1) x 2: the two held corners
+  std::vector<Vec3> anchor_path;  // (steps + 1) x 2: the two held corners
   int steps = 0;
   std::vector<int> spring_patch;     // (n_springs) patch index row * 4 + col in [0, 16)
   std::vector<double> spring_ratio;  // (n_springs) 1, shear_ratio or bending_ratio
   double log_k_low = 0.0, log_k_high = 0.0;
-  std::array<int, 4> corners{};      // vertex indices of the 4 corners
+  std::array<int, 4> corners{};         // vertex indices of the 4 corners
   std::vector<double> fixed_stiffness;  // per spring, the velocity tasks' (every patch at param 0)
-  std::array<int, 9> observed{};     // the RL view's 3 x 3 subsample
+  std::array<int, 9> observed{};        // the RL view's 3 x 3 subsample
   // targets: the final state at the reference params
-  std::vector<Vec3> target;          // (n) every vertex
+  std::vector<Vec3> target;  // (n) every vertex
   Vec3 target_com = Vec3::Zero();
 };
 
@@ -64,8 +64,8 @@ struct SwingModel {
 struct SwingWorkspace : Workspace {
   ClothTape tape;
   ClothState state;
-  std::vector<Vec3> force;         // (n) scratch
-  std::vector<double> stiffness;   // (n_springs)
+  std::vector<Vec3> force;        // (n) scratch
+  std::vector<double> stiffness;  // (n_springs)
   ClothAdjoint final_bar;
   ClothGradient grad;
 };

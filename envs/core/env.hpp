@@ -44,12 +44,12 @@ struct EnvInfo {
   std::string name;
   int dim = 0;
   bool differentiable = false;
-  bool rl = false;             // has a per-step interface (make_rl)
-  bool threaded = false;       // a rollout uses the threads of its team
+  bool rl = false;        // has a per-step interface (make_rl)
+  bool threaded = false;  // a rollout uses the threads of its team
   // seconds of one gradient episode (with the default tape memory) on one core of the machine the
   // project calibrates on (a 2-core AMD EPYC), for plans before `harness calibrate` measures this one
   double cost_hint_s = 0.0;
-  std::string metric;          // name of an optional second per-episode metric ("" for none)
+  std::string metric;                // name of an optional second per-episode metric ("" for none)
   double cost_hint_forward_s = 0.0;  // the same of a forward episode (0: cost_hint_s)
   Smoothness smoothness = Smoothness::smooth;
 };
@@ -59,8 +59,8 @@ class RlEnv {
  public:
   virtual ~RlEnv() = default;
   virtual int observation_dim() const = 0;
-  virtual int action_dim() const = 0;   // actions live in [-1, 1]^action_dim
-  virtual int horizon() const = 0;      // steps per episode
+  virtual int action_dim() const = 0;  // actions live in [-1, 1]^action_dim
+  virtual int horizon() const = 0;     // steps per episode
   // env steps an RL agent's action is held for (the seed's action repeat: 5, the cartpoles 1)
   virtual int action_repeat() const { return 5; }
   virtual void reset() = 0;
@@ -133,9 +133,7 @@ class Env {
   // with the target drawn into every frame, recorded from the env's own rollout. Envs that are not
   // simulated (synthetic functions) are not renderable and return no frames.
   virtual bool renderable() const { return false; }
-  virtual std::vector<Frame> frames(std::span<const double> /*x*/, int /*n*/, ThreadTeam& /*team*/) const {
-    return {};
-  }
+  virtual std::vector<Frame> frames(std::span<const double> /*x*/, int /*n*/, ThreadTeam& /*team*/) const { return {}; }
   // A picture of the env's target on its own, without a rollout (`harness render --target`): the
   // PlasticineLab tasks draw their target grid (frames_mpm.cpp). Empty where the env has no target
   // shape to draw.

@@ -13,9 +13,9 @@
 namespace dsb {
 
 struct EnvFamily {
-  std::string pattern;                    // shown by `harness list`, e.g. "rosenbrock-D"
+  std::string pattern;  // shown by `harness list`, e.g. "rosenbrock-D"
   std::string description;
-  std::vector<std::string> grid_names;    // the members `--all` runs
+  std::vector<std::string> grid_names;  // the members `--all` runs
   // returns an env when the name belongs to this family; throws UsageError for a member name
   // with a bad parameter (e.g. "sphere-0")
   std::function<std::unique_ptr<Env>(const std::string& name)> try_make;

@@ -29,8 +29,8 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 void require_in_box(const Env& env, std::span<const double> x) {
   if (static_cast<int>(x.size()) != env.dim())
-    throw std::invalid_argument("gradient check of '" + env.name() + "': x has size " +
-                                std::to_string(x.size()) + ", expected " + std::to_string(env.dim()));
+    throw std::invalid_argument("gradient check of '" + env.name() + "': x has size " + std::to_string(x.size()) +
+                                ", expected " + std::to_string(env.dim()));
   if (const auto i = first_outside_box(x); i >= 0)
     throw std::invalid_argument("gradient check of '" + env.name() + "': x[" + std::to_string(i) +
                                 "] = " + number_text(x[i]) + " is outside [-1, 1]");
@@ -71,8 +71,8 @@ Differences differences_on(const Env& env, Workspace& ws, std::span<const double
                            double loss_at_x) {
   require_in_box(env, x_in);
   if (i < 0 || i >= env.dim())
-    throw std::invalid_argument("gradient check of '" + env.name() + "': coordinate " +
-                                std::to_string(i) + " outside 0.." + std::to_string(env.dim() - 1));
+    throw std::invalid_argument("gradient check of '" + env.name() + "': coordinate " + std::to_string(i) +
+                                " outside 0.." + std::to_string(env.dim() - 1));
   std::vector<double> x(x_in.begin(), x_in.end());
   const double xi = x[i];
   // the window [x - h, x + h], shifted inside [-1, 1] keeping its width 2h
@@ -98,8 +98,7 @@ Differences differences_on(const Env& env, Workspace& ws, std::span<const double
 
 }  // namespace
 
-Differences finite_differences(const Env& env, std::span<const double> x, int i, double step,
-                               double loss_at_x) {
+Differences finite_differences(const Env& env, std::span<const double> x, int i, double step, double loss_at_x) {
   const auto ws = env.make_workspace();
   return differences_on(env, *ws, x, i, step, loss_at_x);
 }
@@ -110,8 +109,7 @@ Differences finite_differences(const Env& env, std::span<const double> x, int i,
   return differences_on(env, *ws, x, i, step, env.loss(x, *ws, serial_team()));
 }
 
-GradientCheckResult check_gradient(const Env& env, std::span<const double> x,
-                                   const GradientCheckOptions& options) {
+GradientCheckResult check_gradient(const Env& env, std::span<const double> x, const GradientCheckOptions& options) {
   // every rollout of the check reuses one workspace
   const auto ws = env.make_workspace();
   std::vector<int> all(std::max(env.dim(), 0));
@@ -177,8 +175,8 @@ GradientCheckResult check_gradient_along(const Env& env, Workspace& ws, std::spa
     r.gradient_agrees = r.gradient_agrees && c.agrees;
     if (!(c.absolute_error <= r.worst_absolute_error)) r.worst_absolute_error = c.absolute_error;
     // NaN counts as the worst
-    if (r.worst_coordinate < 0 || (!std::isnan(r.worst_relative_error) &&
-                                   !(c.relative_error <= r.worst_relative_error))) {
+    if (r.worst_coordinate < 0 ||
+        (!std::isnan(r.worst_relative_error) && !(c.relative_error <= r.worst_relative_error))) {
       r.worst_relative_error = c.relative_error;
       r.worst_coordinate = coordinates[k];
     }
@@ -245,8 +243,8 @@ GradientSurvey survey_gradient(const Env& env, const GradientSurveyOptions& opti
     s.seconds_per_loss_and_grad += r.seconds_loss_and_grad / options.points;
     s.seconds_per_loss += r.seconds_per_loss / options.points;
     // NaN counts as the worst
-    if (s.worst_point < 0 || (!std::isnan(s.worst_relative_error) &&
-                              !(r.worst_relative_error <= s.worst_relative_error))) {
+    if (s.worst_point < 0 ||
+        (!std::isnan(s.worst_relative_error) && !(r.worst_relative_error <= s.worst_relative_error))) {
       s.worst_relative_error = r.worst_relative_error;
       s.worst_point = p;
       s.worst_coordinate = r.worst_coordinate;

@@ -60,8 +60,7 @@ struct Differences {
   double left;     // (f(x) - f(lo)) / (x - lo); NaN when it has none left of x
 };
 // loss_at_x is env.loss(x); the overload without it computes it (one more rollout)
-Differences finite_differences(const Env& env, std::span<const double> x, int i, double step,
-                               double loss_at_x);
+Differences finite_differences(const Env& env, std::span<const double> x, int i, double step, double loss_at_x);
 Differences finite_differences(const Env& env, std::span<const double> x, int i, double step);
 
 struct CoordinateCheck {
@@ -79,20 +78,20 @@ struct GradientCheckResult {
   double value_path_loss = 0.0;  // from loss()
   bool value_agrees = false;
   std::vector<CoordinateCheck> coordinates;
-  double gradient_norm = 0.0;     // Euclidean norm of the analytic gradient
-  double max_abs_central = 0.0;   // max_j |central_j|
+  double gradient_norm = 0.0;    // Euclidean norm of the analytic gradient
+  double max_abs_central = 0.0;  // max_j |central_j|
   double worst_absolute_error = 0.0;
-  double worst_relative_error = 0.0;  // NaN when any coordinate's is
-  int worst_coordinate = -1;          // where worst_relative_error is; -1 for dim 0
-  bool finite = false;         // both losses, every gradient component, every central difference
-  bool exactly_zero = false;   // every analytic component is 0 (and finite)
+  double worst_relative_error = 0.0;      // NaN when any coordinate's is
+  int worst_coordinate = -1;              // where worst_relative_error is; -1 for dim 0
+  bool finite = false;                    // both losses, every gradient component, every central difference
+  bool exactly_zero = false;              // every analytic component is 0 (and finite)
   bool bit_equal_to_differences = false;  // see the header comment; not a failure
-  bool gradient_agrees = false;  // every coordinate agrees
+  bool gradient_agrees = false;           // every coordinate agrees
   // cos of the angle between the analytic gradient and the central differences over the checked
   // coordinates: where a loss has many small jumps the two can disagree coordinate by coordinate
   // and still point the same way (or not); NaN when either vector is zero or not finite
   double direction_cosine = 0.0;
-  bool passed = false;           // finite, value_agrees and gradient_agrees
+  bool passed = false;                 // finite, value_agrees and gradient_agrees
   double seconds_loss_and_grad = 0.0;  // wall time of the loss_and_grad() call
   double seconds_per_loss = 0.0;       // mean wall time of the loss() calls
 };
@@ -100,8 +99,7 @@ struct GradientCheckResult {
 // Checks env's gradient at x (size dim, inside [-1, 1]): one loss_and_grad() and 2 dim + 1
 // loss() calls. Throws std::invalid_argument for a non-differentiable env or x of the wrong size
 // or outside the box, and ConfigError for invalid options.
-GradientCheckResult check_gradient(const Env& env, std::span<const double> x,
-                                   const GradientCheckOptions& options = {});
+GradientCheckResult check_gradient(const Env& env, std::span<const double> x, const GradientCheckOptions& options = {});
 // The same check along the given coordinates only (2 size + 1 loss() calls; `coordinates` of the
 // result follow their order, worst_coordinate names the env's coordinate, max_abs_central and the
 // relative errors' floor are over these coordinates, gradient_norm is the whole gradient's), with
@@ -130,15 +128,15 @@ struct Quartiles {
 Quartiles quartiles(std::vector<double> values);
 
 struct GradientSurvey {
-  std::vector<std::vector<double>> x;    // the points, in drawing order
+  std::vector<std::vector<double>> x;  // the points, in drawing order
   std::vector<GradientCheckResult> checks;
   int points = 0;
-  int agreeing = 0;        // gradient_agrees
-  int aligned = 0;         // direction_cosine > kAlignedCosine (within 25 degrees)
-  int opposed = 0;         // direction_cosine < 0
-  int directed = 0;        // points with a direction_cosine (not NaN)
-  int exactly_zero = 0;    // exactly_zero
-  int non_finite = 0;      // !finite
+  int agreeing = 0;                   // gradient_agrees
+  int aligned = 0;                    // direction_cosine > kAlignedCosine (within 25 degrees)
+  int opposed = 0;                    // direction_cosine < 0
+  int directed = 0;                   // points with a direction_cosine (not NaN)
+  int exactly_zero = 0;               // exactly_zero
+  int non_finite = 0;                 // !finite
   int value_mismatches = 0;           // !value_agrees
   int bit_equal_to_differences = 0;   // bit_equal_to_differences
   Quartiles gradient_norm{};          // over the points with a finite gradient
@@ -149,9 +147,9 @@ struct GradientSurvey {
   bool passed = false;  // every point passed (the large-step check never fails a point)
   // the large-step check at each point (empty when options.large_step is 0), and its counts
   std::vector<LargeStepCheck> large_steps;
-  int large_step_directed = 0;  // points with a direction (nonzero finite gradient, finite difference)
-  int large_step_opposed = 0;   // of those, the loss falls along +g over the window
-  int large_step_flat = 0;      // of those, the loss is the same at both ends of the window
+  int large_step_directed = 0;   // points with a direction (nonzero finite gradient, finite difference)
+  int large_step_opposed = 0;    // of those, the loss falls along +g over the window
+  int large_step_flat = 0;       // of those, the loss is the same at both ends of the window
   Quartiles large_step_ratio{};  // difference / |g| over the directed points
 };
 

@@ -12,10 +12,10 @@ std::optional<int> parse_horizon_name(const std::string& requested, const std::s
   if (requested.rfind(prefix, 0) != 0) return std::nullopt;
   const std::string digits = requested.substr(prefix.size());
   const std::string rule = base + "-hN: N env steps, a multiple of " + std::to_string(multiple) + " from " +
-                           std::to_string(multiple) + " to " + std::to_string(full_steps - multiple) +
-                           "; all " + std::to_string(full_steps) + " is '" + base + "'";
+      std::to_string(multiple) + " to " + std::to_string(full_steps - multiple) + "; all " +
+      std::to_string(full_steps) + " is '" + base + "'";
   const bool numeric = !digits.empty() && digits.size() <= 6 &&
-                       std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
+      std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
   if (!numeric) throw UsageError("unknown env '" + requested + "' (" + rule + ")");
   const int steps = std::stoi(digits);
   const bool in_range = steps >= multiple && steps <= full_steps && steps % multiple == 0;
@@ -23,8 +23,7 @@ std::optional<int> parse_horizon_name(const std::string& requested, const std::s
   if (steps == full_steps)
     throw UsageError("env '" + requested + "' is the full horizon: name it '" + base + "' (" + rule + ")");
   const std::string canonical = prefix + std::to_string(steps);
-  if (requested != canonical)
-    throw UsageError("env '" + requested + "' is written '" + canonical + "' (" + rule + ")");
+  if (requested != canonical) throw UsageError("env '" + requested + "' is written '" + canonical + "' (" + rule + ")");
   return steps;
 }
 

@@ -11,8 +11,8 @@
 
 namespace dsb {
 
-LargeStepCheck check_large_step(const Env& env, Workspace& ws, std::span<const double> x,
-                                std::span<const double> grad, double step) {
+LargeStepCheck check_large_step(const Env& env, Workspace& ws, std::span<const double> x, std::span<const double> grad,
+                                double step) {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   if (!(step > 0.0 && step <= 0.5))
     throw std::invalid_argument("large-step check: step must be in (0, 0.5], got " + std::to_string(step));

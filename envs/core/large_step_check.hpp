@@ -20,7 +20,7 @@
 namespace dsb {
 
 struct LargeStepCheck {
-  bool directed = false;  // the gradient is nonzero and finite, and the difference finite
+  bool directed = false;      // the gradient is nonzero and finite, and the difference finite
   double lo = 0.0, hi = 0.0;  // the window in t, the distance along u
   double difference = 0.0;    // the central difference along u over the window (NaN: none)
   double ratio = 0.0;         // difference / |g| (NaN when not directed)
@@ -30,7 +30,7 @@ struct LargeStepCheck {
 
 // step H in (0, 0.5]; grad of size env.dim() at x (inside the box). Throws std::invalid_argument
 // for a step outside (0, 0.5] or sizes that do not match.
-LargeStepCheck check_large_step(const Env& env, Workspace& ws, std::span<const double> x,
-                                std::span<const double> grad, double step);
+LargeStepCheck check_large_step(const Env& env, Workspace& ws, std::span<const double> x, std::span<const double> grad,
+                                double step);
 
 }  // namespace dsb

@@ -56,7 +56,7 @@ struct Scene {
   Camera camera = Camera::side;
   std::vector<PointCloud> clouds;  // drawn first (faint ones before the others)
   std::vector<Polyline> lines;
-  std::vector<Disc> discs;          // drawn last
+  std::vector<Disc> discs;  // drawn last
 };
 
 // one picture of the rollout: the state after `step` env steps (time = step x the env's step)

@@ -128,7 +128,7 @@ void p2g_adjoint_gather(const GatherTerms& in, const TransferGrid& g, const doub
       for (int k = 0; k < 3; ++k) {
         const N q = N::load4(qmb + 4 * (row + k));
         const double sc = dot4(q, tij + static_cast<double>(k) * ad2) +
-                          dot3(N::load3(gv + 3 * (row + k)), uij + static_cast<double>(k) * cd2);
+            dot3(N::load3(gv + 3 * (row + k)), uij + static_cast<double>(k) * cd2);
         S0 += in.w[2][k] * sc;
         S1 += in.dw[2][k] * sc;
         const N wq = in.w[2][k] * q;  // its mass entry is not read

@@ -13,8 +13,7 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Advances one env step; records tapes[0 .. substeps) when given.
-void env_step(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const double* actions,
-              SubstepTape* tapes) {
+void env_step(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, const double* actions, SubstepTape* tapes) {
   for (int s = 0; s < model.config.substeps; ++s) substep(model, ws, team, actions, tapes ? &tapes[s] : nullptr);
 }
 
@@ -53,15 +52,15 @@ double run_episode(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, st
 std::size_t tape_bytes(const SubstepTape& t) {
   const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   std::size_t b = bytes(t.before) + bytes(t.svd) + bytes(t.poses) + bytes(t.bins.home) + bytes(t.bins.order) +
-                  bytes(t.bins.unit_begin) + bytes(t.bins.active) + bytes(t.bins.flag) + bytes(t.grid.active) +
-                  bytes(t.grid.mq) + bytes(t.grid.v);
+      bytes(t.bins.unit_begin) + bytes(t.bins.active) + bytes(t.bins.flag) + bytes(t.grid.active) + bytes(t.grid.mq) +
+      bytes(t.grid.v);
   for (const auto& c : t.bins.by_colour) b += bytes(c);
   return b;
 }
 
-double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
-                             std::span<const double> actions, int env_steps, const EpisodeObjective& objective,
-                             std::span<double> actions_bar, std::size_t tape_budget) {
+double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, std::span<const double> actions,
+                             int env_steps, const EpisodeObjective& objective, std::span<double> actions_bar,
+                             std::size_t tape_budget) {
   const int adim = model.action_dim();
   const int S = model.config.substeps;
   ws.reserve_reverse(model, env_steps);
@@ -72,7 +71,8 @@ double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam
   };
   // one env step's tapes before any is measured: the particle buffers, and as much again for the
   // bins and the grid snapshot
-  const std::size_t particle_bytes = static_cast<std::size_t>(model.particles()) * (sizeof(Particle) + sizeof(SvdRecord));
+  const std::size_t particle_bytes =
+      static_cast<std::size_t>(model.particles()) * (sizeof(Particle) + sizeof(SvdRecord));
   if (ws.step_tape_bytes == 0) ws.step_tape_bytes = 2 * particle_bytes * static_cast<std::size_t>(S);
 
   // forward, keeping the state before every env step and the tapes of the first env steps while
@@ -89,7 +89,7 @@ double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam
       clock.lap(&PhaseTimes::other);
     }
     const bool tape = ws.taped_env_steps == k && tape_budget > 0 &&
-                      (tape_budget == kTapeEverything || taped_bytes + ws.step_tape_bytes <= tape_budget);
+        (tape_budget == kTapeEverything || taped_bytes + ws.step_tape_bytes <= tape_budget);
     SubstepTape* tapes = tape ? ws.forward_tapes(model, k) : nullptr;
     env_step(model, ws, team, actions.data() + static_cast<std::size_t>(k) * adim, tapes);
     if (tape) {

@@ -48,9 +48,9 @@ double run_episode(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, st
 // when the simulation blew up. The forward pass tapes env steps from the first on while the
 // tapes (tape_bytes(), counted as they are recorded) fit `tape_bytes`: 0 tapes none,
 // kTapeEverything all. ws.taped_env_steps says how many it taped.
-double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team,
-                             std::span<const double> actions, int env_steps, const EpisodeObjective& objective,
-                             std::span<double> actions_bar, std::size_t tape_bytes = 0);
+double run_episode_with_grad(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, std::span<const double> actions,
+                             int env_steps, const EpisodeObjective& objective, std::span<double> actions_bar,
+                             std::size_t tape_bytes = 0);
 
 // the bytes the buffers of one substep's tape hold (their capacities)
 std::size_t tape_bytes(const SubstepTape& tape);

@@ -23,18 +23,18 @@ MpmConfig FluidConfig::default_mpm() {
 Material FluidConfig::default_syrup() {
   Material m;
   m.kind = MaterialKind::fluid;
-  m.density = 1300.0;      // kg/m^3
-  m.bulk_modulus = 2.08e4; // Pa: sound speed 4 m/s; hydrostatic compression g h / c^2 = 7% at 0.12 m
-  m.viscosity = 5.0;       // Pa s: Reynolds number rho U L / eta = 1300 x 1 x 0.1 / 5 = 26;
-                           // explicit limit rho dx^2 / (6 eta) = 0.017 s >> dt
+  m.density = 1300.0;       // kg/m^3
+  m.bulk_modulus = 2.08e4;  // Pa: sound speed 4 m/s; hydrostatic compression g h / c^2 = 7% at 0.12 m
+  m.viscosity = 5.0;        // Pa s: Reynolds number rho U L / eta = 1300 x 1 x 0.1 / 5 = 26;
+                            // explicit limit rho dx^2 / (6 eta) = 0.017 s >> dt
   return m;
 }
 
 Material FluidConfig::default_cube() {
   Material m;
   m.kind = MaterialKind::elastic;
-  m.density = 1600.0;       // kg/m^3 (sugar 1590), above the syrup's 1300
-  m.youngs_modulus = 2e4;   // Pa: P-wave speed sqrt((lam + 2 mu) / rho) = 4.1 m/s (CFL above)
+  m.density = 1600.0;      // kg/m^3 (sugar 1590), above the syrup's 1300
+  m.youngs_modulus = 2e4;  // Pa: P-wave speed sqrt((lam + 2 mu) / rho) = 4.1 m/s (CFL above)
   m.poisson_ratio = 0.3;
   return m;
 }
@@ -102,10 +102,12 @@ nlohmann::json FluidConfig::to_json() const {
           {"axis_weight", axis_weight},
           {"seed", seed},
           {"units", "m, s, kg, Pa; heights from the tank floor y = bound dx"},
-          {"params", "5 segments x (forward/back speed along x, up/down speed along y), x = +-1 -> +-max_speed, "
-                     "held for env_steps / segments env steps"},
-          {"loss", "max(0, rim_height - y_cube) + ladle_weight |xz_cube - xz_bowl| + axis_weight |xz_cube - "
-                   "tank_axis_xz|, cube = mean of its particles, at the last env step"}};
+          {"params",
+           "5 segments x (forward/back speed along x, up/down speed along y), x = +-1 -> +-max_speed, "
+           "held for env_steps / segments env steps"},
+          {"loss",
+           "max(0, rim_height - y_cube) + ladle_weight |xz_cube - xz_bowl| + axis_weight |xz_cube - "
+           "tank_axis_xz|, cube = mean of its particles, at the last env step"}};
 }
 
 }  // namespace dsb::mpm

@@ -27,39 +27,39 @@ struct FluidConfig {
 
   // syrup: viscous, weakly compressible (material.hpp); sound speed sqrt(K / rho) = 4 m/s
   Material syrup = default_syrup();
-  double syrup_depth = 0.12;           // m above the tank floor (6 cells)
-  int syrup_particles_per_cell = 4;    // sampled uniformly at random (PlasticineLab's ~4 per cell)
+  double syrup_depth = 0.12;         // m above the tank floor (6 cells)
+  int syrup_particles_per_cell = 4;  // sampled uniformly at random (PlasticineLab's ~4 per cell)
 
   // sugar cube: elastic, denser than the syrup, so it rests on the floor
   Material cube = default_cube();
-  double cube_size = 0.08;                      // m, edge (4 cells)
+  double cube_size = 0.08;                       // m, edge (4 cells)
   std::array<double, 2> cube_xz = {0.30, 0.26};  // m, centre on the floor
-  int cube_particles_per_axis_per_cell = 2;     // a regular lattice, 8 per cell
+  int cube_particles_per_axis_per_cell = 2;      // a regular lattice, 8 per cell
 
   // ladle: a bowl (spherical cap shell, sdf.hpp) tilted about z so that it opens forward (+x) and
   // up, plus a handle capsule; both translate together
-  double bowl_radius = 0.09;       // m, mid-surface: inner diameter 0.14 m = 7 cells
-  double bowl_thickness = 0.04;    // m, 2 cells (thinner walls leak: grid contact needs nodes inside)
-  double bowl_rim_height = 0.0;    // hemisphere
-  double bowl_tilt = -0.6;         // rad about z: the opening faces +x and up, the lip leads
-  double handle_radius = 0.015;    // m
-  double handle_half_length = 0.12; // m
-  std::array<double, 3> ladle_start = {0.15, 0.26, 0.26};   // m, bowl centre
+  double bowl_radius = 0.09;         // m, mid-surface: inner diameter 0.14 m = 7 cells
+  double bowl_thickness = 0.04;      // m, 2 cells (thinner walls leak: grid contact needs nodes inside)
+  double bowl_rim_height = 0.0;      // hemisphere
+  double bowl_tilt = -0.6;           // rad about z: the opening faces +x and up, the lip leads
+  double handle_radius = 0.015;      // m
+  double handle_half_length = 0.12;  // m
+  std::array<double, 3> ladle_start = {0.15, 0.26, 0.26};  // m, bowl centre
   // bowl centre clamp: x keeps the bowl's mid-surface inside the walls; the lowest y lets the lip
   // scrape 4 cm into the floor's 3-cell wall layer (the bowl then reaches below the grid, where it
   // touches nothing), like a thin-edged scoop on the tank bottom
   std::array<double, 3> ladle_lower = {0.15, 0.07, 0.26};
   std::array<double, 3> ladle_upper = {0.37, 0.37, 0.26};
-  double max_speed = 1.5;          // m/s: x = +-1 maps to +-1.5 m/s forward/back (x) and up/down (y)
-  double friction = 0.9;           // ladle (PlasticineLab's primitive default)
-  double softness = 520.0;         // 1/m: contact band ln10 / softness = 0.22 dx, as PlasticineLab's 666 at dx = 1/64
+  double max_speed = 1.5;   // m/s: x = +-1 maps to +-1.5 m/s forward/back (x) and up/down (y)
+  double friction = 0.9;    // ladle (PlasticineLab's primitive default)
+  double softness = 520.0;  // 1/m: contact band ln10 / softness = 0.22 dx, as PlasticineLab's 666 at dx = 1/64
 
   // loss
-  double rim_height = 0.2;                        // y_w, m above the tank floor
+  double rim_height = 0.2;  // y_w, m above the tank floor
   std::array<double, 2> tank_axis_xz = {0.26, 0.26};
-  double ladle_weight = 3.0;                      // the seed's weights
+  double ladle_weight = 3.0;  // the seed's weights
   double axis_weight = 1.0;
-  std::uint64_t seed = 20221;                     // particle sampling
+  std::uint64_t seed = 20221;  // particle sampling
 
   static MpmConfig default_mpm();
   static Material default_syrup();

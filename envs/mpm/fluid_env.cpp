@@ -35,9 +35,7 @@ EnvInfo fluid_info(std::string name, const FluidConfig& cfg) {
 // Per-env-step interface: the action is the ladle's (forward/back, up/down) speed in [-1, 1]^2.
 class FluidRl : public RlEnv {
  public:
-  FluidRl(const FluidEnv& env) : env_(env), ws_(env.model()), objective_(env.fluid_config(), env.model()) {
-    reset();
-  }
+  FluidRl(const FluidEnv& env) : env_(env), ws_(env.model()), objective_(env.fluid_config(), env.model()) { reset(); }
   int observation_dim() const override { return 6; }
   int action_dim() const override { return 2; }
   int horizon() const override { return env_.fluid_config().env_steps; }
@@ -86,7 +84,8 @@ class FluidRl : public RlEnv {
 }  // namespace
 
 FluidEnv::FluidEnv(std::string name, FluidConfig cfg)
-    : Env(fluid_info(std::move(name), cfg)), cfg_(std::move(cfg)),
+    : Env(fluid_info(std::move(name), cfg)),
+      cfg_(std::move(cfg)),
       model_([c = cfg_] { return build_fluid_model(c); }) {}
 
 std::unique_ptr<Workspace> FluidEnv::make_workspace() const {
@@ -128,16 +127,17 @@ double FluidEnv::rollout(std::span<const double> x, Workspace& workspace, Thread
   return loss;
 }
 
-double FluidEnv::episode_metric(const Workspace& ws) const { return static_cast<const FluidWorkspace&>(ws).cube_height; }
+double FluidEnv::episode_metric(const Workspace& ws) const {
+  return static_cast<const FluidWorkspace&>(ws).cube_height;
+}
 
 double FluidEnv::rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& workspace,
                                    ThreadTeam& team) const {
   auto& ws = static_cast<FluidWorkspace&>(workspace);
   actions(x, ws.actions);
   const FluidObjective objective(cfg_, model());
-  const double loss =
-      run_episode_with_grad(model(), ws.mpm, team, ws.actions, cfg_.env_steps, objective, ws.actions_bar,
-                            ws.tape_memory_bytes);
+  const double loss = run_episode_with_grad(model(), ws.mpm, team, ws.actions, cfg_.env_steps, objective,
+                                            ws.actions_bar, ws.tape_memory_bytes);
   ws.cube_height = objective.final_cube_height();
   // each param drives both primitives over its segment's env steps
   std::fill(grad.begin(), grad.end(), 0.0);

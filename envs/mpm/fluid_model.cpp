@@ -84,7 +84,8 @@ MpmModel build_fluid_model(const FluidConfig& cfg) {
   const Mat3 R = Eigen::Quaterniond(c, 0.0, 0.0, s).toRotationMatrix();
   const double rim_r = std::sqrt(cfg.bowl_radius * cfg.bowl_radius - cfg.bowl_rim_height * cfg.bowl_rim_height);
   Vec3 rim_top = R * Vec3(-rim_r, cfg.bowl_rim_height, 0.0);
-  if (rim_top.y() < (R * Vec3(rim_r, cfg.bowl_rim_height, 0.0)).y()) rim_top = R * Vec3(rim_r, cfg.bowl_rim_height, 0.0);
+  if (rim_top.y() < (R * Vec3(rim_r, cfg.bowl_rim_height, 0.0)).y())
+    rim_top = R * Vec3(rim_r, cfg.bowl_rim_height, 0.0);
   const Vec3 handle_offset = rim_top + Vec3(0.0, cfg.handle_half_length, 0.0);
   PrimitiveSpec handle = bowl;
   handle.name = "handle";
@@ -128,9 +129,9 @@ double FluidObjective::cube_height(const std::vector<Particle>& particles) const
   return cube_centre(model_, particles).y() - cfg_.floor_y();
 }
 
-void FluidObjective::step_loss_adjoint(int step, const std::vector<Particle>& particles,
-                                       const std::vector<Pose>& poses, std::vector<ParticleAdjoint>& adj,
-                                       std::vector<PoseAdjoint>& pose_adj, ThreadTeam&) const {
+void FluidObjective::step_loss_adjoint(int step, const std::vector<Particle>& particles, const std::vector<Pose>& poses,
+                                       std::vector<ParticleAdjoint>& adj, std::vector<PoseAdjoint>& pose_adj,
+                                       ThreadTeam&) const {
   if (step != cfg_.env_steps - 1) return;
   const Vec3 cube = cube_centre(model_, particles);
   const Vec3& bowl = poses[0].p;

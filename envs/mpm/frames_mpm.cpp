@@ -87,12 +87,14 @@ std::vector<dsb::Frame> FluidEnv::frames(std::span<const double> x, int n, Threa
     sc.camera = Camera::oblique;
     add_box(sc, Role::fixed, "tank", Vec3(lo, floor, lo), Vec3(hi_x, rim, hi_z));
     // the target: above the rim (y_w) over the tank's axis
-    sc.lines.push_back({Role::target, "y_w", {{lo, rim, lo}, {hi_x, rim, lo}, {hi_x, rim, hi_z}, {lo, rim, hi_z}}, true});
+    sc.lines.push_back(
+        {Role::target, "y_w", {{lo, rim, lo}, {hi_x, rim, lo}, {hi_x, rim, hi_z}, {lo, rim, hi_z}}, true});
     const double ax = cfg_.tank_axis_xz[0], az = cfg_.tank_axis_xz[1];
     sc.lines.push_back({Role::target, "axis", {{ax, floor, az}, {ax, rim + 0.1, az}}});
     sc.clouds.push_back(body_cloud(m.bodies[1], s.x, Role::medium));  // syrup
     sc.clouds.push_back(body_cloud(m.bodies[0], s.x, Role::state));   // cube
-    for (std::size_t i = 0; i < m.primitives.size(); ++i) sc.clouds.push_back(primitive_outline(m.primitives[i], s.poses[i]));
+    for (std::size_t i = 0; i < m.primitives.size(); ++i)
+      sc.clouds.push_back(primitive_outline(m.primitives[i], s.poses[i]));
     out.push_back(std::move(f));
   }
   return out;
@@ -112,13 +114,15 @@ std::vector<dsb::Frame> PlbEnv::frames(std::span<const double> x, int n, ThreadT
   PointCloud target{Role::target, "target", {}, false};
   const NodeGrid& g = pm.target;
   auto inside = [&](int i, int j, int k) {
-    return i >= 0 && j >= 0 && k >= 0 && i < g.n[0] && j < g.n[1] && k < g.n[2] && g.at(i, j, k) > cfg_.target_threshold;
+    return i >= 0 && j >= 0 && k >= 0 && i < g.n[0] && j < g.n[1] && k < g.n[2] &&
+        g.at(i, j, k) > cfg_.target_threshold;
   };
   for (int i = 0; i < g.n[0]; ++i)
     for (int j = 0; j < g.n[1]; ++j)
       for (int k = 0; k < g.n[2]; ++k)
-        if (inside(i, j, k) && !(inside(i - 1, j, k) && inside(i + 1, j, k) && inside(i, j - 1, k) &&
-                                 inside(i, j + 1, k) && inside(i, j, k - 1) && inside(i, j, k + 1)))
+        if (inside(i, j, k) &&
+            !(inside(i - 1, j, k) && inside(i + 1, j, k) && inside(i, j - 1, k) && inside(i, j + 1, k) &&
+              inside(i, j, k - 1) && inside(i, j, k + 1)))
           target.points.push_back({(i - pad) * dx, (j - pad) * dx, (k - pad) * dx});
   const double lo = m.config.bound * dx;
   const Vec3 hi((m.config.grid[0] - m.config.bound) * dx, (m.config.grid[1] - m.config.bound) * dx,
@@ -129,10 +133,12 @@ std::vector<dsb::Frame> PlbEnv::frames(std::span<const double> x, int n, ThreadT
     Scene& sc = f.scene;
     sc.camera = Camera::oblique;
     // the floor of the domain (inside the walls)
-    sc.lines.push_back({Role::fixed, "floor", {{lo, lo, lo}, {hi.x(), lo, lo}, {hi.x(), lo, hi.z()}, {lo, lo, hi.z()}}, true});
+    sc.lines.push_back(
+        {Role::fixed, "floor", {{lo, lo, lo}, {hi.x(), lo, lo}, {hi.x(), lo, hi.z()}, {lo, lo, hi.z()}}, true});
     for (const Body& b : m.bodies) sc.clouds.push_back(body_cloud(b, s.x, Role::state));
     sc.clouds.push_back(target);
-    for (std::size_t i = 0; i < m.primitives.size(); ++i) sc.clouds.push_back(primitive_outline(m.primitives[i], s.poses[i]));
+    for (std::size_t i = 0; i < m.primitives.size(); ++i)
+      sc.clouds.push_back(primitive_outline(m.primitives[i], s.poses[i]));
     out.push_back(std::move(f));
   }
   return out;
@@ -193,8 +199,11 @@ std::vector<dsb::Frame> PlbEnv::target_frames() const {
   sc.camera = Camera::oblique;
   // a floor under the target, 0.05 around its cells
   const double y0 = m.config.bound * dx, e = 0.05;
-  sc.lines.push_back({Role::fixed, "floor",
-                      {{lo.x() - e, y0, lo.z() - e}, {hi.x() + e, y0, lo.z() - e}, {hi.x() + e, y0, hi.z() + e},
+  sc.lines.push_back({Role::fixed,
+                      "floor",
+                      {{lo.x() - e, y0, lo.z() - e},
+                       {hi.x() + e, y0, lo.z() - e},
+                       {hi.x() + e, y0, hi.z() + e},
                        {lo.x() - e, y0, hi.z() + e}},
                       true});
   for (auto& c : cells) sc.discs.push_back(std::move(c.disc));

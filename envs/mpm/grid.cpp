@@ -88,7 +88,8 @@ template <class Fn>
 void for_nodes_of_blocks_in_parallel(const GridLayout& layout, const std::vector<int>& blocks, ThreadTeam& team,
                                      Fn&& fn) {
   parallel_for_per_thread(team, static_cast<std::int64_t>(blocks.size()), [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t i = begin; i < end; ++i) for_each_node_of_block(layout, blocks[i], [&](int, int, int, int n) { fn(n); });
+    for (std::int64_t i = begin; i < end; ++i)
+      for_each_node_of_block(layout, blocks[i], [&](int, int, int, int n) { fn(n); });
   });
 }
 

@@ -46,14 +46,10 @@ struct GridLayout {
   int blocks() const { return nb[0] * nb[1] * nb[2]; }
   int node(int i, int j, int k) const { return (i * n[1] + j) * n[2] + k; }
   int block(int bi, int bj, int bk) const { return (bi * nb[1] + bj) * nb[2] + bk; }
-  std::array<int, 3> block_coords(int b) const {
-    return {b / (nb[1] * nb[2]), (b / nb[2]) % nb[1], b % nb[2]};
-  }
+  std::array<int, 3> block_coords(int b) const { return {b / (nb[1] * nb[2]), (b / nb[2]) % nb[1], b % nb[2]}; }
   int units() const { return nu[0] * nu[1] * nu[2]; }
   int unit(int ui, int uj, int uk) const { return (ui * nu[1] + uj) * nu[2] + uk; }
-  std::array<int, 3> unit_coords(int u) const {
-    return {u / (nu[1] * nu[2]), (u / nu[2]) % nu[1], u % nu[2]};
-  }
+  std::array<int, 3> unit_coords(int u) const { return {u / (nu[1] * nu[2]), (u / nu[2]) % nu[1], u % nu[2]}; }
   int unit_colour(int u) const {
     const auto c = unit_coords(u);
     return (c[0] & 1) << 2 | (c[1] & 1) << 1 | (c[2] & 1);
@@ -76,8 +72,8 @@ void for_each_node_of_block(const GridLayout& layout, int b, Fn&& fn) {
 
 // Grid fields, dense over all nodes; only active blocks hold meaningful values.
 struct GridFields {
-  std::vector<Vec4> mq;   // node momentum and mass (q, m) from P2G
-  std::vector<Vec3> v;    // node velocity after the grid update (read by G2P)
+  std::vector<Vec4> mq;  // node momentum and mass (q, m) from P2G
+  std::vector<Vec3> v;   // node velocity after the grid update (read by G2P)
   void resize(int nodes);
 };
 
@@ -90,12 +86,12 @@ struct GridAdjoint {
 
 // Particles binned by home unit, and the active blocks, for one substep.
 struct ParticleBins {
-  std::vector<int> home;          // per particle: home unit
-  std::vector<int> order;         // particle indices sorted by home unit, stable
-  std::vector<int> unit_begin;    // per unit: first position in `order` (size units + 1)
+  std::vector<int> home;                             // per particle: home unit
+  std::vector<int> order;                            // particle indices sorted by home unit, stable
+  std::vector<int> unit_begin;                       // per unit: first position in `order` (size units + 1)
   std::array<std::vector<int>, kColours> by_colour;  // occupied units of each colour, ascending
-  std::vector<int> active;        // active blocks, ascending
-  std::vector<std::uint8_t> flag; // per block scratch
+  std::vector<int> active;                           // active blocks, ascending
+  std::vector<std::uint8_t> flag;                    // per block scratch
 
   // bins particles with home blocks `home` (already filled, size particles)
   void rebuild(const GridLayout& layout);

@@ -18,11 +18,11 @@ struct SolidChunk {
   int count = 0;
   // in: the particle's C and F, its material's constants and its stress and momentum scales
   double C[9][kLaneChunk], F[9][kLaneChunk];
-  double two_mu[kLaneChunk];     // 2 mu
+  double two_mu[kLaneChunk];  // 2 mu
   double lambda[kLaneChunk];
-  double yield[kLaneChunk];      // yield stress (plastic)
-  double threshold[kLaneChunk];  // yield / (2 mu): the flow starts where |eps^| exceeds it
-  double plastic[kLaneChunk];    // 1: von Mises return mapping, 0: elastic
+  double yield[kLaneChunk];         // yield stress (plastic)
+  double threshold[kLaneChunk];     // yield / (2 mu): the flow starts where |eps^| exceeds it
+  double plastic[kLaneChunk];       // 1: von Mises return mapping, 0: elastic
   double stress_scale[kLaneChunk];  // -(4 dt V_p / dx^2)
   double mass[kLaneChunk];
   // out: F_new, A = stress_scale tau + m C, and the SVD of F_tmp (for the tape)
@@ -40,7 +40,7 @@ struct TransferGrid {
   double dx = 0.0, inv_dx = 0.0, dt = 0.0;
   double stencil_low[3] = {}, stencil_top[3] = {};  // the base's clamp, in position units (-pad, n - 3 - pad)
   int pad = 0;
-  int n1 = 0, n2 = 0;  // nodes along y and z: node (i, j, k) is (i n1 + j) n2 + k
+  int n1 = 0, n2 = 0;                          // nodes along y and z: node (i, j, k) is (i n1 + j) n2 + k
   double clamp_low = 0.0, clamp_high[3] = {};  // the particles' positions after advection
 };
 
@@ -67,10 +67,10 @@ struct TransferChunk {
 // stencil, the node terms t = (m v - dx A fx, m) + dx A o and u = v'_bar - dx C_s fx + dx C_s o
 // (o the node offset), and the sums over its 27 nodes.
 struct GatherTerms {
-  int corner = 0;           // node index of offset (0, 0, 0)
+  int corner = 0;            // node index of offset (0, 0, 0)
   double w[3][3], dw[3][3];  // the stencil's weights and derivatives, [axis][offset]
-  double t0[4], ad[3][4];   // t at o = 0 and dx A e_k (with a 0 for the mass)
-  double u0[3], cd[3][3];   // u at o = 0 and dx C_s e_k
+  double t0[4], ad[3][4];    // t at o = 0 and dx A e_k (with a 0 for the mass)
+  double u0[3], cd[3][3];    // u at o = 0 and dx C_s e_k
 };
 struct GatherSums {
   double x_bar[3];   // sum over nodes of grad w times (q_bar . t + m_bar m + v_n . u)
@@ -111,8 +111,8 @@ struct LaneKernels {
   void (*g2p_adjoint)(TransferChunk& chunk, const TransferGrid& grid, double* v_bar);
   // P2G^T: one particle's sums over its nodes from the grid's (q_bar, m_bar) (4 doubles a node)
   // and velocities (3)
-  void (*p2g_adjoint_gather)(const GatherTerms& terms, const TransferGrid& grid, const double* qm_bar,
-                             const double* v, GatherSums& sums);
+  void (*p2g_adjoint_gather)(const GatherTerms& terms, const TransferGrid& grid, const double* qm_bar, const double* v,
+                             GatherSums& sums);
   // the reverse of the chunk's solids from the grid's (q_bar, m_bar) and velocities
   void (*solid_adjoint)(SolidAdjointChunk& chunk, const TransferGrid& grid, const double* qm_bar, const double* v);
 };

@@ -69,10 +69,10 @@ struct Pack {
   }
 };
 
-#define DSB_PACK_BINARY(op)                                                              \
-  template <class R>                                                                     \
-  DSB_LANE_INLINE Pack<R> operator op(const Pack<R>& x, const Pack<R>& y) {              \
-    return {x.a op y.a, x.b op y.b};                                                     \
+#define DSB_PACK_BINARY(op)                                                 \
+  template <class R>                                                        \
+  DSB_LANE_INLINE Pack<R> operator op(const Pack<R>& x, const Pack<R>& y) { \
+    return {x.a op y.a, x.b op y.b};                                        \
   }
 DSB_PACK_BINARY(+)
 DSB_PACK_BINARY(-)

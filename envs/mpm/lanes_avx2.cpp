@@ -32,9 +32,9 @@
 namespace dsb::mpm {
 
 const LaneKernels& avx2_lane_kernels() {
-  static const LaneKernels kernels{&solid_stress_chunk<Pack<F4>>, &p2g_chunk<Pack<F4>>, &g2p_chunk<Pack<F4>>,
-                                   &g2p_adjoint_chunk<Pack<F4>>, &p2g_adjoint_gather<F4>,
-                                   &solid_adjoint_chunk<Pack<F4>>};
+  static const LaneKernels kernels{&solid_stress_chunk<Pack<F4>>, &p2g_chunk<Pack<F4>>,
+                                   &g2p_chunk<Pack<F4>>,          &g2p_adjoint_chunk<Pack<F4>>,
+                                   &p2g_adjoint_gather<F4>,       &solid_adjoint_chunk<Pack<F4>>};
   return kernels;
 }
 

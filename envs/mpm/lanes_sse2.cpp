@@ -7,9 +7,9 @@
 namespace dsb::mpm {
 
 const LaneKernels& sse2_lane_kernels() {
-  static const LaneKernels kernels{&solid_stress_chunk<Pack<F2>>, &p2g_chunk<Pack<F2>>, &g2p_chunk<Pack<F2>>,
-                                   &g2p_adjoint_chunk<Pack<F2>>, &p2g_adjoint_gather<F2>,
-                                   &solid_adjoint_chunk<Pack<F2>>};
+  static const LaneKernels kernels{&solid_stress_chunk<Pack<F2>>, &p2g_chunk<Pack<F2>>,
+                                   &g2p_chunk<Pack<F2>>,          &g2p_adjoint_chunk<Pack<F2>>,
+                                   &p2g_adjoint_gather<F2>,       &solid_adjoint_chunk<Pack<F2>>};
   return kernels;
 }
 

@@ -12,7 +12,7 @@ namespace dsb::mpm {
 
 namespace {
 
-constexpr double kSeriesRadius = 1e-3;   // below this relative gap, divided differences by series
+constexpr double kSeriesRadius = 1e-3;  // below this relative gap, divided differences by series
 
 // ((1 + r)^k - 1) / r for |r| <= kSeriesRadius: the binomial series to r^5 (truncation < 1e-18)
 double power_quotient_series(double k, double r) {
@@ -183,9 +183,8 @@ Mat3 solid_stress(const Material& mat, const SolidTape& tape) {
   return tape.svd.U * g.asDiagonal() * tape.svd.U.transpose();
 }
 
-void solid_update_adjoint(const Material& mat, const Mat3& C, const Mat3& F_before, double dt,
-                          const SolidTape& tape, const Mat3& tau_bar, const Mat3& F_new_bar, Mat3& C_bar,
-                          Mat3& F_bar) {
+void solid_update_adjoint(const Material& mat, const Mat3& C, const Mat3& F_before, double dt, const SolidTape& tape,
+                          const Mat3& tau_bar, const Mat3& F_new_bar, Mat3& C_bar, Mat3& F_bar) {
   const double mu = mat.mu(), lam = mat.lambda();
   const Vec3& sigma = tape.svd.sigma;
   Mat3 dfds, dd;

@@ -60,12 +60,12 @@ const char* material_kind_name(MaterialKind k);
 
 // What the reverse pass needs from one solid particle's update.
 struct SolidTape {
-  Svd3 svd;      // of F_tmp
-  Vec3 f;        // singular values of F_new
-  Vec3 eps_hat;  // deviatoric log strain (plastic flow only)
-  double k = 1.0;      // the flow's scale k (1: no flow)
-  double norm = 0.0;   // |eps^| (plastic flow only)
-  bool flow = false;   // the return mapping moved the state
+  Svd3 svd;           // of F_tmp
+  Vec3 f;             // singular values of F_new
+  Vec3 eps_hat;       // deviatoric log strain (plastic flow only)
+  double k = 1.0;     // the flow's scale k (1: no flow)
+  double norm = 0.0;  // |eps^| (plastic flow only)
+  bool flow = false;  // the return mapping moved the state
 };
 
 // Solid update: F in = F of the particle, out = F_new; returns the Kirchhoff stress.
@@ -85,9 +85,8 @@ Mat3 solid_stress(const Material& mat, const SolidTape& tape);
 
 // Adjoint of solid_update. tau_bar = dL/dtau, F_new_bar = dL/dF_new; accumulates dL/dC into
 // C_bar and writes dL/dF (of the F before the update) into F_bar.
-void solid_update_adjoint(const Material& mat, const Mat3& C, const Mat3& F_before, double dt,
-                          const SolidTape& tape, const Mat3& tau_bar, const Mat3& F_new_bar, Mat3& C_bar,
-                          Mat3& F_bar);
+void solid_update_adjoint(const Material& mat, const Mat3& C, const Mat3& F_before, double dt, const SolidTape& tape,
+                          const Mat3& tau_bar, const Mat3& F_new_bar, Mat3& C_bar, Mat3& F_bar);
 
 // Fluid update: J in = J of the particle, out = J_new; returns the Kirchhoff stress.
 Mat3 fluid_update(const Material& mat, const Mat3& C, double dt, double& J);

@@ -23,7 +23,8 @@ int MpmModel::action_offset(int primitive) const {
 void MpmModel::finalize(const std::string& owner) {
   config.validate(owner.c_str());
   layout = GridLayout(config.grid, config.pad);
-  for (std::size_t m = 0; m < materials.size(); ++m) materials[m].validate(owner, "materials[" + std::to_string(m) + "]");
+  for (std::size_t m = 0; m < materials.size(); ++m)
+    materials[m].validate(owner, "materials[" + std::to_string(m) + "]");
   const int n = particles();
   material_of.assign(n, -1);
   mass.assign(n, 0.0);
@@ -42,7 +43,8 @@ void MpmModel::finalize(const std::string& owner) {
     }
   }
   for (int p = 0; p < n; ++p)
-    if (material_of[p] == -1) throw ConfigError(owner, "bodies", "particle " + std::to_string(p) + " belongs to no body");
+    if (material_of[p] == -1)
+      throw ConfigError(owner, "bodies", "particle " + std::to_string(p) + " belongs to no body");
   for (int p = 0; p < n; ++p)
     for (int a = 0; a < 3; ++a)
       if (!(initial[p].x[a] >= config.clamp_low() && initial[p].x[a] <= config.clamp_high(a)))

@@ -36,7 +36,7 @@ inline ParticleAdjoint zero_adjoint() {
 struct Body {
   std::string name;
   int material = 0;
-  int begin = 0, end = 0;  // particle index range
+  int begin = 0, end = 0;        // particle index range
   double particle_volume = 0.0;  // rest volume V_p of each of its particles
 };
 
@@ -45,16 +45,16 @@ struct MpmModel {
   GridLayout layout;
   std::vector<Material> materials;
   std::vector<Body> bodies;
-  std::vector<int> material_of;       // per particle: index into materials
-  std::vector<double> volume;         // per particle: rest volume V_p (its body's)
-  std::vector<double> mass;           // per particle: density x volume
-  std::vector<Particle> initial;      // initial particle state
+  std::vector<int> material_of;   // per particle: index into materials
+  std::vector<double> volume;     // per particle: rest volume V_p (its body's)
+  std::vector<double> mass;       // per particle: density x volume
+  std::vector<Particle> initial;  // initial particle state
   std::vector<PrimitiveSpec> primitives;
   std::vector<Pose> initial_poses;
 
   int particles() const { return static_cast<int>(initial.size()); }
   int action_offset(int primitive) const;  // where a primitive's actions start in an env step's actions
-  int action_dim() const;  // sum of the primitives' action dims (the actions of one env step)
+  int action_dim() const;                  // sum of the primitives' action dims (the actions of one env step)
   // checks sizes and ranges, fills layout, material_of, volume, mass and initial_poses, and sorts
   // each body's particles by their starting grid block (memory order follows space); throws
   // ConfigError

@@ -20,11 +20,11 @@ constexpr int kMaxPrimitives = 8;
 // of 21); the reverse pass restores U from it and recomputes the return mapping (a few
 // logarithms), which costs far less than the SVD it saves.
 struct SubstepTape {
-  std::vector<Particle> before;   // particles at the start of the substep
-  std::vector<SvdRecord> svd;     // per particle: the SVD of F_tmp (solids only)
-  std::vector<Pose> poses;        // primitive poses at the start of the substep
-  ParticleBins bins;              // the substep's binning of `before`
-  GridSnapshot grid;              // active blocks' m, q, v after the grid update
+  std::vector<Particle> before;  // particles at the start of the substep
+  std::vector<SvdRecord> svd;    // per particle: the SVD of F_tmp (solids only)
+  std::vector<Pose> poses;       // primitive poses at the start of the substep
+  ParticleBins bins;             // the substep's binning of `before`
+  GridSnapshot grid;             // active blocks' m, q, v after the grid update
 };
 
 // dL/d(x + dt v') split where the advection was not clamped: its part reaching x, and the
@@ -43,10 +43,10 @@ struct Checkpoint {
 // Wall seconds spent in each phase of the substeps (filled only when a workspace is given one:
 // benchmarks; results never depend on it).
 struct PhaseTimes {
-  double bin = 0.0;      // binning and clearing active blocks
-  double stress = 0.0;   // F update, SVD, return mapping, stress
+  double bin = 0.0;     // binning and clearing active blocks
+  double stress = 0.0;  // F update, SVD, return mapping, stress
   double p2g = 0.0;
-  double grid = 0.0;     // kinematics and grid update (contact, walls)
+  double grid = 0.0;  // kinematics and grid update (contact, walls)
   double g2p = 0.0;
   double reverse_g2p = 0.0;        // G2P^T scatter
   double reverse_grid = 0.0;       // grid update^T (and restoring the grid)
@@ -86,12 +86,12 @@ struct MpmWorkspace {
   std::vector<AdvectionAdjoint> advection;  // per particle, within one substep's reverse
   std::vector<PoseAdjoint> pose_adj;
   GridAdjoint grid_adj;
-  SimdPath lanes = default_lane_path();  // the code of the per-particle phases (same bits on every path)
+  SimdPath lanes = default_lane_path();    // the code of the per-particle phases (same bits on every path)
   std::vector<TransferChunk> lane_chunks;  // the lanes path's P2G chunks, one per thread
-  PhaseTimes* phase_times = nullptr;  // not owned
-  EpisodeObserver* observer = nullptr;  // not owned; run_episode calls it when set (render only)
+  PhaseTimes* phase_times = nullptr;       // not owned
+  EpisodeObserver* observer = nullptr;     // not owned; run_episode calls it when set (render only)
 
-  void reset_state(const MpmModel& model);  // particles and poses to the model's initial state
+  void reset_state(const MpmModel& model);                     // particles and poses to the model's initial state
   void reserve_reverse(const MpmModel& model, int env_steps);  // checkpoints and one env step's tapes
   // env step k's tapes for the forward pass to record (allocated on first use)
   SubstepTape* forward_tapes(const MpmModel& model, int k);

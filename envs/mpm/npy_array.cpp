@@ -23,17 +23,16 @@ static_assert(std::endian::native == std::endian::little, "the .npy reader copie
 
 namespace {
 
-
 constexpr std::size_t kMaxValues = std::size_t{1} << 27;
 constexpr std::size_t kMaxHeaderBytes = std::size_t{1} << 20;  // np.save writes about a hundred
 
 // A value of the header's Python literal: only the kinds a .npy header holds.
 struct PyValue {
   enum class Kind { string, boolean, none, integer, tuple, list } kind = Kind::none;
-  std::string text;               // string
-  bool flag = false;              // boolean
-  std::uint64_t number = 0;       // integer (non-negative, as shapes are)
-  std::vector<PyValue> items;     // tuple or list
+  std::string text;            // string
+  bool flag = false;           // boolean
+  std::uint64_t number = 0;    // integer (non-negative, as shapes are)
+  std::vector<PyValue> items;  // tuple or list
 };
 
 // Recursive descent over the header text, by Python's literal rules as numpy reads the header
@@ -211,8 +210,8 @@ NpyArray read_npy(const std::string& path) {
   std::string header(static_cast<std::size_t>(header_bytes), '\0');
   in.read(header.data(), static_cast<std::streamsize>(header.size()));
   if (static_cast<std::uint64_t>(in.gcount()) < header_bytes)
-    refuse(path, "truncated header: " + std::to_string(in.gcount()) + " of its " + std::to_string(header_bytes) +
-                     " bytes");
+    refuse(path,
+           "truncated header: " + std::to_string(in.gcount()) + " of its " + std::to_string(header_bytes) + " bytes");
   for (char c : header)
     if (c == '\0') refuse(path, "malformed header: it holds a zero byte");
 
@@ -233,12 +232,14 @@ NpyArray read_npy(const std::string& path) {
     refuse(path, "dtype is a structured type; only float64 '<f8' and float32 '<f4' are read");
   a.dtype = descr.text;
   if (a.dtype != "<f8" && a.dtype != "<f4")
-    refuse(path, "dtype '" + shown_value(a.dtype) + "' is not read; only float64 '<f8' and float32 '<f4' (little-endian)");
+    refuse(path,
+           "dtype '" + shown_value(a.dtype) + "' is not read; only float64 '<f8' and float32 '<f4' (little-endian)");
   const PyValue& order = fields.at("fortran_order");
   if (order.kind != PyValue::Kind::boolean) refuse(path, "malformed header: fortran_order is not True or False");
   if (order.flag)
-    refuse(path, "Fortran order (fortran_order: True) is not read; save the array in C order, e.g. "
-                 "np.save(path, np.ascontiguousarray(a))");
+    refuse(path,
+           "Fortran order (fortran_order: True) is not read; save the array in C order, e.g. "
+           "np.save(path, np.ascontiguousarray(a))");
   const PyValue& shape = fields.at("shape");
   if (shape.kind != PyValue::Kind::tuple) refuse(path, "malformed header: shape is not a tuple in " + shown(header));
   std::size_t count = 1;
@@ -255,11 +256,13 @@ NpyArray read_npy(const std::string& path) {
   const std::uint64_t have = file_size > data_start ? file_size - data_start : 0;
   const std::uint64_t need = static_cast<std::uint64_t>(count) * item;
   if (have < need)
-    refuse(path, "truncated data: " + std::to_string(have) + " bytes, shape " + npy_shape_text(a.shape) + " of '" +
-                     a.dtype + "' needs " + std::to_string(need));
+    refuse(path,
+           "truncated data: " + std::to_string(have) + " bytes, shape " + npy_shape_text(a.shape) + " of '" + a.dtype +
+               "' needs " + std::to_string(need));
   if (have > need)
-    refuse(path, std::to_string(have - need) + " bytes after the data of shape " + npy_shape_text(a.shape) + " of '" +
-                     a.dtype + "'");
+    refuse(path,
+           std::to_string(have - need) + " bytes after the data of shape " + npy_shape_text(a.shape) + " of '" +
+               a.dtype + "'");
   std::vector<unsigned char> raw(static_cast<std::size_t>(need));
   in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(raw.size()));
   if (static_cast<std::uint64_t>(in.gcount()) < need) refuse(path, "truncated data: the read ended early");

@@ -44,16 +44,18 @@ void PlbConfig::validate() const {
   if (!(std::isfinite(softness) && softness >= 0.0)) fail("softness", "must be finite and >= 0");
   if (!(particle_volume > 0.0)) fail("particle_volume", "must be > 0");
   if (!(density > 0.0)) fail("density", "must be > 0");
-  for (auto [f, v] : {std::pair{"sdf_weight", sdf_weight}, {"density_weight", density_weight},
-                      {"contact_weight", contact_weight}})
+  for (auto [f, v] :
+       {std::pair{"sdf_weight", sdf_weight}, {"density_weight", density_weight}, {"contact_weight", contact_weight}})
     if (!(std::isfinite(v) && v >= 0.0)) fail(f, "must be finite and >= 0");
   if (observed_particles < 1) fail("observed_particles", "must be >= 1");
   // a target file's values are bounded by kMaxTargetMass so that the density term, summed over the
   // steps and nodes, stays far below the largest double (plb_target_file.hpp derives it)
   const double nodes = static_cast<double>(mpm.grid[0]) * mpm.grid[1] * mpm.grid[2];
-  if (static_cast<double>(env_steps) * density_weight * nodes * kMaxTargetMass > 0.1 * std::numeric_limits<double>::max())
-    fail("density_weight", "with " + std::to_string(env_steps) + " env steps and " + std::to_string(mpm.grid[0]) +
-                               "^3 nodes, a target of kMaxTargetMass per node could overflow the loss");
+  if (static_cast<double>(env_steps) * density_weight * nodes * kMaxTargetMass >
+      0.1 * std::numeric_limits<double>::max())
+    fail("density_weight",
+         "with " + std::to_string(env_steps) + " env steps and " + std::to_string(mpm.grid[0]) +
+             "^3 nodes, a target of kMaxTargetMass per node could overflow the loss");
 }
 
 namespace {
@@ -112,14 +114,21 @@ nlohmann::json PlbConfig::to_json() const {
           {"softness", softness},
           {"particle_volume", particle_volume},
           {"density", density},
-          {"material", {{"kind", "plastic"}, {"youngs_modulus", t.youngs_modulus}, {"poisson_ratio", t.poisson_ratio},
-                        {"yield_stress", t.yield_stress}}},
+          {"material",
+           {{"kind", "plastic"},
+            {"youngs_modulus", t.youngs_modulus},
+            {"poisson_ratio", t.poisson_ratio},
+            {"yield_stress", t.yield_stress}}},
           {"shapes", shapes},
           {"primitives", prims},
-          {"loss", {{"sdf_weight", sdf_weight}, {"density_weight", density_weight}, {"contact_weight", contact_weight},
-                    {"target_threshold", target_threshold},
-                    {"form", "sum over env steps of sdf_weight sum_I d_I m_I + density_weight sum_I |m_I - t_I| + "
-                             "contact_weight sum_k (min_p max(sdf_k(x_p), 0))^2"}}},
+          {"loss",
+           {{"sdf_weight", sdf_weight},
+            {"density_weight", density_weight},
+            {"contact_weight", contact_weight},
+            {"target_threshold", target_threshold},
+            {"form",
+             "sum over env steps of sdf_weight sum_I d_I m_I + density_weight sum_I |m_I - t_I| + "
+             "contact_weight sum_k (min_p max(sdf_k(x_p), 0))^2"}}},
           {"target", target_json(*this, reference)},
           {"metric", "soft IoU of the final grid mass with the target"},
           {"params", "5 segments x the manipulators' commands of one env step, each held for env_steps / 5 steps"},

@@ -44,7 +44,10 @@ EnvInfo plb_info(std::string name, const PlbConfig& cfg) {
 class PlbRl : public RlEnv {
  public:
   explicit PlbRl(const PlbEnv& env)
-      : env_(env), ws_(env.model().mpm), scratch_(env.model().mpm), objective_(env.model(), env.plb_config(), scratch_) {
+      : env_(env),
+        ws_(env.model().mpm),
+        scratch_(env.model().mpm),
+        objective_(env.model(), env.plb_config(), scratch_) {
     reset();
   }
   int observation_dim() const override {
@@ -75,10 +78,11 @@ class PlbRl : public RlEnv {
     if (done()) return;
     std::vector<double> a(action.begin(), action.end());
     for (auto& v : a) v = std::clamp(v, -1.0, 1.0);
-    for (int s = 0; s < env_.model().mpm.config.substeps; ++s) substep(env_.model().mpm, ws_, serial_team(), a.data(), nullptr);
+    for (int s = 0; s < env_.model().mpm.config.substeps; ++s)
+      substep(env_.model().mpm, ws_, serial_team(), a.data(), nullptr);
     loss_ = state_is_finite(ws_.particles, serial_team())
-                ? loss_ + objective_.step_loss(step_, ws_.particles, ws_.poses, serial_team())
-                : std::numeric_limits<double>::quiet_NaN();
+        ? loss_ + objective_.step_loss(step_, ws_.particles, ws_.poses, serial_team())
+        : std::numeric_limits<double>::quiet_NaN();
     ++step_;
   }
   bool done() const override { return step_ >= horizon() || std::isnan(loss_); }
@@ -102,7 +106,8 @@ class PlbRl : public RlEnv {
 }  // namespace
 
 PlbEnv::PlbEnv(std::string name, PlbConfig cfg)
-    : Env(plb_info(std::move(name), cfg)), cfg_(std::move(cfg)),
+    : Env(plb_info(std::move(name), cfg)),
+      cfg_(std::move(cfg)),
       action_dim_(commands_per_step(*find_plb_task(cfg_.task))),
       model_([c = cfg_] { return build_plb_model(c); }) {}
 
@@ -186,8 +191,9 @@ std::optional<PlbConfig> plb_config_of_name(const std::string& requested) {
 EnvFamily plb_family() {
   EnvFamily f;
   f.pattern = "plb-NAME";
-  f.description = "PlasticineLab tasks on the MPM engine (64^3, dt 1e-4, 19 x 50 substeps, von Mises); "
-                  "plb-NAME-hN: the first N env steps of 50 (N = 5..45, a multiple of 5)";
+  f.description =
+      "PlasticineLab tasks on the MPM engine (64^3, dt 1e-4, 19 x 50 substeps, von Mises); "
+      "plb-NAME-hN: the first N env steps of 50 (N = 5..45, a multiple of 5)";
   for (const auto& t : plb_tasks()) f.grid_names.push_back("plb-" + t.name);
   f.try_make = [](const std::string& requested) -> std::unique_ptr<Env> {
     auto cfg = plb_config_of_name(requested);

@@ -48,7 +48,8 @@ class PlbObjective : public EpisodeObjective {
  private:
   void grid_mass(const std::vector<Particle>& particles, ThreadTeam& team) const;
   // min_p max(sdf_k(x_p), 0) and its particle (the lowest index among ties)
-  std::pair<double, int> closest(int k, const std::vector<Particle>& particles, const Pose& pose, ThreadTeam& team) const;
+  std::pair<double, int> closest(int k, const std::vector<Particle>& particles, const Pose& pose,
+                                 ThreadTeam& team) const;
 
   const PlbModel& model_;
   const PlbConfig& cfg_;

@@ -13,11 +13,11 @@ namespace dsb::mpm {
 
 struct PlbModel {
   MpmModel mpm;
-  NodeGrid target;                 // target grid mass on the engine's nodes (pad included)
-  std::vector<double> target_sdf;  // per node: distance to the nearest node above the threshold
+  NodeGrid target;                            // target grid mass on the engine's nodes (pad included)
+  std::vector<double> target_sdf;             // per node: distance to the nearest node above the threshold
   double target_sum = 0.0, target_max = 0.0;  // sum_I t_I (the soft IoU's), max_I t_I
-  double target_abs_sum = 0.0;                  // sum_I |t_I|: the density term where m = 0
-  std::vector<int> movable;        // primitives with commands (the contact term's)
+  double target_abs_sum = 0.0;                // sum_I |t_I|: the density term where m = 0
+  std::vector<int> movable;                   // primitives with commands (the contact term's)
 };
 
 // The MPM model alone, without the target (what the reference motion runs on).

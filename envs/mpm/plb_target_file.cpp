@@ -28,8 +28,8 @@ PlbTargetFile read_plb_target(const std::string& path, const MpmConfig& mpm) {
   const NpyArray a = read_npy(path);
   const std::vector<std::size_t> want(mpm.grid.begin(), mpm.grid.end());
   if (a.shape != want)
-    throw UsageError(shown_value(path) + ": shape " + npy_shape_text(a.shape) + " is not a target grid's " + npy_shape_text(want) +
-                     " (PlasticineLab's nodes)");
+    throw UsageError(shown_value(path) + ": shape " + npy_shape_text(a.shape) + " is not a target grid's " +
+                     npy_shape_text(want) + " (PlasticineLab's nodes)");
   // "value V at [i, j, k]": the first cell in C order that is not a target's mass
   const auto refuse_cell = [&](std::size_t n, const std::string& why) {
     const std::size_t k = n % want[2], j = n / want[2] % want[1], i = n / want[2] / want[1];
@@ -41,8 +41,9 @@ PlbTargetFile read_plb_target(const std::string& path, const MpmConfig& mpm) {
     const double v = a.values[n];
     if (!std::isfinite(v)) refuse_cell(n, "is not finite");
     if (v < -kTargetNegativeTolerance)
-      refuse_cell(n, "is negative: a target is a grid of masses (values from " + number_text(-kTargetNegativeTolerance) +
-                         " are taken as rounding, as in PlasticineLab's own files)");
+      refuse_cell(n,
+                  "is negative: a target is a grid of masses (values from " + number_text(-kTargetNegativeTolerance) +
+                      " are taken as rounding, as in PlasticineLab's own files)");
     if (v > kMaxTargetMass)
       refuse_cell(n, "is above " + number_text(kMaxTargetMass) + ", where the loss could overflow to inf or nan");
     largest = std::max(largest, v);
@@ -52,8 +53,8 @@ PlbTargetFile read_plb_target(const std::string& path, const MpmConfig& mpm) {
                      "): a target is a grid of masses with some mass in it");
   PlbTargetFile t;
   t.dtype = a.dtype;
-  t.hash = hex64(fnv1a64(std::string_view(reinterpret_cast<const char*>(a.values.data()),
-                                          a.values.size() * sizeof(double))));
+  t.hash = hex64(
+      fnv1a64(std::string_view(reinterpret_cast<const char*>(a.values.data()), a.values.size() * sizeof(double))));
   const int p = mpm.pad;
   t.grid = NodeGrid::zeros({mpm.grid[0] + p, mpm.grid[1] + p, mpm.grid[2] + p});
   std::size_t n = 0;

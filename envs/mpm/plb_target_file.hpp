@@ -40,9 +40,9 @@ inline constexpr double kMaxTargetMass = 1e299;
 // ... and a grid with no value above 0 (no mass at all) is refused too.
 
 struct PlbTargetFile {
-  NodeGrid grid;          // on the scene's nodes (pad included), as build_plb_model uses a target
-  std::string hash;       // FNV-1a 64 (hex) of the file's values as little-endian doubles in C order
-  std::string dtype;      // "<f8" or "<f4", as the file has it (not part of the identity)
+  NodeGrid grid;      // on the scene's nodes (pad included), as build_plb_model uses a target
+  std::string hash;   // FNV-1a 64 (hex) of the file's values as little-endian doubles in C order
+  std::string dtype;  // "<f8" or "<f4", as the file has it (not part of the identity)
 };
 
 // Reads `path` for a scene of config `mpm`: the shape must be mpm.grid (PlasticineLab's

@@ -70,12 +70,12 @@ std::vector<PlbTask> make_tasks() {
     a.shapes = {box({0.6, 0.08, 0.5}, {0.16, 0.16, 0.16}, 6000), ball({0.3, 0.06, 0.5}, 0.06, 4000)};
     a.primitives = {mover("sphere_right", sphere_shape(0.04), {0.38, 0.06, 0.5}, Vec3::Constant(0.009)),
                     mover("sphere_left", sphere_shape(0.04), {0.22, 0.06, 0.5}, Vec3::Constant(0.009))};
-    a.reference = {{3, cmd({-1, 0, 0, 1, 0, 0})},     // squeeze
-                   {18, cmd({1, 1, 0, 1, 1, 0})},     // lift towards the box
-                   {15, cmd({1, 0, 0, 1, 0, 0})},     // over the box
+    a.reference = {{3, cmd({-1, 0, 0, 1, 0, 0})},       // squeeze
+                   {18, cmd({1, 1, 0, 1, 1, 0})},       // lift towards the box
+                   {15, cmd({1, 0, 0, 1, 0, 0})},       // over the box
                    {6, cmd({0, -0.5, 0, 0, -0.5, 0})},  // set it down
-                   {4, cmd({1, 0, 0, -1, 0, 0})},     // open
-                   {4, cmd({0, 1, 0, 0, 1, 0})}};     // up
+                   {4, cmd({1, 0, 0, -1, 0, 0})},       // open
+                   {4, cmd({0, 1, 0, 0, 1, 0})}};       // up
     a.plb_target = {{{0.600, 0.136, 0.500}, {0.516, 0.0, 0.406}, {0.719, 0.3125, 0.609}}};
     t.push_back(a);
   }
@@ -93,8 +93,8 @@ std::vector<PlbTask> make_tasks() {
     // of mass 0.01 towards -z: from above, the sphere comes down onto the (+x, +z) top edge to the
     // lower bound (13 steps), presses in towards the block's centre (6), backs out (6), and waits
     // (the commands found by a search over these phases against the figures of plb_target)
-    a.reference = {{13, cmd({0.5, -1, 0.74})}, {6, cmd({-0.47, -0.83, -1})}, {6, cmd({0.46, 0.45, 1})},
-                   {25, cmd({0, 0, 0})}};
+    a.reference = {
+        {13, cmd({0.5, -1, 0.74})}, {6, cmd({-0.47, -0.83, -1})}, {6, cmd({0.46, 0.45, 1})}, {25, cmd({0, 0, 0})}};
     a.plb_target = {{{0.500, 0.104, 0.490}, {0.375, 0.0, 0.375}, {0.641, 0.25, 0.641}}};
     t.push_back(a);
   }
@@ -113,7 +113,7 @@ std::vector<PlbTask> make_tasks() {
     pin.action_scale = {0.6667, 0.0667, 0.001};  // roll (rad), yaw (rad), vertical per env step
     a.primitives = {pin};
     // back and forth along x (roll +1 moves the pin towards -x by 0.6667 x 0.03 per env step), pressing down
-    a.reference = {{5, cmd({1, 0, -1})},  {10, cmd({-1, 0, -1})}, {10, cmd({1, 0, -1})},
+    a.reference = {{5, cmd({1, 0, -1})},   {10, cmd({-1, 0, -1})}, {10, cmd({1, 0, -1})},
                    {10, cmd({-1, 0, -1})}, {10, cmd({1, 0, 0})},   {5, cmd({-1, 0, 0})}};
     a.plb_target = {{{0.496, 0.046, 0.500}, {0.25, 0.0, 0.281}, {0.75, 0.141, 0.734}}};
     t.push_back(a);
@@ -152,8 +152,9 @@ std::vector<PlbTask> make_tasks() {
       const double radius = 0.1 + (p.z() - 0.7) / 0.06 * (kRingOuter - 0.1);
       return Vec3(axis.x() + radius * dm::sin(angle), kHeight * p.y(), axis.z() + radius * dm::cos(angle));
     };
-    a.construction = "the rope wrapped once around the pillar's axis: a particle at (x, y, z) goes to angle "
-                     "2 pi (x - 0.5) / 0.6 from +z, radius 0.1 + (z - 0.7) / 0.06 x 0.055, height y";
+    a.construction =
+        "the rope wrapped once around the pillar's axis: a particle at (x, y, z) goes to angle "
+        "2 pi (x - 0.5) / 0.6 from +z, radius 0.1 + (z - 0.7) / 0.06 x 0.055, height y";
     t.push_back(a);
   }
   {  // Table: push the (+x, -z) leg out from under the table
@@ -203,7 +204,8 @@ std::vector<PlbTask> make_tasks() {
     for (double x : {0.3, 0.5, 0.7}) a.shapes.push_back(box({x, 0.05, 0.5}, {0.1, 0.1, 0.1}, 3333));
     const char* names[] = {"sphere_1", "sphere_2", "sphere_3", "sphere_4", "sphere_5", "sphere_6"};
     const double xs[] = {0.23, 0.37, 0.43, 0.57, 0.63, 0.77};
-    for (int i = 0; i < 6; ++i) a.primitives.push_back(mover(names[i], sphere_shape(0.03), {xs[i], 0.05, 0.5}, Vec3::Constant(0.01)));
+    for (int i = 0; i < 6; ++i)
+      a.primitives.push_back(mover(names[i], sphere_shape(0.03), {xs[i], 0.05, 0.5}, Vec3::Constant(0.01)));
     // PlasticineLab's target holds the three blocks in the air, undeformed: the left one at
     // (0.2, 0.2, 0.5), the middle one at (0.625, 0.344, 0.2), the right one at (0.8, 0.2, 0.2).
     // Grab (3 steps), carry each block in a straight line (30: the left one by (-0.1, +0.145, 0),
@@ -211,7 +213,8 @@ std::vector<PlbTask> make_tasks() {
     // 0.005 short, as the squeeze raises each block's centre by about that), hold (17)
     const std::vector<double> left = {-0.3333, 0.4837, 0}, middle = {0.4167, 0.9637, -1}, right = {0.33, 0.4833, -1};
     std::vector<double> carry;
-    for (const auto* c : {&left, &left, &middle, &middle, &right, &right}) carry.insert(carry.end(), c->begin(), c->end());
+    for (const auto* c : {&left, &left, &middle, &middle, &right, &right})
+      carry.insert(carry.end(), c->begin(), c->end());
     a.reference = {{3, cmd({1, 0, 0, -1, 0, 0, 1, 0, 0, -1, 0, 0, 1, 0, 0, -1, 0, 0})},
                    {30, carry},
                    {17, std::vector<double>(18, 0.0)}};
@@ -235,8 +238,11 @@ std::vector<PlbTask> make_tasks() {
     // of mass where it was: the pen goes 0.02 down (5 steps), strokes 0.14 towards +x (14), back
     // diagonally towards -x and +z (14), and along the +z edge towards -x (14), then stops (commands
     // found by a search against the figures of plb_target)
-    a.reference = {{5, cmd({0, -0.41, 0})}, {14, cmd({1, 0, -0.1})}, {14, cmd({-1, 0, 0.97})},
-                   {14, cmd({-0.7, 0, 0.21})}, {3, cmd({0, 0, 0})}};
+    a.reference = {{5, cmd({0, -0.41, 0})},
+                   {14, cmd({1, 0, -0.1})},
+                   {14, cmd({-1, 0, 0.97})},
+                   {14, cmd({-0.7, 0, 0.21})},
+                   {3, cmd({0, 0, 0})}};
     a.plb_target = {{{0.501, 0.051, 0.499}, {0.328, 0.0, 0.344}, {0.6875, 0.172, 0.703}}};
     t.push_back(a);
   }

@@ -40,8 +40,14 @@ nlohmann::json shape_json(const Shape& s) {
   switch (s.kind) {
     case ShapeKind::sphere: j["radius"] = s.radius; break;
     case ShapeKind::capsule:
-    case ShapeKind::cylinder: j["radius"] = s.radius; j["half_height"] = s.half_height; break;
-    case ShapeKind::torus: j["major_radius"] = s.major_radius; j["radius"] = s.radius; break;
+    case ShapeKind::cylinder:
+      j["radius"] = s.radius;
+      j["half_height"] = s.half_height;
+      break;
+    case ShapeKind::torus:
+      j["major_radius"] = s.major_radius;
+      j["radius"] = s.radius;
+      break;
     case ShapeKind::box: j["half_extents"] = {s.half_extents.x(), s.half_extents.y(), s.half_extents.z()}; break;
     case ShapeKind::bowl:
       j["radius"] = s.radius;
@@ -118,8 +124,8 @@ void PrimitiveSpec::validate(const std::string& owner, const std::string& field)
       if (a < 0 || a > 2) fail("action_axes", "must be 0, 1 or 2, got " + std::to_string(a));
   }
   if (static_cast<int>(action_scale.size()) != action_dim())
-    fail("action_scale", "must have " + std::to_string(action_dim()) + " entries, got " +
-                             std::to_string(action_scale.size()));
+    fail("action_scale",
+         "must have " + std::to_string(action_dim()) + " entries, got " + std::to_string(action_scale.size()));
   for (double s : action_scale)
     if (!std::isfinite(s)) fail("action_scale", "must be finite");
   if (!(position.array() >= lower_bound.array()).all() || !(position.array() <= upper_bound.array()).all())
@@ -282,8 +288,8 @@ Vec3 collide(const PrimitiveSpec& spec, const ContactFrame& fr, const Vec3& x, c
   return vc + (1.0 - c.influence) * u + c.influence * ut;
 }
 
-Vec3 collide_adjoint(const PrimitiveSpec& spec, const ContactFrame& fr, const Vec3& x, const Vec3& v,
-                     const Vec3& g, PoseAdjoint& at_f, PoseAdjoint& at_f1) {
+Vec3 collide_adjoint(const PrimitiveSpec& spec, const ContactFrame& fr, const Vec3& x, const Vec3& v, const Vec3& g,
+                     PoseAdjoint& at_f, PoseAdjoint& at_f1) {
   const ContactState c = contact_state(spec, fr, x);
   if (!c.active) return g;
   const SdfEval e = evaluate_sdf(spec.shape, c.l);
@@ -356,8 +362,8 @@ double primitive_distance(const PrimitiveSpec& spec, const Pose& pose, const Vec
   return sdf_distance(spec.shape, R.transpose() * (x - pose.p));
 }
 
-void primitive_distance_adjoint(const PrimitiveSpec& spec, const Pose& pose, const Vec3& x, double d_bar,
-                                Vec3& x_bar, PoseAdjoint& pose_bar) {
+void primitive_distance_adjoint(const PrimitiveSpec& spec, const Pose& pose, const Vec3& x, double d_bar, Vec3& x_bar,
+                                PoseAdjoint& pose_bar) {
   const Mat3 R = pose.q.toRotationMatrix();
   const Vec3 r = x - pose.p;
   const SdfEval e = evaluate_sdf(spec.shape, R.transpose() * r);

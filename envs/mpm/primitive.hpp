@@ -39,13 +39,13 @@ struct PrimitiveSpec {
   Shape shape;
   Vec3 position = Vec3(0.5, 0.5, 0.5);
   std::array<double, 4> rotation = {1.0, 0.0, 0.0, 0.0};  // quaternion (w, x, y, z), PlasticineLab order
-  double friction = 0.9;   // PlasticineLab's primitive default
-  double softness = 0.0;   // 0: hard contact (d <= 0 only); PlasticineLab's gradient solver: 666
+  double friction = 0.9;                                  // PlasticineLab's primitive default
+  double softness = 0.0;  // 0: hard contact (d <= 0 only); PlasticineLab's gradient solver: 666
   PrimitiveMotion motion = PrimitiveMotion::fixed;
-  std::vector<int> action_axes;       // translate: world axis of each action component
-  std::vector<double> action_scale;   // displacement (or angle) per env step at action 1, per component
-  double roll_radius = 0.03;          // rolling_pin: translation per radian of roll
-  Vec3 lower_bound = Vec3::Zero();    // position clamp
+  std::vector<int> action_axes;      // translate: world axis of each action component
+  std::vector<double> action_scale;  // displacement (or angle) per env step at action 1, per component
+  double roll_radius = 0.03;         // rolling_pin: translation per radian of roll
+  Vec3 lower_bound = Vec3::Zero();   // position clamp
   Vec3 upper_bound = Vec3::Ones();
 
   int action_dim() const;
@@ -80,9 +80,9 @@ void advance_pose_adjoint(const PrimitiveSpec& spec, const Pose& pose, const dou
 
 // The contact geometry of one primitive over one substep (poses f and f + 1).
 struct ContactFrame {
-  Mat3 R0;          // rotation at f
-  Vec3 p0, p1;      // positions at f and f + 1
-  Mat3 M;           // R_{f+1} R_f^T
+  Mat3 R0;      // rotation at f
+  Vec3 p0, p1;  // positions at f and f + 1
+  Mat3 M;       // R_{f+1} R_f^T
   double inv_dt = 0.0;
   double reach = 0.0;  // nodes farther than this from p0 cannot be in contact (bounding radius + band)
 };
@@ -98,8 +98,8 @@ Vec3 collide_adjoint(const PrimitiveSpec& spec, const ContactFrame& frame, const
 // Signed distance of a world point to the primitive at a pose (losses, tests).
 double primitive_distance(const PrimitiveSpec& spec, const Pose& pose, const Vec3& x);
 // ... and its gradients: dL/dx and the pose adjoint, for dL/d(distance) = d_bar.
-void primitive_distance_adjoint(const PrimitiveSpec& spec, const Pose& pose, const Vec3& x, double d_bar,
-                                Vec3& x_bar, PoseAdjoint& pose_bar);
+void primitive_distance_adjoint(const PrimitiveSpec& spec, const Pose& pose, const Vec3& x, double d_bar, Vec3& x_bar,
+                                PoseAdjoint& pose_bar);
 
 // Radius of a sphere around the local origin that contains the shape.
 double bounding_radius(const Shape& shape);

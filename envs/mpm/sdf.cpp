@@ -200,9 +200,8 @@ double dispatch(const Shape& s, const Vec3& p, SdfEval* out) {
 
 void require(bool ok, const Shape& s, const char* field, const std::string& rule, double got) {
   if (!ok)
-    throw ConfigError(
-        "shape", field,
-        "must be " + rule + " for a " + shape_kind_name(s.kind) + ", got " + number_text(got));
+    throw ConfigError("shape", field,
+                      "must be " + rule + " for a " + shape_kind_name(s.kind) + ", got " + number_text(got));
 }
 
 void require_positive(const Shape& s, const char* field, double x) {
@@ -228,8 +227,7 @@ void Shape::validate() const {
     case ShapeKind::sphere: require_positive(*this, "radius", radius); return;
     case ShapeKind::capsule:
       require_positive(*this, "radius", radius);
-      require(std::isfinite(half_height) && half_height >= 0.0, *this, "half_height",
-              "finite and >= 0", half_height);
+      require(std::isfinite(half_height) && half_height >= 0.0, *this, "half_height", "finite and >= 0", half_height);
       return;
     case ShapeKind::cylinder:
       require_positive(*this, "radius", radius);
@@ -238,8 +236,7 @@ void Shape::validate() const {
     case ShapeKind::torus:
       require_positive(*this, "major_radius", major_radius);
       require_positive(*this, "radius", radius);
-      require(radius <= major_radius, *this, "radius",
-              "<= major_radius (" + number_text(major_radius) + ")", radius);
+      require(radius <= major_radius, *this, "radius", "<= major_radius (" + number_text(major_radius) + ")", radius);
       return;
     case ShapeKind::box:
       require_positive(*this, "half_extents.x", half_extents.x());
@@ -252,14 +249,13 @@ void Shape::validate() const {
               "in (-radius, radius) = (" + number_text(-radius) + ", " + number_text(radius) + ")", rim_height);
       require_positive(*this, "thickness", thickness);
       const double w = std::sqrt(radius * radius - rim_height * rim_height);
-      require(thickness <= 2.0 * w, *this, "thickness",
-              "<= 2 sqrt(radius^2 - rim_height^2) = " + number_text(2.0 * w), thickness);
+      require(thickness <= 2.0 * w, *this, "thickness", "<= 2 sqrt(radius^2 - rim_height^2) = " + number_text(2.0 * w),
+              thickness);
       return;
     }
   }
-  throw ConfigError(
-      "shape", "kind",
-      "is not a known shape kind, got " + number_text(static_cast<double>(static_cast<int>(kind))));
+  throw ConfigError("shape", "kind",
+                    "is not a known shape kind, got " + number_text(static_cast<double>(static_cast<int>(kind))));
 }
 
 SdfEval evaluate_sdf(const Shape& shape, const Vec3& p_local) {
@@ -268,8 +264,6 @@ SdfEval evaluate_sdf(const Shape& shape, const Vec3& p_local) {
   return r;
 }
 
-double sdf_distance(const Shape& shape, const Vec3& p_local) {
-  return dispatch(shape, p_local, nullptr);
-}
+double sdf_distance(const Shape& shape, const Vec3& p_local) { return dispatch(shape, p_local, nullptr); }
 
 }  // namespace dsb::mpm

@@ -26,15 +26,15 @@ const char* shape_kind_name(ShapeKind kind);
 // ignored.
 struct Shape {
   ShapeKind kind = ShapeKind::sphere;
-  double radius = 0.0;        // sphere radius; capsule radius; cylinder radius (in xz); torus tube
-                              // (minor) radius; bowl: radius of the spherical shell's mid-surface
-  double half_height = 0.0;   // capsule: half length of its segment along y (from -h to +h);
-                              // cylinder: half height along y
-  double major_radius = 0.0;  // torus: radius of the tube's centre circle in xz (axis = y)
+  double radius = 0.0;               // sphere radius; capsule radius; cylinder radius (in xz); torus tube
+                                     // (minor) radius; bowl: radius of the spherical shell's mid-surface
+  double half_height = 0.0;          // capsule: half length of its segment along y (from -h to +h);
+                                     // cylinder: half height along y
+  double major_radius = 0.0;         // torus: radius of the tube's centre circle in xz (axis = y)
   Vec3 half_extents = Vec3::Zero();  // box
-  double thickness = 0.0;   // bowl: wall thickness (the shell is mid-surface +- thickness / 2)
-  double rim_height = 0.0;  // bowl: the shell is the part of the sphere below y = rim_height
-                            // (-radius < rim_height < radius; 0 = a hemisphere opening upward)
+  double thickness = 0.0;            // bowl: wall thickness (the shell is mid-surface +- thickness / 2)
+  double rim_height = 0.0;           // bowl: the shell is the part of the sphere below y = rim_height
+                                     // (-radius < rim_height < radius; 0 = a hemisphere opening upward)
 
   // throws dsb::ConfigError naming the bad field:
   //   sphere: radius > 0; capsule: radius > 0, half_height >= 0; cylinder: radius, half_height > 0;

@@ -56,7 +56,8 @@ DSB_LANE_INLINE void transposed_chain(const T (&U)[3][3], const T (&X)[3][3], co
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) P[i][j] = left_sum(U[0][i] * X[0][j], U[1][i] * X[1][j], U[2][i] * X[2][j]);
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) out[i][j] = eigen_product_sum(i, P[i][0] * Y[0][j], P[i][1] * Y[1][j], P[i][2] * Y[2][j]);
+    for (int j = 0; j < 3; ++j)
+      out[i][j] = eigen_product_sum(i, P[i][0] * Y[0][j], P[i][1] * Y[1][j], P[i][2] * Y[2][j]);
 }
 
 // (U H) V^T, both products as eigen_product_sum (iso adjoints' return value)
@@ -66,7 +67,8 @@ DSB_LANE_INLINE void back_to_F(const T (&U)[3][3], const T (&H)[3][3], const T (
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) Q[i][j] = eigen_product_sum(i, U[i][0] * H[0][j], U[i][1] * H[1][j], U[i][2] * H[2][j]);
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) out[i][j] = eigen_product_sum(i, Q[i][0] * V[j][0], Q[i][1] * V[j][1], Q[i][2] * V[j][2]);
+    for (int j = 0; j < 3; ++j)
+      out[i][j] = eigen_product_sum(i, Q[i][0] * V[j][0], Q[i][1] * V[j][1], Q[i][2] * V[j][2]);
 }
 
 // A matrix of the chunk (column-major element i + 3 j) into [row][col] lanes
@@ -94,10 +96,10 @@ DSB_LANE_INLINE void gather_terms(SolidAdjointChunk& c, const TransferGrid& g, i
       store(&c.dxCs[i + 3 * k][o], dCs[i][k]);
     }
   for (int i = 0; i < 3; ++i) {
-    store(&c.t0[i][o], mass * load<T>(&c.v[i][o]) -
-                           eigen_product_sum(i, dA[i][0] * fx[0], dA[i][1] * fx[1], dA[i][2] * fx[2]));
-    store(&c.u0[i][o], load<T>(&c.adv_v[i][o]) -
-                           eigen_product_sum(i, dCs[i][0] * fx[0], dCs[i][1] * fx[1], dCs[i][2] * fx[2]));
+    store(&c.t0[i][o],
+          mass * load<T>(&c.v[i][o]) - eigen_product_sum(i, dA[i][0] * fx[0], dA[i][1] * fx[1], dA[i][2] * fx[2]));
+    store(&c.u0[i][o],
+          load<T>(&c.adv_v[i][o]) - eigen_product_sum(i, dCs[i][0] * fx[0], dCs[i][1] * fx[1], dCs[i][2] * fx[2]));
   }
 }
 
@@ -197,8 +199,8 @@ DSB_LANE_INLINE void solid_adjoint_tail(SolidAdjointChunk& c, const TransferGrid
       const T both = sel_le(abs_(r), T(1e-3), series, quotient);
       // both above the floor: both; both at it: 0; one at it: the quotient
       const T above_i = sel_gt(sigma[i], floor, one, zero), above_j = sel_gt(sigma[j], floor, one, zero);
-      const T above = sel_gt(above_i, zero, sel_gt(above_j, zero, both, quotient),
-                             sel_gt(above_j, zero, quotient, zero));
+      const T above =
+          sel_gt(above_i, zero, sel_gt(above_j, zero, both, quotient), sel_gt(above_j, zero, quotient, zero));
       dd[i][j] = sel_gt(flow, zero, above, one);
     }
   // corotated_diagonal's dg/df, then dg/dsigma = dg/df df/dsigma and ddg = 2 mu (f_i + f_j - 1) dd
@@ -207,8 +209,7 @@ DSB_LANE_INLINE void solid_adjoint_tail(SolidAdjointChunk& c, const TransferGrid
   const T vol_slope = lam * (T(2.0) * J - one);
   T dgdf[3][3];
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      dgdf[i][j] = (i == j ? two_mu * (T(2.0) * f[i] - one) : zero) + vol_slope * J_over[j];
+    for (int j = 0; j < 3; ++j) dgdf[i][j] = (i == j ? two_mu * (T(2.0) * f[i] - one) : zero) + vol_slope * J_over[j];
   T dgds[3][3];
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)

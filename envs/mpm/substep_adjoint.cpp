@@ -136,7 +136,7 @@ void adjoint_of_particle(const ParticleAdjointContext& ctx, std::int64_t p, cons
   const double dx = cfg.dx, inv_dx = 1.0 / dx;
   const double k_dt = 4.0 * cfg.dt / (dx * dx);
   const GridLayout& L = model.layout;
-  const std::vector<Vec3>& gv = ws.grid.v;   // node velocities after the grid update
+  const std::vector<Vec3>& gv = ws.grid.v;    // node velocities after the grid update
   const std::vector<Vec4>& qmb = ws.grid.mq;  // now (dL/dq, dL/dm)
   const Particle& P = tape.before[p];
   const ParticleAdjoint& a = ws.adj[p];
@@ -196,12 +196,12 @@ void adjoint_of_particle(const ParticleAdjointContext& ctx, std::int64_t p, cons
       const Vec4 tij = ti + static_cast<double>(j) * ad1;
       const Vec3 uij = ui + static_cast<double>(j) * cd1;
       const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-      double S0 = 0.0, S1 = 0.0;  // sum_k w_z s, sum_k w_z' s
+      double S0 = 0.0, S1 = 0.0;                  // sum_k w_z s, sum_k w_z' s
       Vec3 Q0 = Vec3::Zero(), Qk = Vec3::Zero();  // sum_k w_z q_bar, sum_k k w_z q_bar
       for (int k = 0; k < 3; ++k) {
         const int nd = row + k;
-        const double sc = qmb[nd].dot(tij + static_cast<double>(k) * ad2) +
-                          gv[nd].dot(uij + static_cast<double>(k) * cd2);
+        const double sc =
+            qmb[nd].dot(tij + static_cast<double>(k) * ad2) + gv[nd].dot(uij + static_cast<double>(k) * cd2);
         S0 += s.w[2][k] * sc;
         S1 += s.dw[2][k] * sc;
         const Vec3 wq = s.w[2][k] * qmb[nd].head<3>();

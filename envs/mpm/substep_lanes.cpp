@@ -22,8 +22,7 @@ SolidConstants solid_constants(const MpmModel& model, int material) {
   return k;
 }
 
-void gather_solid(SolidChunk& c, int l, const Particle& P, const SolidConstants& k, double stress_scale,
-                  double mass) {
+void gather_solid(SolidChunk& c, int l, const Particle& P, const SolidConstants& k, double stress_scale, double mass) {
   for (int e = 0; e < 9; ++e) {
     c.C[e][l] = P.C.data()[e];
     c.F[e][l] = P.F.data()[e];

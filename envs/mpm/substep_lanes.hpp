@@ -17,8 +17,7 @@ struct SolidConstants {
 SolidConstants solid_constants(const MpmModel& model, int material);
 
 // lane l of a solid chunk: particle P's C and F, its material's constants and its scales
-void gather_solid(SolidChunk& c, int l, const Particle& P, const SolidConstants& k, double stress_scale,
-                  double mass);
+void gather_solid(SolidChunk& c, int l, const Particle& P, const SolidConstants& k, double stress_scale, double mass);
 
 // lanes past the chunk's particles repeat its first particle (finite; their results are not read)
 void pad_solid_adjoint(SolidAdjointChunk& c);

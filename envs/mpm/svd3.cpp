@@ -38,12 +38,12 @@ struct Lanes {
   }
 };
 
-#define DSB_LANE_BINOP(op)                                                      \
-  template <int W>                                                              \
-  DSB_INLINE Lanes<W> operator op(const Lanes<W>& a, const Lanes<W>& b) {       \
-    Lanes<W> r;                                                                 \
-    DSB_UNROLL for (int k = 0; k < Lanes<W>::kRegs; ++k) r.x[k] = a.x[k] op b.x[k];        \
-    return r;                                                                   \
+#define DSB_LANE_BINOP(op)                                                          \
+  template <int W>                                                                  \
+  DSB_INLINE Lanes<W> operator op(const Lanes<W>& a, const Lanes<W>& b) {           \
+    Lanes<W> r;                                                                     \
+    DSB_UNROLL for (int k = 0; k < Lanes<W>::kRegs; ++k) r.x[k] = a.x[k] op b.x[k]; \
+    return r;                                                                       \
   }
 DSB_LANE_BINOP(+)
 DSB_LANE_BINOP(-)
@@ -89,15 +89,13 @@ DSB_INLINE Lanes<W> abs_(const Lanes<W>& a) {
 
 // x < y ? a : b, and x == y ? a : b, lane by lane
 template <int W>
-DSB_INLINE Lanes<W> sel_lt(const Lanes<W>& x, const Lanes<W>& y, const Lanes<W>& a,
-                           const Lanes<W>& b) {
+DSB_INLINE Lanes<W> sel_lt(const Lanes<W>& x, const Lanes<W>& y, const Lanes<W>& a, const Lanes<W>& b) {
   Lanes<W> r;
   DSB_UNROLL for (int k = 0; k < Lanes<W>::kRegs; ++k) r.x[k] = x.x[k] < y.x[k] ? a.x[k] : b.x[k];
   return r;
 }
 template <int W>
-DSB_INLINE Lanes<W> sel_eq(const Lanes<W>& x, const Lanes<W>& y, const Lanes<W>& a,
-                           const Lanes<W>& b) {
+DSB_INLINE Lanes<W> sel_eq(const Lanes<W>& x, const Lanes<W>& y, const Lanes<W>& a, const Lanes<W>& b) {
   Lanes<W> r;
   DSB_UNROLL for (int k = 0; k < Lanes<W>::kRegs; ++k) r.x[k] = x.x[k] == y.x[k] ? a.x[k] : b.x[k];
   return r;
@@ -108,8 +106,7 @@ void batch_chunk(const Mat3* A, Svd3* out, std::size_t count) {
   Lanes<W> a[3][3], u[3][3], sigma[3], v[3][3];
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
-      for (int l = 0; l < W; ++l)
-        a[r][c].x[l / 2][l % 2] = static_cast<std::size_t>(l) < count ? A[l](r, c) : 0.0;
+      for (int l = 0; l < W; ++l) a[r][c].x[l / 2][l % 2] = static_cast<std::size_t>(l) < count ? A[l](r, c) : 0.0;
   svd3_kernel(a, u, sigma, v);
   for (std::size_t l = 0; l < count; ++l) {
     for (int r = 0; r < 3; ++r)
@@ -160,13 +157,11 @@ double away_from_zero(double x, double floor) {
 
 }  // namespace
 
-Mat3 svd3_adjoint(const Svd3& s, const Mat3& U_bar, const Vec3& sigma_bar, const Mat3& V_bar,
-                  double clamp) {
+Mat3 svd3_adjoint(const Svd3& s, const Mat3& U_bar, const Vec3& sigma_bar, const Mat3& V_bar, double clamp) {
   Mat3 K = Mat3::Zero();
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
-      if (i != j)
-        K(i, j) = 1.0 / away_from_zero(s.sigma(j) * s.sigma(j) - s.sigma(i) * s.sigma(i), clamp);
+      if (i != j) K(i, j) = 1.0 / away_from_zero(s.sigma(j) * s.sigma(j) - s.sigma(i) * s.sigma(i), clamp);
   const Mat3 Ju = s.U.transpose() * U_bar;
   const Mat3 Jv = s.V.transpose() * V_bar;
   Mat3 M = K.cwiseProduct(Ju - Ju.transpose()) * s.sigma.asDiagonal();
@@ -185,8 +180,7 @@ Mat3 svd3_adjoint(const Svd3& s, const Mat3& U_bar, const Vec3& sigma_bar, const
 // denominator sigma_i^2 - sigma_j^2), and dX^_ii = sum_j dfds(i, j) dP_jj. The adjoint is the
 // transpose of that map: the coefficients are symmetric in (i, j), so H_ij collects G_ij through
 // (a + b)/2 and G_ji through (a - b)/2.
-Mat3 iso_uv_adjoint(const Svd3& s, const Vec3& f, const Mat3& dfds, const Mat3& dd,
-                    const Mat3& X_bar) {
+Mat3 iso_uv_adjoint(const Svd3& s, const Vec3& f, const Mat3& dfds, const Mat3& dd, const Mat3& X_bar) {
   const Mat3 G = s.U.transpose() * X_bar * s.V;
   Mat3 H;
   for (int i = 0; i < 3; ++i) {
@@ -211,12 +205,10 @@ Mat3 iso_uu_adjoint(const Svd3& s, const Mat3& dgds, const Mat3& ddg, const Mat3
   const Mat3 M = s.U.transpose() * T_bar * s.U;
   const Mat3 S = 0.5 * (M + M.transpose());
   Mat3 H;
-  for (int i = 0; i < 3; ++i)
-    H(i, i) = dgds(0, i) * S(0, 0) + dgds(1, i) * S(1, 1) + dgds(2, i) * S(2, 2);
+  for (int i = 0; i < 3; ++i) H(i, i) = dgds(0, i) * S(0, 0) + dgds(1, i) * S(1, 1) + dgds(2, i) * S(2, 2);
   for (int i = 0; i < 3; ++i)
     for (int j = i + 1; j < 3; ++j) {
-      const double e =
-          ddg(i, j) / away_from_zero(s.sigma(i) + s.sigma(j), kIsoDenominatorFloor);
+      const double e = ddg(i, j) / away_from_zero(s.sigma(i) + s.sigma(j), kIsoDenominatorFloor);
       const double w = 2.0 * S(i, j) * e;
       H(i, j) = w * s.sigma(j);
       H(j, i) = w * s.sigma(i);

@@ -55,8 +55,7 @@ Svd3 restore_svd(const SvdRecord& r, const Mat3& A);
 //   K_ij = 1 / (sigma_j^2 - sigma_i^2) (i != j), K_ii = 0, the denominator clamped to
 //   |.| >= clamp keeping its sign (a zero denominator counts as positive). Exact for well-separated
 //   singular values; biased (not NaN) when two are closer than the clamp allows.
-Mat3 svd3_adjoint(const Svd3& s, const Mat3& U_bar, const Vec3& sigma_bar, const Mat3& V_bar,
-                  double clamp = 1e-6);
+Mat3 svd3_adjoint(const Svd3& s, const Mat3& U_bar, const Vec3& sigma_bar, const Mat3& V_bar, double clamp = 1e-6);
 
 // Denominators sigma_i + sigma_j of the isotropic adjoints are kept at |.| >= this (sign kept; a
 // zero counts as positive). They vanish only under inversion (sigma_i = -sigma_j, e.g. a matrix of
@@ -69,8 +68,7 @@ inline constexpr double kIsoDenominatorFloor = 1e-100;
 //   read). With G = U^T X_bar V: F_bar = U H V^T,
 //   H_ii = sum_j dfds(j, i) G_jj,
 //   H_ij = (a + b)/2 G_ij + (a - b)/2 G_ji (i != j), a = dd(i, j), b = (f_i + f_j)/(sigma_i + sigma_j).
-Mat3 iso_uv_adjoint(const Svd3& s, const Vec3& f, const Mat3& dfds, const Mat3& dd,
-                    const Mat3& X_bar);
+Mat3 iso_uv_adjoint(const Svd3& s, const Vec3& f, const Mat3& dfds, const Mat3& dd, const Mat3& X_bar);
 
 // Adjoint of the symmetric T = U diag(g) U^T, g = g(sigma), with respect to F (s = svd3(F)).
 //   dgds(i, j) = d g_i / d sigma_j; ddg(i, j) = (g_i - g_j) / (sigma_i - sigma_j) (stable, its

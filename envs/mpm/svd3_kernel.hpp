@@ -69,8 +69,7 @@ DSB_SVD_INLINE T dot3(const T (&x)[3], const T (&y)[3]) {
 
 // one Jacobi step on S = A^T A for the pair (p, q), r the third index: S <- J^T S J, V <- V J
 template <class T>
-DSB_SVD_INLINE void sym_step(T& spp, T& sqq, T& spq, T& srp, T& srq, T (&vp)[3], T (&vq)[3],
-                         const T& thr) {
+DSB_SVD_INLINE void sym_step(T& spp, T& sqq, T& spq, T& srp, T& srq, T (&vp)[3], T (&vq)[3], const T& thr) {
   const Rot<T> g = jacobi_rotation(spp, sqq, spq, thr);
   spp = spp - g.t * spq;
   sqq = sqq + g.t * spq;

@@ -20,7 +20,7 @@ namespace dsb::mpm {
 
 namespace {
 
-constexpr int kMaxAxis = 1 << 16;                  // nodes per axis (distance_to_mass, files)
+constexpr int kMaxAxis = 1 << 16;                        // nodes per axis (distance_to_mass, files)
 constexpr std::size_t kMaxNodes = std::size_t{1} << 24;  // nodes in all (files)
 constexpr std::size_t kMaxText = std::size_t{1} << 30;   // decompressed bytes (files)
 
@@ -79,8 +79,7 @@ void envelope_1d(const std::int64_t* f, std::int64_t* d, int len, std::vector<in
 void transform_axis(std::vector<std::int64_t>& g, const std::array<int, 3>& n, int axis) {
   const int len = n[axis];
   if (len == 0) return;
-  const std::array<std::size_t, 3> stride{static_cast<std::size_t>(n[1]) * n[2],
-                                          static_cast<std::size_t>(n[2]), 1};
+  const std::array<std::size_t, 3> stride{static_cast<std::size_t>(n[1]) * n[2], static_cast<std::size_t>(n[2]), 1};
   std::array<int, 3> lines = n;
   lines[axis] = 1;
   std::vector<std::int64_t> f(len), d(len);
@@ -105,8 +104,7 @@ void transform_axis(std::vector<std::int64_t>& g, const std::array<int, 3>& n, i
 // a field of the file quoted in a message: printable, one line, at most 40 characters
 std::string quote(std::string_view s) {
   std::string out = "'";
-  for (std::size_t i = 0; i < s.size() && i < 40; ++i)
-    out += (s[i] >= 0x20 && s[i] < 0x7f) ? s[i] : '?';
+  for (std::size_t i = 0; i < s.size() && i < 40; ++i) out += (s[i] >= 0x20 && s[i] < 0x7f) ? s[i] : '?';
   if (s.size() > 40) out += "...";
   return out + "'";
 }
@@ -198,8 +196,7 @@ double NodeGrid::max() const {
 
 // ---- distance and IoU --------------------------------------------------------------------------
 
-std::vector<double> distance_to_mass(const NodeGrid& target, double threshold, double dx,
-                                     double empty_value) {
+std::vector<double> distance_to_mass(const NodeGrid& target, double threshold, double dx, double empty_value) {
   check_values(target, "distance_to_mass");
   for (int a = 0; a < 3; ++a)
     if (target.n[a] > kMaxAxis) throw std::invalid_argument("distance_to_mass: more than 65536 nodes on an axis");
@@ -328,8 +325,9 @@ NodeGrid read_grid_gz(const std::string& path) {
       if (!parse_int(f[a], LLONG_MIN, LLONG_MAX, idx[a])) fail(path, at_line("bad node index " + quote(f[a])));
     for (int a = 0; a < 3; ++a)
       if (idx[a] < 0 || idx[a] >= n[a])
-        fail(path, at_line("node " + node_str(idx[0], idx[1], idx[2]) + " outside the " + std::to_string(n[0]) +
-                           " x " + std::to_string(n[1]) + " x " + std::to_string(n[2]) + " grid"));
+        fail(path,
+             at_line("node " + node_str(idx[0], idx[1], idx[2]) + " outside the " + std::to_string(n[0]) + " x " +
+                     std::to_string(n[1]) + " x " + std::to_string(n[2]) + " grid"));
     double v;
     if (!parse_double(f[3], v)) fail(path, at_line("bad number " + quote(f[3])));
     const std::size_t i = g.index(static_cast<int>(idx[0]), static_cast<int>(idx[1]), static_cast<int>(idx[2]));

@@ -33,9 +33,7 @@ struct NodeGrid {
 
   static NodeGrid zeros(const std::array<int, 3>& n);  // every value 0
   std::size_t size() const;                            // n0 n1 n2 (the expected values.size())
-  std::size_t index(int i, int j, int k) const {
-    return (static_cast<std::size_t>(i) * n[1] + j) * n[2] + k;
-  }
+  std::size_t index(int i, int j, int k) const { return (static_cast<std::size_t>(i) * n[1] + j) * n[2] + k; }
   double& at(int i, int j, int k) { return values[index(i, j, k)]; }
   double at(int i, int j, int k) const { return values[index(i, j, k)]; }
   double sum() const;  // in index order
@@ -49,8 +47,7 @@ struct NodeGrid {
 // per axis, O(nodes); the result at a node is sqrt(integer) * dx: deterministic, and equal to the
 // brute-force minimum over the target nodes. Throws std::invalid_argument when values.size() !=
 // size() or an axis exceeds 65536 nodes. Indexed like target.values.
-std::vector<double> distance_to_mass(const NodeGrid& target, double threshold, double dx,
-                                     double empty_value = 1000.0);
+std::vector<double> distance_to_mass(const NodeGrid& target, double threshold, double dx, double empty_value = 1000.0);
 
 // PlasticineLab's soft IoU of two grids of one shape (formula above), sums in index order.
 // 0 when either grid has no positive value (in particular when it is all zero), where the formula

@@ -19,8 +19,8 @@ struct TargetBody {
 };
 
 struct TargetShape {
-  double mass = 0.0;  // every node's value, in index order
-  Vec3 centre = Vec3::Zero();  // of every node's value
+  double mass = 0.0;                          // every node's value, in index order
+  Vec3 centre = Vec3::Zero();                 // of every node's value
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // bounding box of the cells above the threshold
   long cells = 0;                             // cells above the threshold
   double threshold = 0.0;                     // fraction x the grid's maximum

@@ -8,9 +8,7 @@
 namespace dsb {
 
 void BounceConfig::validate() const {
-  auto fail = [](const std::string& field, const std::string& why) {
-    throw ConfigError("bounce", field, why);
-  };
+  auto fail = [](const std::string& field, const std::string& why) { throw ConfigError("bounce", field, why); };
   auto positive = [&](const std::string& field, double v) {
     if (!(std::isfinite(v) && v > 0.0)) fail(field, "must be finite and > 0, got " + std::to_string(v));
   };

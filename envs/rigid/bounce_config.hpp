@@ -12,17 +12,17 @@
 namespace dsb {
 
 struct BounceConfig {
-  double radius = 0.1;                         // m, contact radius (Warp soft_contact_distance)
-  double mass = 1.0;                           // kg
-  std::array<double, 3> start = {0.0, 1.0, 0.0};   // m
+  double radius = 0.1;                                  // m, contact radius (Warp soft_contact_distance)
+  double mass = 1.0;                                    // kg
+  std::array<double, 3> start = {0.0, 1.0, 0.0};        // m
   std::array<double, 3> v_low = {-10.0, -10.0, -10.0};  // m/s, x = -1
   std::array<double, 3> v_high = {10.0, -1.0, 10.0};    // m/s, x = +1
-  double wall_x = 2.0;                          // m, wall plane x = wall_x facing -x
-  double gravity = 9.81;                        // m/s^2 along -y
-  double dt = 1.0 / 480.0;                      // s, semi-implicit Euler
-  double duration = 2.0;                        // s (960 steps)
-  std::array<double, 3> target = {-1.0, 0.5, 1.0};  // m (chosen here)
-  ContactConfig contact;                        // ke 1e4, kd 10, mu 0.25
+  double wall_x = 2.0;                                  // m, wall plane x = wall_x facing -x
+  double gravity = 9.81;                                // m/s^2 along -y
+  double dt = 1.0 / 480.0;                              // s, semi-implicit Euler
+  double duration = 2.0;                                // s (960 steps)
+  std::array<double, 3> target = {-1.0, 0.5, 1.0};      // m (chosen here)
+  ContactConfig contact;                                // ke 1e4, kd 10, mu 0.25
   void validate() const;
   nlohmann::json to_json() const;
 };

@@ -23,11 +23,10 @@ BounceModel BounceModel::build(const BounceConfig& cfg) {
 
 void bounce_step(const BounceModel& m, BallState& s, BounceStepCache* cache) {
   // contacts: ground plane y = 0 (normal +y) and wall plane x = wall_x (normal -x, i.e. -x = -wall_x)
-  const ContactForce<3> ground = contact_force<3>(
-      m.contact, m.radius, plane_geometry<3>(s.position, Eigen::Vector3d::UnitY(), 0.0), s.velocity);
+  const ContactForce<3> ground =
+      contact_force<3>(m.contact, m.radius, plane_geometry<3>(s.position, Eigen::Vector3d::UnitY(), 0.0), s.velocity);
   const ContactForce<3> wall = contact_force<3>(
-      m.contact, m.radius, plane_geometry<3>(s.position, -Eigen::Vector3d::UnitX(), -m.wall_x),
-      s.velocity);
+      m.contact, m.radius, plane_geometry<3>(s.position, -Eigen::Vector3d::UnitX(), -m.wall_x), s.velocity);
   const Eigen::Vector3d f = ground.f + wall.f;
   if (cache) {
     cache->df_dx = ground.df_dx + wall.df_dx;
@@ -79,8 +78,7 @@ std::unique_ptr<Workspace> BounceEnv::make_workspace() const {
 Eigen::Vector3d BounceEnv::initial_velocity(std::span<const double> x) const {
   // affine map of each component: x = -1 -> v_low, x = +1 -> v_high
   Eigen::Vector3d v;
-  for (int i = 0; i < 3; ++i)
-    v(i) = cfg_.v_low[i] + 0.5 * (x[i] + 1.0) * (cfg_.v_high[i] - cfg_.v_low[i]);
+  for (int i = 0; i < 3; ++i) v(i) = cfg_.v_low[i] + 0.5 * (x[i] + 1.0) * (cfg_.v_high[i] - cfg_.v_low[i]);
   return v;
 }
 
@@ -92,8 +90,7 @@ BallState BounceEnv::initial_state(std::span<const double> x) const {
 }
 
 double BounceEnv::final_loss(const BallState& s) const {
-  if (!s.position.allFinite() || !s.velocity.allFinite())
-    return std::numeric_limits<double>::quiet_NaN();
+  if (!s.position.allFinite() || !s.velocity.allFinite()) return std::numeric_limits<double>::quiet_NaN();
   return (s.position - Eigen::Vector3d(cfg_.target[0], cfg_.target[1], cfg_.target[2])).norm();
 }
 

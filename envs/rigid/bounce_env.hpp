@@ -26,12 +26,12 @@ struct BallState {
 
 // constants of one simulation, built from a validated config
 struct BounceModel {
-  double dt = 0.0;        // s
-  int steps = 0;          // round(duration / dt)
-  double mass = 0.0;      // kg
-  double radius = 0.0;    // m, contact radius
-  double gravity = 0.0;   // m/s^2 along -y
-  double wall_x = 0.0;    // m, wall plane x = wall_x (normal -x)
+  double dt = 0.0;       // s
+  int steps = 0;         // round(duration / dt)
+  double mass = 0.0;     // kg
+  double radius = 0.0;   // m, contact radius
+  double gravity = 0.0;  // m/s^2 along -y
+  double wall_x = 0.0;   // m, wall plane x = wall_x (normal -x)
   ContactConfig contact;
 
   static BounceModel build(const BounceConfig& cfg);

@@ -20,16 +20,13 @@ CartpoleConfig CartpoleConfig::one_link() {
 CartpoleConfig CartpoleConfig::three_links() { return CartpoleConfig{}; }
 
 void CartpoleConfig::validate() const {
-  auto fail = [](const std::string& field, const std::string& why) {
-    throw ConfigError("cartpole", field, why);
-  };
+  auto fail = [](const std::string& field, const std::string& why) { throw ConfigError("cartpole", field, why); };
   auto positive = [&](const std::string& field, double v) {
     if (!(std::isfinite(v) && v > 0.0)) fail(field, "must be finite and > 0, got " + std::to_string(v));
   };
   if (links < 1 || links > 8) fail("links", "must be in 1..8, got " + std::to_string(links));
   if (static_cast<int>(link_masses.size()) != links)
-    fail("link_masses", "must have " + std::to_string(links) + " entries, got " +
-                            std::to_string(link_masses.size()));
+    fail("link_masses", "must have " + std::to_string(links) + " entries, got " + std::to_string(link_masses.size()));
   for (double m : link_masses) positive("link_masses", m);
   positive("link_length", link_length);
   positive("cart_mass", cart_mass);

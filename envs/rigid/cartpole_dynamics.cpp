@@ -46,8 +46,7 @@ CartpoleState cartpole_initial_state(const CartpoleModel& m, const CartpoleConfi
   return s;
 }
 
-void cartpole_step(const CartpoleModel& m, CartpoleState& s, double u, const double* tau,
-                   CartpoleStepCache* cache) {
+void cartpole_step(const CartpoleModel& m, CartpoleState& s, double u, const double* tau, CartpoleStepCache* cache) {
   const int n = m.n;
   // velocity control: the cart reaches the commanded speed within the step
   const double cart_accel = (u - s.vx) / m.dt;
@@ -87,9 +86,8 @@ void cartpole_step(const CartpoleModel& m, CartpoleState& s, double u, const dou
   s.phi += m.dt * s.dphi;
 }
 
-void cartpole_step_adjoint(const CartpoleModel& m, const CartpoleState& before,
-                           const CartpoleStepCache& c, CartpoleAdjoint& adj, double* u_bar,
-                           double* tau_bar) {
+void cartpole_step_adjoint(const CartpoleModel& m, const CartpoleState& before, const CartpoleStepCache& c,
+                           CartpoleAdjoint& adj, double* u_bar, double* tau_bar) {
   const int n = m.n;
   const double dt = m.dt;
   const LinkVec& sn = c.sin_phi;
@@ -152,8 +150,7 @@ Eigen::Vector2d cartpole_tip(const CartpoleModel& m, const CartpoleState& s) {
   return tip;
 }
 
-double cartpole_chain_energy(const CartpoleModel& m, const CartpoleState& s,
-                             const CartpoleConfig& cfg) {
+double cartpole_chain_energy(const CartpoleModel& m, const CartpoleState& s, const CartpoleConfig& cfg) {
   // E = sum_i 1/2 m_i |v_ci|^2 + 1/2 I_i dphi_i^2 + m_i g y_ci   (rods, centre of mass at L/2)
   const double L = m.length;
   double energy = 0.0;
@@ -164,8 +161,8 @@ double cartpole_chain_energy(const CartpoleModel& m, const CartpoleState& s,
     const double cy = py - 0.5 * L * cp;
     const double cvx = vx + 0.5 * L * cp * s.dphi(i);
     const double cvy = vy + 0.5 * L * sp * s.dphi(i);
-    energy += 0.5 * mi * (cvx * cvx + cvy * cvy) + 0.5 * (mi * L * L / 12.0) * s.dphi(i) * s.dphi(i) +
-              mi * m.gravity * cy;
+    energy +=
+        0.5 * mi * (cvx * cvx + cvy * cvy) + 0.5 * (mi * L * L / 12.0) * s.dphi(i) * s.dphi(i) + mi * m.gravity * cy;
     px += L * sp;
     py -= L * cp;
     vx += L * cp * s.dphi(i);

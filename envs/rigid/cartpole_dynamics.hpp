@@ -57,16 +57,14 @@ void cartpole_step(const CartpoleModel& m, CartpoleState& s, double u, const dou
 // Reverse of cartpole_step. `before` is the state the step started from and `cache` what the step
 // recorded; `adj` holds dLoss/d(state after the step) on entry and dLoss/d(before) on exit;
 // dLoss/du and dLoss/dtau (n) are written.
-void cartpole_step_adjoint(const CartpoleModel& m, const CartpoleState& before,
-                           const CartpoleStepCache& cache, CartpoleAdjoint& adj, double* u_bar,
-                           double* tau_bar);
+void cartpole_step_adjoint(const CartpoleModel& m, const CartpoleState& before, const CartpoleStepCache& cache,
+                           CartpoleAdjoint& adj, double* u_bar, double* tau_bar);
 
 // Tip of the chain (world x, y) relative to the rail origin.
 Eigen::Vector2d cartpole_tip(const CartpoleModel& m, const CartpoleState& s);
 
 // Total mechanical energy of the chain (kinetic + potential, cart motion included), J.
-double cartpole_chain_energy(const CartpoleModel& m, const CartpoleState& s,
-                             const CartpoleConfig& cfg);
+double cartpole_chain_energy(const CartpoleModel& m, const CartpoleState& s, const CartpoleConfig& cfg);
 
 CartpoleState cartpole_initial_state(const CartpoleModel& m, const CartpoleConfig& cfg);
 

@@ -26,7 +26,8 @@ EnvInfo cartpole_info(std::string name, const CartpoleConfig& cfg) {
 }  // namespace
 
 CartpoleEnv::CartpoleEnv(std::string name, CartpoleConfig cfg)
-    : Env(cartpole_info(std::move(name), cfg)), cfg_(std::move(cfg)),
+    : Env(cartpole_info(std::move(name), cfg)),
+      cfg_(std::move(cfg)),
       model_([c = cfg_] { return CartpoleModel::build(c); }) {}
 
 std::unique_ptr<Workspace> CartpoleEnv::make_workspace() const {
@@ -55,9 +56,7 @@ bool finite_state(const CartpoleState& s) {
 
 }  // namespace
 
-CartpoleControls CartpoleEnv::controls(std::span<const double> x, int t) const {
-  return control_at(cfg_, x, t);
-}
+CartpoleControls CartpoleEnv::controls(std::span<const double> x, int t) const { return control_at(cfg_, x, t); }
 
 double CartpoleEnv::final_loss(const CartpoleState& s) const {
   if (!finite_state(s)) return std::numeric_limits<double>::quiet_NaN();
@@ -179,13 +178,13 @@ EnvFamily cartpole_family(int links) {
   const std::string name = "cartpole" + std::to_string(links);
   EnvFamily f;
   f.pattern = name;
-  f.description = links == 1 ? "velocity-controlled cart + 1 link (1 kg), 100 steps, 200-D, tip target (1, 0.8)"
-                             : "velocity-controlled cart + 3 links (1, 0.5, 0.25 kg), 100 steps, 400-D, tip target (1, 2.5)";
+  f.description = links == 1
+      ? "velocity-controlled cart + 1 link (1 kg), 100 steps, 200-D, tip target (1, 0.8)"
+      : "velocity-controlled cart + 3 links (1, 0.5, 0.25 kg), 100 steps, 400-D, tip target (1, 2.5)";
   f.grid_names = {name};
   f.try_make = [name, links](const std::string& requested) -> std::unique_ptr<Env> {
     if (requested != name) return nullptr;
-    return std::make_unique<CartpoleEnv>(
-        name, links == 1 ? CartpoleConfig::one_link() : CartpoleConfig::three_links());
+    return std::make_unique<CartpoleEnv>(name, links == 1 ? CartpoleConfig::one_link() : CartpoleConfig::three_links());
   };
   return f;
 }

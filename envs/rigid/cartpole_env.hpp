@@ -18,8 +18,8 @@ namespace dsb {
 
 // buffers of one rollout: the states before every step and what each step's reverse needs
 struct CartpoleWorkspace : Workspace {
-  std::vector<CartpoleState> states;       // steps + 1
-  std::vector<CartpoleStepCache> caches;   // steps
+  std::vector<CartpoleState> states;      // steps + 1
+  std::vector<CartpoleStepCache> caches;  // steps
 };
 
 // physical controls of one step: cart speed u (m/s) and joint torques tau (N m, links entries)

@@ -5,8 +5,8 @@
 namespace dsb {
 
 template <int D>
-ContactGeometry<D> plane_geometry(const Eigen::Matrix<double, D, 1>& p,
-                                  const Eigen::Matrix<double, D, 1>& normal, double offset) {
+ContactGeometry<D> plane_geometry(const Eigen::Matrix<double, D, 1>& p, const Eigen::Matrix<double, D, 1>& normal,
+                                  double offset) {
   // signed distance d = n . p - offset; the normal is constant (dn/dp = 0)
   ContactGeometry<D> g;
   g.distance = normal.dot(p) - offset;
@@ -47,8 +47,8 @@ ContactGeometry<2> capsule_geometry(const Eigen::Vector2d& p, const Eigen::Vecto
 }
 
 template <int D>
-ContactForce<D> contact_force(const ContactConfig& cfg, double ball_radius,
-                              const ContactGeometry<D>& g, const Eigen::Matrix<double, D, 1>& v) {
+ContactForce<D> contact_force(const ContactConfig& cfg, double ball_radius, const ContactGeometry<D>& g,
+                              const Eigen::Matrix<double, D, 1>& v) {
   using Vec = Eigen::Matrix<double, D, 1>;
   using Row = Eigen::Matrix<double, 1, D>;
   using Mat = Eigen::Matrix<double, D, D>;

@@ -24,8 +24,8 @@ namespace dsb {
 // closest-point geometry of a ball centre against one surface
 template <int D>
 struct ContactGeometry {
-  double distance = 0.0;                                      // signed distance of the centre (m)
-  Eigen::Matrix<double, D, 1> normal = Eigen::Matrix<double, D, 1>::Zero();  // unit outward normal (D)
+  double distance = 0.0;                                                         // signed distance of the centre (m)
+  Eigen::Matrix<double, D, 1> normal = Eigen::Matrix<double, D, 1>::Zero();      // unit outward normal (D)
   Eigen::Matrix<double, D, D> dnormal_dx = Eigen::Matrix<double, D, D>::Zero();  // dn/dp (D x D)
 };
 
@@ -42,8 +42,8 @@ struct ContactForce {
 
 // plane {y : normal . y = offset} with unit `normal` pointing into the free side
 template <int D>
-ContactGeometry<D> plane_geometry(const Eigen::Matrix<double, D, 1>& p,
-                                  const Eigen::Matrix<double, D, 1>& normal, double offset);
+ContactGeometry<D> plane_geometry(const Eigen::Matrix<double, D, 1>& p, const Eigen::Matrix<double, D, 1>& normal,
+                                  double offset);
 
 // 2-D capsule: the segment centre + s axis, |s| <= half_length (unit `axis`), inflated by
 // `radius`. Distance = |p - closest point on the segment| - radius. Undefined (normal zero, the
@@ -53,7 +53,7 @@ ContactGeometry<2> capsule_geometry(const Eigen::Vector2d& p, const Eigen::Vecto
 
 // the penalty force of one contact on a ball of contact radius `ball_radius` moving at v
 template <int D>
-ContactForce<D> contact_force(const ContactConfig& cfg, double ball_radius,
-                              const ContactGeometry<D>& g, const Eigen::Matrix<double, D, 1>& v);
+ContactForce<D> contact_force(const ContactConfig& cfg, double ball_radius, const ContactGeometry<D>& g,
+                              const Eigen::Matrix<double, D, 1>& v);
 
 }  // namespace dsb

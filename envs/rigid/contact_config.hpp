@@ -19,11 +19,11 @@
 namespace dsb {
 
 struct ContactConfig {
-  double ke = 1e4;                   // N/m, normal stiffness (Warp example)
-  double kd = 10.0;                  // N s/m, normal damping on approach (Warp example)
-  double mu = 0.25;                  // Coulomb friction coefficient (design)
-  double friction_smoothing = 0.5;   // m/s, velocity scale of the smooth Coulomb law (chosen
-                                     // here, was 1e-2: unstable stick, see above)
+  double ke = 1e4;                         // N/m, normal stiffness (Warp example)
+  double kd = 10.0;                        // N s/m, normal damping on approach (Warp example)
+  double mu = 0.25;                        // Coulomb friction coefficient (design)
+  double friction_smoothing = 0.5;         // m/s, velocity scale of the smooth Coulomb law (chosen
+                                           // here, was 1e-2: unstable stick, see above)
   void validate(const char* owner) const;  // throws ConfigError naming the field
   nlohmann::json to_json() const;
 };

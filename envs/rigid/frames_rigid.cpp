@@ -108,7 +108,8 @@ std::vector<Frame> PinballEnv::frames(std::span<const double> x, int n, ThreadTe
     Frame f{step, step * m.dt, {}};
     Scene& sc = f.scene;
     sc.camera = Camera::side;
-    sc.lines.push_back({Role::fixed, "board", {p2(0, cfg_.height), p2(0, 0), p2(m.width, 0), p2(m.width, cfg_.height)}});
+    sc.lines.push_back(
+        {Role::fixed, "board", {p2(0, cfg_.height), p2(0, 0), p2(m.width, 0), p2(m.width, cfg_.height)}});
     // paddles: the capsule's box outline at its angle (paddle_length x paddle_thickness)
     for (int k = 0; k < m.paddles; ++k) {
       const Eigen::Vector2d a(dm::cos(angles[k]), dm::sin(angles[k])), nrm(-a.y(), a.x());

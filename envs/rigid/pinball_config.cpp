@@ -24,17 +24,13 @@ PinballConfig PinballConfig::grid(int rows, int cols) {
 
 std::array<double, 2> PinballConfig::paddle_centre(int row, int col) const {
   // rows evenly spaced from first_row_y down to last_row_y, columns from first_col_x to last_col_x
-  const double y = rows == 1 ? first_row_y
-                             : first_row_y + (last_row_y - first_row_y) * row / (rows - 1);
-  const double x = cols == 1 ? first_col_x
-                             : first_col_x + (last_col_x - first_col_x) * col / (cols - 1);
+  const double y = rows == 1 ? first_row_y : first_row_y + (last_row_y - first_row_y) * row / (rows - 1);
+  const double x = cols == 1 ? first_col_x : first_col_x + (last_col_x - first_col_x) * col / (cols - 1);
   return {x, y};
 }
 
 void PinballConfig::validate() const {
-  auto fail = [](const std::string& field, const std::string& why) {
-    throw ConfigError("pinball", field, why);
-  };
+  auto fail = [](const std::string& field, const std::string& why) { throw ConfigError("pinball", field, why); };
   auto positive = [&](const std::string& field, double v) {
     if (!(std::isfinite(v) && v > 0.0)) fail(field, "must be finite and > 0, got " + std::to_string(v));
   };
@@ -44,8 +40,7 @@ void PinballConfig::validate() const {
   if (rows < 1) fail("rows", "must be >= 1, got " + std::to_string(rows));
   if (cols < 1) fail("cols", "must be >= 1, got " + std::to_string(cols));
   if (rows * cols > max_paddles)
-    fail("rows", "rows * cols must be <= " + std::to_string(max_paddles) + ", got " +
-                     std::to_string(rows * cols));
+    fail("rows", "rows * cols must be <= " + std::to_string(max_paddles) + ", got " + std::to_string(rows * cols));
   positive("width", width);
   positive("height", height);
   positive("ball_radius", ball_radius);

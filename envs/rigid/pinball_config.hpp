@@ -18,11 +18,11 @@
 namespace dsb {
 
 struct PinballConfig {
-  int rows = 1, cols = 2;                        // n_h x n_w
-  double width = 8.0, height = 10.0;             // m
-  double ball_radius = 0.2;                      // m (chosen here)
-  double ball_mass = 1.0;                        // kg (chosen here)
-  std::array<double, 2> start = {1.0, 9.5};      // m (chosen here)
+  int rows = 1, cols = 2;                               // n_h x n_w
+  double width = 8.0, height = 10.0;                    // m
+  double ball_radius = 0.2;                             // m (chosen here)
+  double ball_mass = 1.0;                               // kg (chosen here)
+  std::array<double, 2> start = {1.0, 9.5};             // m (chosen here)
   double paddle_length = 1.6, paddle_thickness = 0.15;  // m (chosen here)
   // paddle centres: rows evenly spaced from first_row_y down to last_row_y, columns from
   // first_col_x to last_col_x (a single row or column uses the first value); chosen here so that
@@ -31,13 +31,13 @@ struct PinballConfig {
   // (1x2: centres (1.4, 6.5) and (4.2, 6.5)), see grid()
   double first_row_y = 7.5, last_row_y = 2.5;
   double first_col_x = 1.4, last_col_x = 6.2;
-  double max_angle = 1.5707963267948966;          // rad, x = +-1
-  double gravity = 9.81;                          // m/s^2 along -y
-  double dt = 1.0 / 480.0;                        // s, semi-implicit Euler
-  double duration = 4.0;                          // s
-  std::array<double, 2> target = {7.0, 0.5};      // m (chosen here)
-  ContactConfig contact;                          // same law as bounce
-  static constexpr int max_paddles = 64;          // validate() bounds rows * cols by this
+  double max_angle = 1.5707963267948966;                        // rad, x = +-1
+  double gravity = 9.81;                                        // m/s^2 along -y
+  double dt = 1.0 / 480.0;                                      // s, semi-implicit Euler
+  double duration = 4.0;                                        // s
+  std::array<double, 2> target = {7.0, 0.5};                    // m (chosen here)
+  ContactConfig contact;                                        // same law as bounce
+  static constexpr int max_paddles = 64;                        // validate() bounds rows * cols by this
   static PinballConfig grid(int rows, int cols);                // `pinball-RxC`'s config
   std::array<double, 2> paddle_centre(int row, int col) const;  // m, (x, y)
   void validate() const;

@@ -40,8 +40,8 @@ Eigen::Vector2d perp(const Eigen::Vector2d& a) { return Eigen::Vector2d(-a.y(), 
 
 }  // namespace
 
-void pinball_step(const PinballModel& m, const PaddleAxes& axes, Ball2State& s,
-                  PinballStepCache* cache, PaddleContactGrad* contacts) {
+void pinball_step(const PinballModel& m, const PaddleAxes& axes, Ball2State& s, PinballStepCache* cache,
+                  PaddleContactGrad* contacts) {
   const Eigen::Vector2d& p = s.position;
   const Eigen::Vector2d& v = s.velocity;
   Eigen::Vector2d f = Eigen::Vector2d::Zero();
@@ -53,10 +53,9 @@ void pinball_step(const PinballModel& m, const PaddleAxes& axes, Ball2State& s,
     df_dv += c.df_dv;
   };
   // walls and floor: planes x = 0 (normal +x), x = width (normal -x), y = 0 (normal +y)
-  const ContactGeometry<2> planes[3] = {
-      plane_geometry<2>(p, Eigen::Vector2d::UnitX(), 0.0),
-      plane_geometry<2>(p, -Eigen::Vector2d::UnitX(), -m.width),
-      plane_geometry<2>(p, Eigen::Vector2d::UnitY(), 0.0)};
+  const ContactGeometry<2> planes[3] = {plane_geometry<2>(p, Eigen::Vector2d::UnitX(), 0.0),
+                                        plane_geometry<2>(p, -Eigen::Vector2d::UnitX(), -m.width),
+                                        plane_geometry<2>(p, Eigen::Vector2d::UnitY(), 0.0)};
   for (int i = 0; i < 3; ++i) {
     const ContactForce<2> c = contact_force<2>(m.contact, m.radius, planes[i], v);
     if (!c.active) continue;
@@ -69,8 +68,7 @@ void pinball_step(const PinballModel& m, const PaddleAxes& axes, Ball2State& s,
     const Eigen::Vector2d rel = p - m.centres[k];
     if (rel.squaredNorm() > reach2) continue;
     const ContactForce<2> c = contact_force<2>(
-        m.contact, m.radius,
-        capsule_geometry(p, m.centres[k], axes.axis[k], m.half_segment, m.paddle_radius), v);
+        m.contact, m.radius, capsule_geometry(p, m.centres[k], axes.axis[k], m.half_segment, m.paddle_radius), v);
     if (!c.active) continue;
     add(c);
     if (contacts) {
@@ -93,8 +91,8 @@ void pinball_step(const PinballModel& m, const PaddleAxes& axes, Ball2State& s,
   s.position += m.dt * s.velocity;
 }
 
-void pinball_step_adjoint(const PinballModel& m, const PinballStepCache& cache,
-                          const PaddleContactGrad* contacts, Ball2State& adj, double* angle_bar) {
+void pinball_step_adjoint(const PinballModel& m, const PinballStepCache& cache, const PaddleContactGrad* contacts,
+                          Ball2State& adj, double* angle_bar) {
   // x' = x + dt v': dL/dv' gains dt dL/dx'
   const Eigen::Vector2d vbar = adj.velocity + m.dt * adj.position;
   // v' = v + dt (g + f(x, v, angles) / m): dL/dx += dt/m (df/dx)^T vbar,
@@ -102,8 +100,7 @@ void pinball_step_adjoint(const PinballModel& m, const PinballStepCache& cache,
   const double k = m.dt / m.mass;
   adj.position += k * (cache.df_dx.transpose() * vbar);
   adj.velocity = vbar + k * (cache.df_dv.transpose() * vbar);
-  for (int i = 0; i < cache.paddle_contacts; ++i)
-    angle_bar[contacts[i].paddle] += k * contacts[i].df_dangle.dot(vbar);
+  for (int i = 0; i < cache.paddle_contacts; ++i) angle_bar[contacts[i].paddle] += k * contacts[i].df_dangle.dot(vbar);
 }
 
 namespace {
@@ -125,7 +122,8 @@ EnvInfo pinball_info(std::string name, const PinballConfig& cfg) {
 }  // namespace
 
 PinballEnv::PinballEnv(std::string name, PinballConfig cfg)
-    : Env(pinball_info(std::move(name), cfg)), cfg_(std::move(cfg)),
+    : Env(pinball_info(std::move(name), cfg)),
+      cfg_(std::move(cfg)),
       model_([c = cfg_] { return PinballModel::build(c); }) {}
 
 std::unique_ptr<Workspace> PinballEnv::make_workspace() const {
@@ -160,8 +158,7 @@ Ball2State PinballEnv::initial_state() const {
 }
 
 double PinballEnv::final_loss(const Ball2State& s) const {
-  if (!s.position.allFinite() || !s.velocity.allFinite())
-    return std::numeric_limits<double>::quiet_NaN();
+  if (!s.position.allFinite() || !s.velocity.allFinite()) return std::numeric_limits<double>::quiet_NaN();
   return (s.position - Eigen::Vector2d(cfg_.target[0], cfg_.target[1])).norm();
 }
 
@@ -248,8 +245,8 @@ EnvFamily pinball_family(int rows, int cols) {
   EnvFamily f;
   f.pattern = name;
   f.description = "ball dropped through a " + std::to_string(rows) + " x " + std::to_string(cols) +
-                  " grid of paddles on an 8 x 10 m board (penalty contact, dt 1/480, 4 s), " +
-                  std::to_string(rows * cols) + "-D paddle angles, target (7, 0.5)";
+      " grid of paddles on an 8 x 10 m board (penalty contact, dt 1/480, 4 s), " + std::to_string(rows * cols) +
+      "-D paddle angles, target (7, 0.5)";
   f.grid_names = {name};
   f.try_make = [name, rows, cols](const std::string& requested) -> std::unique_ptr<Env> {
     if (requested != name) return nullptr;

@@ -34,17 +34,17 @@ struct Ball2State {
 
 // constants of one simulation, built from a validated config (the angles are not in it)
 struct PinballModel {
-  double dt = 0.0;            // s
-  int steps = 0;              // round(duration / dt)
-  double mass = 0.0;          // kg
-  double radius = 0.0;        // m, ball contact radius
-  double gravity = 0.0;       // m/s^2 along -y
-  double width = 0.0;         // m, walls at x = 0 and x = width, floor at y = 0
-  double half_segment = 0.0;  // m, (paddle_length - paddle_thickness) / 2
-  double paddle_radius = 0.0; // m, paddle_thickness / 2
-  double reach = 0.0;         // m, half_segment + paddle_radius + radius (+ a rounding margin):
-                              // farther from a paddle centre the ball cannot touch it
-  int paddles = 0;            // rows * cols
+  double dt = 0.0;                       // s
+  int steps = 0;                         // round(duration / dt)
+  double mass = 0.0;                     // kg
+  double radius = 0.0;                   // m, ball contact radius
+  double gravity = 0.0;                  // m/s^2 along -y
+  double width = 0.0;                    // m, walls at x = 0 and x = width, floor at y = 0
+  double half_segment = 0.0;             // m, (paddle_length - paddle_thickness) / 2
+  double paddle_radius = 0.0;            // m, paddle_thickness / 2
+  double reach = 0.0;                    // m, half_segment + paddle_radius + radius (+ a rounding margin):
+                                         // farther from a paddle centre the ball cannot touch it
+  int paddles = 0;                       // rows * cols
   std::vector<Eigen::Vector2d> centres;  // paddle centres, row-major (paddles)
   ContactConfig contact;
 
@@ -66,19 +66,19 @@ struct PaddleContactGrad {
 struct PinballStepCache {
   Eigen::Matrix2d df_dx = Eigen::Matrix2d::Zero();  // d(total contact force)/d position (2 x 2)
   Eigen::Matrix2d df_dv = Eigen::Matrix2d::Zero();  // d(total contact force)/d velocity (2 x 2)
-  int walls = 0;  // active wall contacts, bit mask: 1 wall x = 0, 2 wall x = width, 4 floor
-  int paddle_contacts = 0;                          // entries written to the contact buffer
+  int walls = 0;            // active wall contacts, bit mask: 1 wall x = 0, 2 wall x = width, 4 floor
+  int paddle_contacts = 0;  // entries written to the contact buffer
 };
 
 // one semi-implicit Euler step: v += dt (g + f(x, v) / m); x += dt v. With `cache` it is filled
 // and the active paddle contacts go to `contacts` (capacity m.paddles, may be null without cache).
-void pinball_step(const PinballModel& m, const PaddleAxes& axes, Ball2State& s,
-                  PinballStepCache* cache = nullptr, PaddleContactGrad* contacts = nullptr);
+void pinball_step(const PinballModel& m, const PaddleAxes& axes, Ball2State& s, PinballStepCache* cache = nullptr,
+                  PaddleContactGrad* contacts = nullptr);
 
 // reverse of pinball_step: `adj` holds dLoss/d(state after the step) on entry and dLoss/d(state
 // before it) on exit; dLoss/d(angle) of the touched paddles is added to angle_bar (m.paddles)
-void pinball_step_adjoint(const PinballModel& m, const PinballStepCache& cache,
-                          const PaddleContactGrad* contacts, Ball2State& adj, double* angle_bar);
+void pinball_step_adjoint(const PinballModel& m, const PinballStepCache& cache, const PaddleContactGrad* contacts,
+                          Ball2State& adj, double* angle_bar);
 
 // steps in which each surface touched the ball
 struct PinballContactSteps {

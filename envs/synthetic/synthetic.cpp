@@ -91,7 +91,9 @@ double ackley(std::span<const double> z, std::span<double> g, ThreadTeam& team) 
         }
         return acc;
       },
-      [](Sums a, Sums b) { return Sums{a.sq + b.sq, a.cos + b.cos}; });
+      [](Sums a, Sums b) {
+        return Sums{a.sq + b.sq, a.cos + b.cos};
+      });
   const double r = std::sqrt(sums.sq / d);
   const double e_r = dm::exp(-0.2 * r);
   const double e_cos = dm::exp(sums.cos / d);
@@ -127,8 +129,7 @@ double styblinski(std::span<const double> z, std::span<double> g, ThreadTeam& te
 // = 0.397887357729738 at (-pi, 12.275), (pi, 2.275) and (3 pi, 2.475) (where the square is 0
 // and cos z1 = -1).
 double branin(std::span<const double> z, std::span<double> g, ThreadTeam&) {
-  const double a = 1.0, b = 5.1 / (4.0 * kPi * kPi), c = 5.0 / kPi, r = 6.0, s = 10.0,
-               t = 1.0 / (8.0 * kPi);
+  const double a = 1.0, b = 5.1 / (4.0 * kPi * kPi), c = 5.0 / kPi, r = 6.0, s = 10.0, t = 1.0 / (8.0 * kPi);
   const double u = z[1] - b * z[0] * z[0] + c * z[0] - r;
   if (!g.empty()) {
     g[0] = 2.0 * a * u * (c - 2.0 * b * z[0]) - s * (1.0 - t) * dm::sin(z[0]);
@@ -179,24 +180,46 @@ struct Spec {
   int fixed_dim;              // 0 for scalable families
   std::vector<double> lower;  // fixed families: the box
   std::vector<double> upper;
-  double z_star = 0.0;        // scalable: f's classic minimizer is z_star in every coordinate
+  double z_star = 0.0;  // scalable: f's classic minimizer is z_star in every coordinate
 };
 
 const std::vector<Spec>& specs() {
   static const std::vector<Spec> all = {
-      {"sphere", "sum z_i^2 on [-5,5]^D, shifted; min 0 at z = x_opt", sphere, 1, 0, {}, {},
+      {"sphere", "sum z_i^2 on [-5,5]^D, shifted; min 0 at z = x_opt", sphere, 1, 0, {}, {}, 0.0},
+      {"rosenbrock",
+       "Rosenbrock valley on [-5,5]^D, D >= 2, shifted; min 0 at z = x_opt",
+       rosenbrock,
+       2,
+       0,
+       {},
+       {},
+       1.0},
+      {"rastrigin",
+       "Rastrigin (many local minima) on [-5,5]^D, shifted; min 0 at z = x_opt",
+       rastrigin,
+       1,
+       0,
+       {},
+       {},
        0.0},
-      {"rosenbrock", "Rosenbrock valley on [-5,5]^D, D >= 2, shifted; min 0 at z = x_opt",
-       rosenbrock, 2, 0, {}, {}, 1.0},
-      {"rastrigin", "Rastrigin (many local minima) on [-5,5]^D, shifted; min 0 at z = x_opt",
-       rastrigin, 1, 0, {}, {}, 0.0},
       {"ackley", "Ackley on [-5,5]^D, shifted; min 0 at z = x_opt", ackley, 1, 0, {}, {}, 0.0},
-      {"styblinski", "Styblinski-Tang on [-5,5]^D, shifted; min -39.16616570377142 D at z = x_opt",
-       styblinski, 1, 0, {}, {}, kStyblinskiArgmin},
-      {"branin", "Branin on [-5,10]x[0,15]; min 0.397887357729738 at three points", branin, 2, 2,
-       {-5.0, 0.0}, {10.0, 15.0}},
-      {"hartmann6", "Hartmann 6-D on [0,1]^6; min -3.32236801141551", hartmann6, 6, 6,
-       std::vector<double>(6, 0.0), std::vector<double>(6, 1.0)},
+      {"styblinski",
+       "Styblinski-Tang on [-5,5]^D, shifted; min -39.16616570377142 D at z = x_opt",
+       styblinski,
+       1,
+       0,
+       {},
+       {},
+       kStyblinskiArgmin},
+      {"branin",
+       "Branin on [-5,10]x[0,15]; min 0.397887357729738 at three points",
+       branin,
+       2,
+       2,
+       {-5.0, 0.0},
+       {10.0, 15.0}},
+      {"hartmann6", "Hartmann 6-D on [0,1]^6; min -3.32236801141551", hartmann6, 6, 6, std::vector<double>(6, 0.0),
+       std::vector<double>(6, 1.0)},
   };
   return all;
 }
@@ -257,9 +280,8 @@ std::optional<SyntheticConfig> parse_name(const Spec& spec, const std::string& n
   for (char ch : digits) ok = ok && ch >= '0' && ch <= '9';
   const int dim = ok ? std::stoi(digits) : 0;
   if (!ok || dim < spec.min_dim || dim > kSyntheticMaxDim)
-    throw UsageError("env '" + name + "': D must be an integer from " +
-                     std::to_string(spec.min_dim) + " to " + std::to_string(kSyntheticMaxDim) +
-                     ", got '" + digits + "'");
+    throw UsageError("env '" + name + "': D must be an integer from " + std::to_string(spec.min_dim) + " to " +
+                     std::to_string(kSyntheticMaxDim) + ", got '" + digits + "'");
   return standard_config(spec, dim);
 }
 
@@ -281,8 +303,7 @@ EnvInfo synthetic_info(std::string name, const SyntheticConfig& config) {
 class SyntheticEnv final : public Env {
  public:
   SyntheticEnv(std::string name, SyntheticConfig config, Function function, double z_star)
-      : Env(synthetic_info(std::move(name), config)), config_(std::move(config)), function_(function),
-        z_star_(z_star) {
+      : Env(synthetic_info(std::move(name), config)), config_(std::move(config)), function_(function), z_star_(z_star) {
     config_.validate();
     for (int i = 0; i < config_.dim; ++i) {
       centre_.push_back(0.5 * (config_.lower[i] + config_.upper[i]));
@@ -304,20 +325,18 @@ class SyntheticEnv final : public Env {
   double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
                            ThreadTeam& team) const override {
     if (static_cast<int>(grad.size()) != config_.dim)
-      throw std::invalid_argument("env '" + name() + "': gradient has size " +
-                                  std::to_string(grad.size()) + ", expected " +
-                                  std::to_string(config_.dim));
+      throw std::invalid_argument("env '" + name() + "': gradient has size " + std::to_string(grad.size()) +
+                                  ", expected " + std::to_string(config_.dim));
     return evaluate(x, grad, ws, team);
   }
 
  private:
   // f at z = centre + halfwidth * x, shifted to f(z - x_opt + z_star) when x_opt is set (unit
   // Jacobian); df/dx = df/dz * halfwidth into grad unless it is empty
-  double evaluate(std::span<const double> x, std::span<double> grad, Workspace& workspace,
-                  ThreadTeam& team) const {
+  double evaluate(std::span<const double> x, std::span<double> grad, Workspace& workspace, ThreadTeam& team) const {
     if (static_cast<int>(x.size()) != config_.dim)
-      throw std::invalid_argument("env '" + name() + "': x has size " + std::to_string(x.size()) +
-                                  ", expected " + std::to_string(config_.dim));
+      throw std::invalid_argument("env '" + name() + "': x has size " + std::to_string(x.size()) + ", expected " +
+                                  std::to_string(config_.dim));
     std::vector<double>& z = static_cast<SyntheticWorkspace&>(workspace).z;
     for (std::size_t i = 0; i < x.size(); ++i) z[i] = centre_[i] + halfwidth_[i] * x[i];
     if (!config_.x_opt.empty())
@@ -337,15 +356,11 @@ KnownOptimum known_optimum(const SyntheticConfig& config) {
   const int d = config.dim;
   const std::string& f = config.function;
   // shifted families: the minimizer is x_opt, the value f's classic minimum
-  if (f == "sphere" || f == "rastrigin" || f == "ackley" || f == "rosenbrock")
-    return {0.0, config.x_opt, {}};
+  if (f == "sphere" || f == "rastrigin" || f == "ackley" || f == "rosenbrock") return {0.0, config.x_opt, {}};
   if (f == "styblinski") return {kStyblinskiMinPerDim * d, config.x_opt, {}};
-  if (f == "branin")
-    return {5.0 / (4.0 * kPi), {-kPi, 12.275}, {{kPi, 2.275}, {3.0 * kPi, 2.475}}};
+  if (f == "branin") return {5.0 / (4.0 * kPi), {-kPi, 12.275}, {{kPi, 2.275}, {3.0 * kPi, 2.475}}};
   // hartmann6
-  return {-3.32236801141551,
-          {0.20168952, 0.15001069, 0.47687398, 0.27533243, 0.31165162, 0.65730054},
-          {}};
+  return {-3.32236801141551, {0.20168952, 0.15001069, 0.47687398, 0.27533243, 0.31165162, 0.65730054}, {}};
 }
 
 }  // namespace
@@ -357,39 +372,33 @@ void SyntheticConfig::validate() const {
   const int hi = spec->fixed_dim > 0 ? spec->fixed_dim : kSyntheticMaxDim;
   if (dim < lo || dim > hi)
     throw ConfigError("synthetic", "dim",
-                      "must be from " + std::to_string(lo) + " to " + std::to_string(hi) +
-                          " for " + function + ", got " + std::to_string(dim));
+                      "must be from " + std::to_string(lo) + " to " + std::to_string(hi) + " for " + function +
+                          ", got " + std::to_string(dim));
   if (static_cast<int>(lower.size()) != dim)
     throw ConfigError("synthetic", "lower",
-                      "has size " + std::to_string(lower.size()) + ", expected " +
-                          std::to_string(dim));
+                      "has size " + std::to_string(lower.size()) + ", expected " + std::to_string(dim));
   if (static_cast<int>(upper.size()) != dim)
     throw ConfigError("synthetic", "upper",
-                      "has size " + std::to_string(upper.size()) + ", expected " +
-                          std::to_string(dim));
+                      "has size " + std::to_string(upper.size()) + ", expected " + std::to_string(dim));
   for (int i = 0; i < dim; ++i) {
     if (!std::isfinite(lower[i]))
       throw ConfigError("synthetic", "lower", "is not finite at index " + std::to_string(i));
     if (!std::isfinite(upper[i]))
       throw ConfigError("synthetic", "upper", "is not finite at index " + std::to_string(i));
     if (!(lower[i] < upper[i]))
-      throw ConfigError("synthetic", "upper",
-                        "must exceed lower at index " + std::to_string(i));
+      throw ConfigError("synthetic", "upper", "must exceed lower at index " + std::to_string(i));
   }
   // scalable families are shifted (x_opt of size dim, inside the box); fixed ones are not
   if (spec->fixed_dim > 0) {
-    if (!x_opt.empty())
-      throw ConfigError("synthetic", "x_opt", "must be empty for " + function + " (not shifted)");
+    if (!x_opt.empty()) throw ConfigError("synthetic", "x_opt", "must be empty for " + function + " (not shifted)");
     return;
   }
   if (static_cast<int>(x_opt.size()) != dim)
     throw ConfigError("synthetic", "x_opt",
-                      "has size " + std::to_string(x_opt.size()) + ", expected " +
-                          std::to_string(dim));
+                      "has size " + std::to_string(x_opt.size()) + ", expected " + std::to_string(dim));
   for (int i = 0; i < dim; ++i)
     if (!(x_opt[i] >= lower[i] && x_opt[i] <= upper[i]))
-      throw ConfigError("synthetic", "x_opt",
-                        "is outside the box (or not finite) at index " + std::to_string(i));
+      throw ConfigError("synthetic", "x_opt", "is outside the box (or not finite) at index " + std::to_string(i));
 }
 
 nlohmann::json SyntheticConfig::to_json() const {
@@ -412,8 +421,7 @@ std::optional<KnownOptimum> synthetic_known_optimum(const std::string& name) {
 std::unique_ptr<Env> make_synthetic_env(std::string name, SyntheticConfig config) {
   config.validate();
   const Spec* spec = find_spec(config.function);
-  return std::make_unique<SyntheticEnv>(std::move(name), std::move(config), spec->function,
-                                        spec->z_star);
+  return std::make_unique<SyntheticEnv>(std::move(name), std::move(config), spec->function, spec->z_star);
 }
 
 std::vector<EnvFamily> synthetic_families() {
@@ -428,8 +436,7 @@ std::vector<EnvFamily> synthetic_families() {
     family.try_make = [&spec](const std::string& name) -> std::unique_ptr<Env> {
       auto config = parse_name(spec, name);
       if (!config) return nullptr;
-      return std::make_unique<SyntheticEnv>(name, std::move(*config), spec.function,
-                                            spec.z_star);
+      return std::make_unique<SyntheticEnv>(name, std::move(*config), spec.function, spec.z_star);
     };
     families.push_back(std::move(family));
   }

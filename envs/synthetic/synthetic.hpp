@@ -28,13 +28,13 @@ inline constexpr int kSyntheticMaxDim = 10000;
 
 // Every constant that changes the loss of a synthetic env.
 struct SyntheticConfig {
-  std::string function;        // "sphere", "rosenbrock", "rastrigin", "ackley", "styblinski",
-                               // "branin" or "hartmann6"
-  int dim = 0;                 // D
-  std::vector<double> lower;   // physical box, size dim; x = -1 maps to lower
-  std::vector<double> upper;   // x = +1 maps to upper
-  std::vector<double> x_opt;   // the shifted minimizer (physical units), size dim for the five
-                               // scalable families; empty for branin and hartmann6
+  std::string function;       // "sphere", "rosenbrock", "rastrigin", "ackley", "styblinski",
+                              // "branin" or "hartmann6"
+  int dim = 0;                // D
+  std::vector<double> lower;  // physical box, size dim; x = -1 maps to lower
+  std::vector<double> upper;  // x = +1 maps to upper
+  std::vector<double> x_opt;  // the shifted minimizer (physical units), size dim for the five
+                              // scalable families; empty for branin and hartmann6
   // throws ConfigError naming the field: unknown function, dim out of range for the function,
   // box of the wrong size, non-finite, or with lower >= upper, x_opt of the wrong size or
   // outside the box (or set for branin / hartmann6)
@@ -56,8 +56,8 @@ std::unique_ptr<Env> make_synthetic_env(std::string name, SyntheticConfig config
 
 // The global minimum of a synthetic env, in physical units (for the shifted families: x_opt).
 struct KnownOptimum {
-  double value;                                     // f at the minimizers
-  std::vector<double> x_physical;                   // one global minimizer
+  double value;                                       // f at the minimizers
+  std::vector<double> x_physical;                     // one global minimizer
   std::vector<std::vector<double>> other_minimizers;  // the rest (branin has three in all)
 };
 

@@ -51,8 +51,8 @@ int command_calibrate(const RunArgs& a, bool force) {
   std::vector<PlannedRun> pairs;
   std::vector<bool> measured_now;
   for (const PlannedRun& run : plan.pending) {
-    const std::string pair = run.spec.env + "|" + run.key.env_config_hash + "|" + run.spec.optimizer + "|" +
-                             run.key.opt_config_hash;
+    const std::string pair =
+        run.spec.env + "|" + run.key.env_config_hash + "|" + run.spec.optimizer + "|" + run.key.opt_config_hash;
     if (!costs.probes(run) || !probed.insert(pair).second) continue;
     pairs.push_back(run);
     measured_now.push_back(force || !costs.probed(run));

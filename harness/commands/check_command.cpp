@@ -41,9 +41,9 @@ int command_check(const std::string& db_path, const std::string& baseline_path) 
   }
   // the command that regenerates this baseline: CI's own script for its baseline, else an export
   const bool ci_baseline = std::filesystem::path(baseline_path).filename() == "small-grid.csv";
-  const std::string regenerate = ci_baseline ? std::string("scripts/regression-grid.sh regenerate")
-                                             : "harness export --db " + shell_word(db_path) + " --out " +
-                                                   shell_word(baseline_path) + " --force";
+  const std::string regenerate = ci_baseline
+      ? std::string("scripts/regression-grid.sh regenerate")
+      : "harness export --db " + shell_word(db_path) + " --out " + shell_word(baseline_path) + " --force";
   print_verdicts(diff, std::cout, regenerate);
   std::cout << "check: database '" << db_path << "' differs from baseline '" << baseline_path
             << "'. A change of results bumps the results version of what changed and regenerates the baseline in "

@@ -29,8 +29,8 @@ std::string one_line(std::string s) {
 
 int harness_main(int argc, char** argv) {
   CLI::App app{"diffsim-bench harness: optimizers x differentiable simulators, every episode in SQLite"};
-  app.set_version_flag("--version", fmt::format("harness {} (git {}, {} build)", DSB_VERSION, DSB_GIT_SHA,
-                                                DSB_BUILD_TYPE));
+  app.set_version_flag("--version",
+                       fmt::format("harness {} (git {}, {} build)", DSB_VERSION, DSB_GIT_SHA, DSB_BUILD_TYPE));
   app.require_subcommand(0, 1);
   // bare flags are `run`'s (harness --all --seeds 5)
   const std::function<int()> bare_run = run_command().define(app);

@@ -33,8 +33,7 @@ nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : 
 int command_eval(const std::string& env_name, const std::string& x_text, bool with_grad, const EnvOptions& options) {
   const auto env = make_env(env_name, options);
   const auto x = checked_point(*env, x_text);
-  if (with_grad && !env->differentiable())
-    throw UsageError("--grad: env '" + env_name + "' is not differentiable");
+  if (with_grad && !env->differentiable()) throw UsageError("--grad: env '" + env_name + "' is not differentiable");
   nlohmann::json out = {{"env", env_name}, {"x", x}};
   const auto ws = env->make_workspace();
   if (with_grad) {
@@ -63,7 +62,8 @@ Command eval_command() {
             };
             auto a = std::make_shared<Args>();
             app.add_option("--env", a->env, "env name")->required();
-            app.add_option("--set", a->sets, "an option of the env, ENV.KEY=VALUE (repeatable; `harness list` shows them)")
+            app.add_option("--set", a->sets,
+                           "an option of the env, ENV.KEY=VALUE (repeatable; `harness list` shows them)")
                 ->type_name("ENV.KEY=VALUE");
             app.add_option("--x", a->x, "comma-separated parameters in [-1, 1]")->required();
             app.add_flag("--grad", a->grad, "also print dLoss/dx (normalized units)");

@@ -54,7 +54,7 @@ int export_ioh(const std::string& db_path, const std::string& out_path, bool for
     stale_left_out += a.stale_left_out;
     const auto key = [](const IohRun& r) {
       return r.env + '\n' + r.optimizer + '\n' + std::to_string(r.seed) + '\n' + std::to_string(r.budget) + '\n' +
-             r.env_hash + '\n' + r.opt_hash + '\n' + r.version + '\n' + r.results_versions;
+          r.env_hash + '\n' + r.opt_hash + '\n' + r.version + '\n' + r.results_versions;
     };
     std::set<std::string> mine;
     for (const auto& r : runs) mine.insert(key(r));
@@ -68,19 +68,20 @@ int export_ioh(const std::string& db_path, const std::string& out_path, bool for
     }
     std::stable_sort(runs.begin(), runs.end(), [](const IohRun& x, const IohRun& y) {
       return std::tie(x.env, x.optimizer, x.budget, x.opt_hash, x.env_hash, x.seed, x.run_id) <
-             std::tie(y.env, y.optimizer, y.budget, y.opt_hash, y.env_hash, y.seed, y.run_id);
+          std::tie(y.env, y.optimizer, y.budget, y.opt_hash, y.env_hash, y.seed, y.run_id);
     });
   }
   std::filesystem::create_directories(out, ec);
   if (ec || !std::filesystem::is_directory(out))
     throw UsageError("--out: cannot create folder '" + out_path + "'" + (ec ? ": " + ec.message() : ""));
   const IohExportSummary s = write_ioh_export(runs, out);
-  std::cerr << "harness: wrote " << s.runs << " runs (" << s.rows << " rows) of " << s.algorithms
-            << " algorithms on " << s.functions << " functions to " << out_path << " (IOHprofiler format)";
+  std::cerr << "harness: wrote " << s.runs << " runs (" << s.rows << " rows) of " << s.algorithms << " algorithms on "
+            << s.functions << " functions to " << out_path << " (IOHprofiler format)";
   if (s.runs_left_out > 0) std::cerr << "; left out " << s.runs_left_out << " runs without a finite loss";
   if (!with.empty())
     std::cerr << "; " << archived << " of them archived (" << with << ")"
-              << (repeated > 0 ? ", " + std::to_string(repeated) + " archived runs the database also holds counted once" : "");
+              << (repeated > 0 ? ", " + std::to_string(repeated) + " archived runs the database also holds counted once"
+                               : "");
   if (stale_left_out > 0)
     std::cerr << "; left out " << stale_left_out
               << " stale runs (made by other results versions; --include-stale exports them)";
@@ -88,8 +89,8 @@ int export_ioh(const std::string& db_path, const std::string& out_path, bool for
   return 0;
 }
 
-int command_export(const std::string& db_path, const std::string& out_path, const std::string& format,
-                   bool force, bool include_stale, const std::string& with) {
+int command_export(const std::string& db_path, const std::string& out_path, const std::string& format, bool force,
+                   bool include_stale, const std::string& with) {
   if (format != "csv" && format != "ioh") throw UsageError("--format must be csv or ioh, got '" + format + "'");
   if (format == "ioh") return export_ioh(db_path, out_path, force, include_stale, with);
   if (!with.empty()) throw UsageError("--with goes with --format ioh (the CSV is a database's result table)");
@@ -100,7 +101,8 @@ int command_export(const std::string& db_path, const std::string& out_path, cons
   write_result_csv(table.rows, out.stream(), include_stale);
   out.commit();
   std::cerr << "harness: wrote " << table.rows.size() << " rows to " << out_path << "\n";
-  if (const std::string note = stale_note(table, include_stale); !note.empty()) std::cerr << "harness: " << note << "\n";
+  if (const std::string note = stale_note(table, include_stale); !note.empty())
+    std::cerr << "harness: " << note << "\n";
   return 0;
 }
 

@@ -35,31 +35,32 @@ std::string status(const GradientCheckResult& r) {
 
 std::string percent(int count, int total) { return fmt::format("{:5.1f}%", 100.0 * count / total); }
 
-void print_table(const std::string& env_name, int dim, const GradientSurveyOptions& o,
-                 const GradientSurvey& s) {
+void print_table(const std::string& env_name, int dim, const GradientSurveyOptions& o, const GradientSurvey& s) {
   const auto& c = o.check;
-  std::cout << fmt::format("gradcheck {} (dim {}): central differences with step {}, points uniform in "
-                           "[-{}, {}]^{}, seed {}\n",
-                           env_name, dim, c.step, o.amplitude, o.amplitude, dim, o.seed);
+  std::cout << fmt::format(
+      "gradcheck {} (dim {}): central differences with step {}, points uniform in "
+      "[-{}, {}]^{}, seed {}\n",
+      env_name, dim, c.step, o.amplitude, o.amplitude, dim, o.seed);
   std::cout << fmt::format("{:>5} {:>14} {:>12} {:>12} {:>12} {:>12} {:>6} {:>8}  {}\n", "point", "loss", "|grad|",
                            "max|fd|", "max abs err", "max rel err", "coord", "cos", "status");
   for (int p = 0; p < s.points; ++p) {
     const auto& r = s.checks[p];
-    std::cout << fmt::format("{:>5} {:>14.6e} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e} {:>6} {:>8.4f}  {}\n", p,
-                             r.loss, r.gradient_norm, r.max_abs_central, r.worst_absolute_error,
-                             r.worst_relative_error, r.worst_coordinate, r.direction_cosine, status(r));
+    std::cout << fmt::format("{:>5} {:>14.6e} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e} {:>6} {:>8.4f}  {}\n", p, r.loss,
+                             r.gradient_norm, r.max_abs_central, r.worst_absolute_error, r.worst_relative_error,
+                             r.worst_coordinate, r.direction_cosine, status(r));
   }
   const int n = s.points;
-  std::cout << fmt::format("\nsummary over {} points (relative error |grad - fd| / (|fd| + {} max|fd| + {}), "
-                           "tolerance {:.1e}):\n",
-                           n, c.relative_floor, c.absolute_floor, c.tolerance);
-  std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient agrees with central differences", s.agreeing,
-                           n, percent(s.agreeing, n));
+  std::cout << fmt::format(
+      "\nsummary over {} points (relative error |grad - fd| / (|fd| + {} max|fd| + {}), "
+      "tolerance {:.1e}):\n",
+      n, c.relative_floor, c.absolute_floor, c.tolerance);
+  std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient agrees with central differences", s.agreeing, n,
+                           percent(s.agreeing, n));
   if (s.directed > 0) {
-    std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient within 25 degrees of differences",
-                             s.aligned, s.directed, percent(s.aligned, s.directed));
-    std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient opposed to differences (cos < 0)", s.opposed, s.directed,
-                             percent(s.opposed, s.directed));
+    std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient within 25 degrees of differences", s.aligned,
+                             s.directed, percent(s.aligned, s.directed));
+    std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient opposed to differences (cos < 0)", s.opposed,
+                             s.directed, percent(s.opposed, s.directed));
   }
   std::cout << fmt::format("  {:<42} {:>6} of {:<6} {}\n", "gradient exactly zero", s.exactly_zero, n,
                            percent(s.exactly_zero, n));
@@ -76,19 +77,18 @@ void print_table(const std::string& env_name, int dim, const GradientSurveyOptio
                              "step-difference along it / |grad|", r.min, r.q1, r.median, r.q3, r.max);
   }
   const auto& q = s.gradient_norm;
-  std::cout << fmt::format("  {:<42} min {:.4e}  q1 {:.4e}  median {:.4e}  q3 {:.4e}  max {:.4e}\n", "|grad|",
-                           q.min, q.q1, q.median, q.q3, q.max);
-  std::cout << fmt::format("  {:<42} loss() {:.3e} s, loss_and_grad() {:.3e} s (ratio {:.2f})\n",
-                           "time per call", s.seconds_per_loss, s.seconds_per_loss_and_grad,
+  std::cout << fmt::format("  {:<42} min {:.4e}  q1 {:.4e}  median {:.4e}  q3 {:.4e}  max {:.4e}\n", "|grad|", q.min,
+                           q.q1, q.median, q.q3, q.max);
+  std::cout << fmt::format("  {:<42} loss() {:.3e} s, loss_and_grad() {:.3e} s (ratio {:.2f})\n", "time per call",
+                           s.seconds_per_loss, s.seconds_per_loss_and_grad,
                            s.seconds_per_loss / s.seconds_per_loss_and_grad);
-  std::cout << fmt::format("gradcheck {}: {} points, worst relative error {:.3e} at point {} coordinate {} "
-                           "(tolerance {:.1e}): {}\n",
-                           env_name, n, s.worst_relative_error, s.worst_point, s.worst_coordinate, c.tolerance,
-                           s.passed ? "PASS" : "FAIL");
+  std::cout << fmt::format(
+      "gradcheck {}: {} points, worst relative error {:.3e} at point {} coordinate {} "
+      "(tolerance {:.1e}): {}\n",
+      env_name, n, s.worst_relative_error, s.worst_point, s.worst_coordinate, c.tolerance, s.passed ? "PASS" : "FAIL");
 }
 
-nlohmann::json to_json(const std::string& env_name, int dim, const GradientSurveyOptions& o,
-                       const GradientSurvey& s) {
+nlohmann::json to_json(const std::string& env_name, int dim, const GradientSurveyOptions& o, const GradientSurvey& s) {
   const auto& c = o.check;
   nlohmann::json points = nlohmann::json::array();
   for (int p = 0; p < s.points; ++p) {
@@ -111,44 +111,49 @@ nlohmann::json to_json(const std::string& env_name, int dim, const GradientSurve
                       {"passed", r.passed}});
     if (!s.large_steps.empty()) {
       const auto& l = s.large_steps[p];
-      points.back()["large_step"] = {{"directed", l.directed}, {"lo", l.lo},           {"hi", l.hi},
-                                     {"difference", number(l.difference)}, {"ratio", number(l.ratio)},
-                                     {"opposed", l.opposed}, {"flat", l.flat}};
+      points.back()["large_step"] = {
+          {"directed", l.directed},   {"lo", l.lo},           {"hi", l.hi},    {"difference", number(l.difference)},
+          {"ratio", number(l.ratio)}, {"opposed", l.opposed}, {"flat", l.flat}};
     }
   }
   const auto& q = s.gradient_norm;
   const int n = s.points;
-  nlohmann::json summary = {
-      {"points", n},
-      {"agreeing", s.agreeing},
-      {"agreeing_fraction", static_cast<double>(s.agreeing) / n},
-      {"aligned", s.aligned},
-      {"opposed", s.opposed},
-      {"directed", s.directed},
-      {"exactly_zero", s.exactly_zero},
-      {"exactly_zero_fraction", static_cast<double>(s.exactly_zero) / n},
-      {"non_finite", s.non_finite},
-      {"value_mismatches", s.value_mismatches},
-      {"bit_equal_to_differences", s.bit_equal_to_differences},
-      {"gradient_norm",
-       {{"min", number(q.min)}, {"q1", number(q.q1)}, {"median", number(q.median)}, {"q3", number(q.q3)},
-        {"max", number(q.max)}}},
-      {"worst_relative_error", number(s.worst_relative_error)},
-      {"worst_point", s.worst_point},
-      {"worst_coordinate", s.worst_coordinate},
-      {"seconds_per_loss", s.seconds_per_loss},
-      {"seconds_per_loss_and_grad", s.seconds_per_loss_and_grad},
-      {"passed", s.passed}};
+  nlohmann::json summary = {{"points", n},
+                            {"agreeing", s.agreeing},
+                            {"agreeing_fraction", static_cast<double>(s.agreeing) / n},
+                            {"aligned", s.aligned},
+                            {"opposed", s.opposed},
+                            {"directed", s.directed},
+                            {"exactly_zero", s.exactly_zero},
+                            {"exactly_zero_fraction", static_cast<double>(s.exactly_zero) / n},
+                            {"non_finite", s.non_finite},
+                            {"value_mismatches", s.value_mismatches},
+                            {"bit_equal_to_differences", s.bit_equal_to_differences},
+                            {"gradient_norm",
+                             {{"min", number(q.min)},
+                              {"q1", number(q.q1)},
+                              {"median", number(q.median)},
+                              {"q3", number(q.q3)},
+                              {"max", number(q.max)}}},
+                            {"worst_relative_error", number(s.worst_relative_error)},
+                            {"worst_point", s.worst_point},
+                            {"worst_coordinate", s.worst_coordinate},
+                            {"seconds_per_loss", s.seconds_per_loss},
+                            {"seconds_per_loss_and_grad", s.seconds_per_loss_and_grad},
+                            {"passed", s.passed}};
   if (!s.large_steps.empty()) {
     const auto& r = s.large_step_ratio;
     summary["large_step_directed"] = s.large_step_directed;
     summary["large_step_opposed"] = s.large_step_opposed;
     summary["large_step_flat"] = s.large_step_flat;
-    summary["large_step_opposed_fraction"] =
-        s.large_step_directed > 0 ? nlohmann::json(static_cast<double>(s.large_step_opposed) / s.large_step_directed)
-                                  : nlohmann::json();
-    summary["large_step_ratio"] = {{"min", number(r.min)}, {"q1", number(r.q1)}, {"median", number(r.median)},
-                                   {"q3", number(r.q3)},   {"max", number(r.max)}};
+    summary["large_step_opposed_fraction"] = s.large_step_directed > 0
+        ? nlohmann::json(static_cast<double>(s.large_step_opposed) / s.large_step_directed)
+        : nlohmann::json();
+    summary["large_step_ratio"] = {{"min", number(r.min)},
+                                   {"q1", number(r.q1)},
+                                   {"median", number(r.median)},
+                                   {"q3", number(r.q3)},
+                                   {"max", number(r.max)}};
   }
   return {{"env", env_name},
           {"dim", dim},

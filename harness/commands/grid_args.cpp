@@ -37,9 +37,10 @@ std::size_t default_tape_memory_bytes(int jobs) {
 
 // --set's help: the knobs of every optimizer that has some, and the env options
 std::string knob_help() {
-  std::string h = "set a knob of an optimizer's config, OPT.KNOB=VALUE, or an option of an env of the grid, "
-                  "ENV.KEY=VALUE (repeatable; the run key keeps variants apart; `harness list` shows both). Env "
-                  "options:";
+  std::string h =
+      "set a knob of an optimizer's config, OPT.KNOB=VALUE, or an option of an env of the grid, "
+      "ENV.KEY=VALUE (repeatable; the run key keeps variants apart; `harness list` shows both). Env "
+      "options:";
   for (const auto& f : env_families())
     for (const auto& o : f.options) h += " " + f.pattern + "." + o.key + ";";
   h += " knobs:";
@@ -96,7 +97,8 @@ void add_run_options(CLI::App& app, RunArgs& a) {
   add_grid_options(app, a);
   app.add_option("--db", a.db, "SQLite results file (default ./results.sqlite); resumes");
   app.add_option("--jobs", a.jobs, "runs at once (default: the CPUs this process may use, divided by --threads)");
-  app.add_option("--threads", a.threads, "threads inside one run's rollouts and batches (default 1; same results for any value)");
+  app.add_option("--threads", a.threads,
+                 "threads inside one run's rollouts and batches (default 1; same results for any value)");
   app.add_option("--shard", a.shard, "run only shard I of N (I/N, 0-based): deterministic slices");
   app.add_flag("--quiet", a.quiet, "no progress lines");
   app.add_option("--tape-memory", a.tape_memory,
@@ -126,7 +128,8 @@ CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
   if (!a.ext_timeout.empty()) {
     char* end = nullptr;
     req.ext_timeout_s = std::strtod(a.ext_timeout.c_str(), &end);
-    if (end != a.ext_timeout.c_str() + a.ext_timeout.size() || !(req.ext_timeout_s > 0.0 && req.ext_timeout_s <= 86400.0))
+    if (end != a.ext_timeout.c_str() + a.ext_timeout.size() ||
+        !(req.ext_timeout_s > 0.0 && req.ext_timeout_s <= 86400.0))
       throw UsageError("--ext-timeout must be seconds above 0 and at most 86400, got '" + a.ext_timeout + "'");
   }
   {
@@ -155,9 +158,10 @@ CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
   if (a.threads < 1 || a.threads > 1024)
     throw UsageError("--threads must be from 1 to 1024, got " + std::to_string(a.threads));
   if (for_this_machine && a.threads > usable_cpus())
-    throw UsageError(fmt::format("--threads {} is more than the {} CPUs this process may use (the cap: more threads "
-                                 "than CPUs only slow a rollout down; results are the same for any count)",
-                                 a.threads, usable_cpus()));
+    throw UsageError(
+        fmt::format("--threads {} is more than the {} CPUs this process may use (the cap: more threads "
+                    "than CPUs only slow a rollout down; results are the same for any count)",
+                    a.threads, usable_cpus()));
   const int jobs = a.jobs > 0 ? a.jobs : std::max(1, usable_cpus() / a.threads);
   std::size_t tape = default_tape_memory_bytes(jobs);
   if (!a.tape_memory.empty()) {
@@ -184,8 +188,6 @@ CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
   return {std::move(grid), shard, jobs, tape};
 }
 
-PlanContext plan_context(const RunArgs& a, const CheckedRun& run) {
-  return {a.db, run.jobs, a.threads, grid_flags(a)};
-}
+PlanContext plan_context(const RunArgs& a, const CheckedRun& run) { return {a.db, run.jobs, a.threads, grid_flags(a)}; }
 
 }  // namespace dsb

@@ -25,14 +25,13 @@
 namespace dsb {
 namespace {
 
-int command_landscape(const std::string& env_name, const std::string& dims, int resolution,
-                      const std::string& center, const std::string& out_path,
-                      const std::optional<GradientCheckOptions>& check, bool force) {
+int command_landscape(const std::string& env_name, const std::string& dims, int resolution, const std::string& center,
+                      const std::string& out_path, const std::optional<GradientCheckOptions>& check, bool force) {
   const auto env = make_env(env_name);
   const int n = env->dim();
   const auto d = parse_number_list("--dims", dims);
-  if (d.size() != 2 || d[0] != std::floor(d[0]) || d[1] != std::floor(d[1]) || d[0] < 0 || d[1] < 0 ||
-      d[0] >= n || d[1] >= n || d[0] == d[1])
+  if (d.size() != 2 || d[0] != std::floor(d[0]) || d[1] != std::floor(d[1]) || d[0] < 0 || d[1] < 0 || d[0] >= n ||
+      d[1] >= n || d[0] == d[1])
     throw UsageError(fmt::format("--dims: '{}' must be two different indices in 0..{}", dims, n - 1));
   if (resolution < 2 || resolution > 2000)
     throw UsageError(fmt::format("--res must be in 2..2000, got {}", resolution));
@@ -74,9 +73,9 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
           aligned += r.direction_cosine > kAlignedCosine;
           opposed += r.direction_cosine < 0.0;
         }
-        out << num(r.loss) << ',' << num(ci.analytic) << ',' << num(cj.analytic) << ','
-            << num(ci.differences.central) << ',' << num(cj.differences.central) << ','
-            << num(r.worst_relative_error) << ',' << (agrees ? 1 : 0) << '\n';
+        out << num(r.loss) << ',' << num(ci.analytic) << ',' << num(cj.analytic) << ',' << num(ci.differences.central)
+            << ',' << num(cj.differences.central) << ',' << num(r.worst_relative_error) << ',' << (agrees ? 1 : 0)
+            << '\n';
       } else if (env->differentiable()) {
         const double loss = env->loss_and_grad(x, grad, *ws, serial_team());
         out << num(loss) << ',' << num(grad[i]) << ',' << num(grad[j]) << '\n';
@@ -89,14 +88,16 @@ int command_landscape(const std::string& env_name, const std::string& dims, int 
   std::cerr << fmt::format("harness: wrote {} grid points of {} (dims {}, {}) to {}\n", resolution * resolution,
                            env_name, i, j, out_path);
   if (check)
-    std::cerr << fmt::format("harness: the gradient along dims {}, {} agrees with central differences (step {:g}, "
-                             "tolerance {:g}) at {} of {} points ({:.1f}%)\n",
-                             i, j, check->step, check->tolerance, agreeing, resolution * resolution,
-                             100.0 * agreeing / (resolution * resolution));
+    std::cerr << fmt::format(
+        "harness: the gradient along dims {}, {} agrees with central differences (step {:g}, "
+        "tolerance {:g}) at {} of {} points ({:.1f}%)\n",
+        i, j, check->step, check->tolerance, agreeing, resolution * resolution,
+        100.0 * agreeing / (resolution * resolution));
   if (check && compared > 0)
-    std::cerr << fmt::format("harness: its direction in the slice is within 25 degrees of the differences' at {} "
-                             "({:.1f}%) and opposed (cos < 0) at {} ({:.1f}%) of {} points with both nonzero\n",
-                             aligned, 100.0 * aligned / compared, opposed, 100.0 * opposed / compared, compared);
+    std::cerr << fmt::format(
+        "harness: its direction in the slice is within 25 degrees of the differences' at {} "
+        "({:.1f}%) and opposed (cos < 0) at {} ({:.1f}%) of {} points with both nonzero\n",
+        aligned, 100.0 * aligned / compared, opposed, 100.0 * opposed / compared, compared);
   return 0;
 }
 

@@ -33,16 +33,18 @@ int command_list() {
   for (const auto& family : env_families()) {
     for (const auto& name : family.grid_names) {
       const EnvInfo& info = shared_env(name)->info();  // metadata only: no model is built
-      std::cout << fmt::format("{:<22} {:>7} {:>5} {:>14} {:>3}  {}\n", name, family.results_version, info.dim,
-                               info.differentiable ? "yes" : "no", info.rl ? "yes" : "no",
-                               family.pattern == name ? family.description
-                                                      : family.pattern + ": " + family.description);
+      std::cout << fmt::format(
+          "{:<22} {:>7} {:>5} {:>14} {:>3}  {}\n", name, family.results_version, info.dim,
+          info.differentiable ? "yes" : "no", info.rl ? "yes" : "no",
+          family.pattern == name ? family.description : family.pattern + ": " + family.description);
     }
   }
   std::cout << "\n"
-            << fmt::format("{:<22} {:>7} {:>14} {:>8} {:>9}  {}\n", "optimizer", "version", "needs gradient", "needs rl",
-                           "seed use", "description");
-  const auto seed_use = [](SeedUse u) { return u == SeedUse::never ? "never" : u == SeedUse::late ? "late" : "at start"; };
+            << fmt::format("{:<22} {:>7} {:>14} {:>8} {:>9}  {}\n", "optimizer", "version", "needs gradient",
+                           "needs rl", "seed use", "description");
+  const auto seed_use = [](SeedUse u) {
+    return u == SeedUse::never ? "never" : u == SeedUse::late ? "late" : "at start";
+  };
   for (const auto& e : optimizer_entries())
     std::cout << fmt::format("{:<22} {:>7} {:>14} {:>8} {:>9}  {}\n", e.name, e.results_version,
                              e.needs_gradient ? "yes" : "no", e.needs_rl ? "yes" : "no", seed_use(e.seed_use),
@@ -68,7 +70,8 @@ int command_list() {
 }  // namespace
 
 Command list_command() {
-  return {"list", "envs (dim, differentiable, rl) and optimizers", [](CLI::App&) { return [] { return command_list(); }; }};
+  return {"list", "envs (dim, differentiable, rl) and optimizers",
+          [](CLI::App&) { return [] { return command_list(); }; }};
 }
 
 }  // namespace dsb

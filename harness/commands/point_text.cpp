@@ -37,8 +37,9 @@ std::vector<double> parse_number_list(const std::string& option, const std::stri
         continue;
       }
       throw UsageError(option + ": '" + token + "' " +
-                       (std::isinf(rounded) ? "overflows a double (its magnitude is above 1.8e308)"
-                                            : "underflows a double (its magnitude is below 4.9e-324); write 0 for zero"));
+                       (std::isinf(rounded)
+                            ? "overflows a double (its magnitude is above 1.8e308)"
+                            : "underflows a double (its magnitude is below 4.9e-324); write 0 for zero"));
     }
     if (token.empty() || ec != std::errc() || ptr != end || !std::isfinite(v))
       throw UsageError(option + ": '" + token + "' is not a finite number");

@@ -25,7 +25,8 @@ namespace {
 
 // `render --target`: the env's target shape alone (Env::target_frames), one panel
 int render_target(const RenderArgs& a, const render::RenderOptions& options) {
-  if (!a.x.empty() || !a.best_of.empty()) throw UsageError("--target draws the env's target: it takes no --x or --best-of");
+  if (!a.x.empty() || !a.best_of.empty())
+    throw UsageError("--target draws the env's target: it takes no --x or --best-of");
   if (a.frames_given) throw UsageError("--target draws one picture: it takes no --frames");
   const auto env = make_env(a.env);
   if (!env->renderable()) throw UsageError(fmt::format("env '{}' is not simulated: nothing to render", a.env));
@@ -59,8 +60,8 @@ int command_render(const RenderArgs& a) {
   if (!a.best_of.empty()) {
     const BestRun best = best_run_of(a.best_of, a.env);
     x_text = best.best_x;
-    source = fmt::format("best run of {} ({}, seed {}, loss {:.6g})", a.best_of, best.optimizer, best.seed,
-                         best.best_loss);
+    source =
+        fmt::format("best run of {} ({}, seed {}, loss {:.6g})", a.best_of, best.optimizer, best.seed, best.best_loss);
   }
   const auto x = checked_point(*env, x_text, a.best_of.empty() ? "--x" : "--best-of best_x");
   // open the output before the rollout, so an unusable path fails at once

@@ -9,13 +9,13 @@ namespace dsb {
 
 struct RenderArgs {
   std::string env;
-  std::string x;        // comma-separated point in [-1, 1]^dim, or
-  std::string best_of;  // a harness database: the best_x of --env's best done run
-  std::string out;      // FILE.png (strip) or FILE.gif (animation)
-  int frames = 5;       // 1 to 20 time points, from the start to the end of the episode
+  std::string x;              // comma-separated point in [-1, 1]^dim, or
+  std::string best_of;        // a harness database: the best_x of --env's best done run
+  std::string out;            // FILE.png (strip) or FILE.gif (animation)
+  int frames = 5;             // 1 to 20 time points, from the start to the end of the episode
   bool frames_given = false;  // --frames on the command line
-  int width = 320;      // pixels per frame, 64 to 2000
-  bool force = false;   // write over an existing --out (never over a database: output_path.hpp)
+  int width = 320;            // pixels per frame, 64 to 2000
+  bool force = false;         // write over an existing --out (never over a database: output_path.hpp)
   bool target = false;  // draw the env's target alone (Env::target_frames), no rollout: no --x, --best-of, --frames
 };
 

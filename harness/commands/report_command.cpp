@@ -39,14 +39,15 @@ void check_report_folder(const std::string& dir, bool force, const std::string& 
   check_output_folder(option, dir, force, is_report, option == "--out" ? "--force" : "");
 }
 
-int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes,
-                   bool quiet, const std::string& gradient_quality, const std::string& renders,
-                   bool include_stale, const std::string& with) {
+int command_report(const std::string& db_path, const std::string& out_dir, const std::string& landscapes, bool quiet,
+                   const std::string& gradient_quality, const std::string& renders, bool include_stale,
+                   const std::string& with) {
   check_database_path("--db", db_path, true);
   // Debian's pandas/matplotlib/scipy import only in Debian's interpreter; DSB_PYTHON overrides
   const char* python_env = std::getenv("DSB_PYTHON");
-  const std::string python = python_env ? python_env
-                             : std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  const std::string python = python_env             ? python_env
+      : std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3"
+                                                    : "python3";
   const char* reports_env = std::getenv("DSB_REPORTS_DIR");
   const std::string script = std::string(reports_env ? reports_env : DSB_SOURCE_DIR "/reports") + "/make_report.py";
   if (!std::filesystem::is_regular_file(script)) throw UsageError("report generator not found at '" + script + "'");

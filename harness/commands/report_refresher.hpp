@@ -16,9 +16,9 @@ inline constexpr double kReportIntervalS = 300.0;
 class ReportRefresher {
  public:
   ReportRefresher(std::string db, std::string dir);
-  ~ReportRefresher();  // waits for a build in progress; does not build
+  ~ReportRefresher();   // waits for a build in progress; does not build
   void run_finished();  // a run ended: build when due
-  int final_build();     // the last build (waits for one in progress); the report's exit code
+  int final_build();    // the last build (waits for one in progress); the report's exit code
 
  private:
   void loop();

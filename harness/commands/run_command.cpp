@@ -93,7 +93,10 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
     std::fprintf(stderr,
                  "harness: stopped by %s: %lld runs in progress committed their finished episodes; run the same "
                  "command again to resume them\n",
-                 sig == SIGINT ? "SIGINT" : sig == SIGHUP ? "SIGHUP" : "SIGTERM", static_cast<long long>(s.interrupted));
+                 sig == SIGINT       ? "SIGINT"
+                     : sig == SIGHUP ? "SIGHUP"
+                                     : "SIGTERM",
+                 static_cast<long long>(s.interrupted));
     return 128 + sig;
   }
   if (s.failed > 0) {

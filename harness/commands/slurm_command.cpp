@@ -37,7 +37,8 @@ constexpr int kTermLeadSeconds = 120;
 constexpr int kMinTimeSeconds = 300;
 
 // the one rule by which both scripts give a file its name: never over anything already there
-const char* kPlaceNew = R"SH(# place_new FILE NAME: FILE takes NAME only where nothing is there (a hard link refuses any existing
+const char* kPlaceNew =
+    R"SH(# place_new FILE NAME: FILE takes NAME only where nothing is there (a hard link refuses any existing
 # name, a link or a folder included, atomically; mv -n where the filesystem has no hard links)
 place_new() {
   if ln -T -- "$1" "$2" 2>/dev/null; then rm -f -- "$1"; return 0; fi
@@ -249,27 +250,31 @@ long long time_seconds(const std::string& t) {
   if (std::regex_match(t, m, with_days)) return ((num(1) * 24 + num(2)) * 60 + num(3)) * 60 + num(4);
   if (!std::regex_match(t, m, without_days)) return -1;
   if (m[3].matched) return (num(1) * 60 + num(2)) * 60 + num(3);  // H:M:S
-  return num(1) * 60 + num(2);                                     // M or M:S
+  return num(1) * 60 + num(2);                                    // M or M:S
 }
 
 void check_options(const SlurmOptions& o, std::size_t grid_runs) {
   if (o.shards < 1 || o.shards > kMaxSlurmShards)
-    throw UsageError(fmt::format("--shards must be from 1 to {} (Slurm's default MaxArraySize), got {}", kMaxSlurmShards,
-                                 o.shards));
+    throw UsageError(
+        fmt::format("--shards must be from 1 to {} (Slurm's default MaxArraySize), got {}", kMaxSlurmShards, o.shards));
   if (static_cast<std::size_t>(o.shards) > grid_runs)
     throw UsageError(fmt::format("--shards {} is more than the grid's {} runs", o.shards, grid_runs));
   if (o.cpus_per_task < 1 || o.cpus_per_task > 1024)
     throw UsageError(fmt::format("--cpus-per-task must be from 1 to 1024, got {}", o.cpus_per_task));
   if (!o.time.empty()) {
     const long long s = time_seconds(o.time);
-    if (s < 0) throw UsageError("--time must look like HH:MM:SS, D-HH:MM:SS or minutes, got '" + shown_value(o.time) + "'");
+    if (s < 0)
+      throw UsageError("--time must look like HH:MM:SS, D-HH:MM:SS or minutes, got '" + shown_value(o.time) + "'");
     if (s < kMinTimeSeconds)
-      throw UsageError(fmt::format("--time {} is under {} minutes: each task gets TERM {} s before its limit to "
-                                   "copy its database back", o.time, kMinTimeSeconds / 60, kTermLeadSeconds));
+      throw UsageError(
+          fmt::format("--time {} is under {} minutes: each task gets TERM {} s before its limit to "
+                      "copy its database back",
+                      o.time, kMinTimeSeconds / 60, kTermLeadSeconds));
   }
   static const std::regex partition("[A-Za-z0-9_.,-]+");
   if (!o.partition.empty() && !std::regex_match(o.partition, partition))
-    throw UsageError("--partition must be Slurm partition names (letters, digits, _ . - ,), got '" + shown_value(o.partition) + "'");
+    throw UsageError("--partition must be Slurm partition names (letters, digits, _ . - ,), got '" +
+                     shown_value(o.partition) + "'");
 }
 
 // a script, whole or not at all: an exclusive temporary file beside it, moved into place (over an
@@ -278,8 +283,9 @@ void write_script(const fs::path& path, const std::string& text) {
   OutputFile out("--dir", path.string(), true);
   out.stream() << text;
   out.commit();
-  fs::permissions(path, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
-                            fs::perms::others_read | fs::perms::others_exec);
+  fs::permissions(path,
+                  fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec | fs::perms::others_read |
+                      fs::perms::others_exec);
 }
 
 }  // namespace
@@ -310,10 +316,10 @@ int command_slurm(const SlurmGridFlags& grid, std::size_t grid_runs, const std::
       {"CPUS", std::to_string(options.cpus_per_task)},
       {"LEAD", std::to_string(kTermLeadSeconds)},
       {"OPTIONAL", optional},
-      {"DIR", dir.string()},                                 // in comments
-      {"PLACE_NEW", kPlaceNew},                              // the naming rule both scripts use
+      {"DIR", dir.string()},                                // in comments
+      {"PLACE_NEW", kPlaceNew},                             // the naming rule both scripts use
       {"DIR_SBATCH", slurm_pattern_literal(dir.string())},  // in #SBATCH lines: '%' is '%%' there
-      {"DIR_Q", shell_word(dir.string())},  // in assignments
+      {"DIR_Q", shell_word(dir.string())},                  // in assignments
       {"HARNESS", shell_word(harness_path)},
       {"GRID", grid_flags_text(grid)},
   };
@@ -328,8 +334,9 @@ int command_slurm(const SlurmGridFlags& grid, std::size_t grid_runs, const std::
   const std::string d = dir.string();
   out << fmt::format("harness slurm: {} runs in {} shards (a job array), {} CPU(s) per task{}{}\n", grid_runs,
                      options.shards, options.cpus_per_task,
-                     options.time.empty() ? "" : ", time limit " + options.time +
-                                                     (options.time_note.empty() ? "" : " (" + options.time_note + ")"),
+                     options.time.empty() ? ""
+                                          : ", time limit " + options.time +
+                             (options.time_note.empty() ? "" : " (" + options.time_note + ")"),
                      options.partition.empty() ? "" : ", partition " + options.partition);
   if (!shard_runs.empty()) {
     const auto [lo, hi] = std::minmax_element(shard_runs.begin(), shard_runs.end());
@@ -341,8 +348,7 @@ int command_slurm(const SlurmGridFlags& grid, std::size_t grid_runs, const std::
                      options.shards, d);
   out << fmt::format("  wrote {}/merge.sbatch  harness merge of the shards into {}/results.sqlite\n", d, d);
   out << fmt::format("  wrote {}/submit.sh     submits the array, then the merge after it succeeds\n", d);
-  out << fmt::format("  the tasks run {}: it must be at that path on the compute nodes, with sqlite3\n",
-                     harness_path);
+  out << fmt::format("  the tasks run {}: it must be at that path on the compute nodes, with sqlite3\n", harness_path);
   out << "submit (prints both job ids; run it again after a time limit to resume):\n";
   out << fmt::format("  bash {}\n", shell_word(d + "/submit.sh"));
   out << "or by hand:\n";
@@ -361,12 +367,13 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
   std::vector<std::int64_t> shard_runs;
   if (options.shards >= 1 && options.shards <= kMaxSlurmShards) {
     shard_runs.assign(options.shards, 0);
-    for (const PlannedRun& p : plan_grid(run.grid, {}, harness_version()).pending) ++shard_runs[shard_of(p, options.shards)];
+    for (const PlannedRun& p : plan_grid(run.grid, {}, harness_version()).pending)
+      ++shard_runs[shard_of(p, options.shards)];
   }
   // the tasks run in another folder: a target file's path goes to them absolute
   const SlurmGridFlags flags{
-      a.all, a.claims, a.envs, a.optimizers, a.seeds, a.budget, settings_with_absolute_paths(a.knobs), a.ext,
-      a.ext_timeout};
+      a.all, a.claims,     a.envs, a.optimizers, a.seeds, a.budget, settings_with_absolute_paths(a.knobs),
+      a.ext, a.ext_timeout};
   SlurmOptions o = options;
   if (o.time.empty() && !shard_runs.empty()) {
     // each task's wall from the plan (its runs over its CPUs, at least its longest run)

@@ -30,12 +30,12 @@ struct SlurmGridFlags {
 inline constexpr int kMaxSlurmShards = 1000;
 
 struct SlurmOptions {
-  int shards = 0;          // N: array tasks 0..N-1
-  std::string dir;         // where the scripts, logs, shards and the merged database go
-  int cpus_per_task = 1;   // each task's --jobs
-  std::string time;        // Slurm time limit per task ([D-]HH:MM:SS etc.); empty = the cluster's default
-  std::string time_note;   // where `time` came from, when the harness chose it (printed)
-  std::string partition;   // empty = the cluster's default
+  int shards = 0;         // N: array tasks 0..N-1
+  std::string dir;        // where the scripts, logs, shards and the merged database go
+  int cpus_per_task = 1;  // each task's --jobs
+  std::string time;       // Slurm time limit per task ([D-]HH:MM:SS etc.); empty = the cluster's default
+  std::string time_note;  // where `time` came from, when the harness chose it (printed)
+  std::string partition;  // empty = the cluster's default
 };
 
 // Checks the options and DIR (UsageError naming the bad value; nothing is created before every

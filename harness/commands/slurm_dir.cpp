@@ -80,7 +80,8 @@ std::vector<std::string> names_in(const fs::path& dir) {
 
 // the names the scripts write (slurm_command.cpp's templates)
 const std::regex kLogName(R"((shard-[0-9]+-job-[0-9]+|merge-job-[0-9]+)\.out)");
-const std::regex kShardName(R"(shard-[0-9]+\.sqlite(-journal|-wal|-shm)?|\.shard-[0-9]+\.[A-Za-z0-9]+\.tmp(-journal)?)");
+const std::regex kShardName(
+    R"(shard-[0-9]+\.sqlite(-journal|-wal|-shm)?|\.shard-[0-9]+\.[A-Za-z0-9]+\.tmp(-journal)?)");
 const std::regex kMergeTempName(R"(\.results\.[A-Za-z0-9]+\.sqlite(-journal)?)");
 const char* const kScripts[] = {"array.sbatch", "merge.sbatch", "submit.sh"};
 
@@ -103,7 +104,8 @@ void check_creatable(const fs::path& dir) {
       throw UsageError("--dir " + quoted(dir) + ": cannot create it: " + quoted(up) + ": " + std::strerror(errno));
     up = up.parent_path();
   }
-  if (!S_ISDIR(st.st_mode)) throw UsageError("--dir " + quoted(dir) + ": cannot create it: " + quoted(up) + " is not a folder");
+  if (!S_ISDIR(st.st_mode))
+    throw UsageError("--dir " + quoted(dir) + ": cannot create it: " + quoted(up) + " is not a folder");
   if (::access(up.c_str(), W_OK | X_OK) != 0)
     throw UsageError("--dir " + quoted(dir) + ": cannot create it: folder " + quoted(up) + " is not writable");
 }
@@ -119,8 +121,8 @@ fs::path slurm_dir_path(const std::string& dir) {
     return static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) == 0x7f;
   });
   if (control || text.find_first_of("'\"\\ ") != std::string::npos)
-    throw UsageError("--dir must not contain spaces, quotes, backslashes or control characters, got '" + shown_value(dir) +
-                     "'");
+    throw UsageError("--dir must not contain spaces, quotes, backslashes or control characters, got '" +
+                     shown_value(dir) + "'");
   return abs;
 }
 
@@ -154,8 +156,8 @@ void check_slurm_dir(const fs::path& dir, const std::string& array_text) {
     }
   }
   // a database first, then a script of the user's, then anything else
-  const auto first = std::min_element(found.begin(), found.end(),
-                                      [](const Foreign& a, const Foreign& b) { return a.kind < b.kind; });
+  const auto first =
+      std::min_element(found.begin(), found.end(), [](const Foreign& a, const Foreign& b) { return a.kind < b.kind; });
   if (first != found.end()) {
     switch (first->kind) {
       case Foreign::Kind::database:

@@ -76,9 +76,9 @@ PathKind path_kind(const std::string& path) {
 }
 
 bool same_file(const std::string& a, const std::string& b) {
-  struct stat sa {}, sb {};
-  return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev &&
-         sa.st_ino == sb.st_ino;
+  struct stat sa {
+  }, sb{};
+  return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }
 
 void check_output_file(const std::string& option, const std::string& path, bool force) {
@@ -94,14 +94,12 @@ void check_output_file(const std::string& option, const std::string& path, bool 
       throw UsageError(quoted(option, path) +
                        " is a SQLite database (or one of its files): no command writes over a database, "
                        "even with --force");
-    case PathKind::folder:
-      throw UsageError(quoted(option, path) + " is a folder; name a file");
+    case PathKind::folder: throw UsageError(quoted(option, path) + " is a folder; name a file");
     case PathKind::other:
       if (!force) throw UsageError(quoted(option, path) + " exists; give --force to write over it");
       break;
     case PathKind::missing:
-    case PathKind::stream:
-      break;
+    case PathKind::stream: break;
   }
   const fs::path parent = fs::path(path).parent_path();
   std::error_code ec;
@@ -134,8 +132,9 @@ OutputFile::OutputFile(std::string option, std::string path, bool force)
   const fs::path p(path_);
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
   for (int attempt = 0;; ++attempt) {
-    temp_ = (dir / ("." + p.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
-                    std::to_string(g_temp_counter.fetch_add(1))))
+    temp_ = (dir /
+             ("." + p.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
+              std::to_string(g_temp_counter.fetch_add(1))))
                 .string();
     const int fd = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd >= 0) {
@@ -145,8 +144,8 @@ OutputFile::OutputFile(std::string option, std::string path, bool force)
     if (errno != EEXIST || attempt > 100) {
       const int err = errno;
       temp_.clear();
-      throw UsageError(quoted(option_, path_) + ": cannot write in folder '" + dir.string() + "': " +
-                       std::strerror(err));
+      throw UsageError(quoted(option_, path_) + ": cannot write in folder '" + dir.string() +
+                       "': " + std::strerror(err));
     }
   }
   out_.open(temp_, std::ios::binary | std::ios::trunc);
@@ -177,7 +176,8 @@ void OutputFile::commit() {
       if (err == 0) ::unlink(temp_.c_str());
     }
     if (err == EEXIST)
-      throw UsageError(quoted(option_, path_) + " appeared while the output was written; give --force to write over it");
+      throw UsageError(quoted(option_, path_) +
+                       " appeared while the output was written; give --force to write over it");
     if (err != 0)
       throw UsageError(quoted(option_, path_) + ": cannot move the output into place: " + std::strerror(err));
   }
@@ -188,15 +188,11 @@ void check_output_folder(const std::string& option, const std::string& path, boo
                          const std::function<bool(const std::string&)>& is_ours, const std::string& force_flag) {
   if (path.empty()) throw UsageError(option + " must name a folder, got ''");
   switch (path_kind(path)) {
-    case PathKind::missing:
-      return;
-    case PathKind::sqlite:
-      throw UsageError(quoted(option, path) + " is a SQLite database, not a folder");
+    case PathKind::missing: return;
+    case PathKind::sqlite: throw UsageError(quoted(option, path) + " is a SQLite database, not a folder");
     case PathKind::other:
-    case PathKind::stream:
-      throw UsageError(quoted(option, path) + " is a file, not a folder");
-    case PathKind::folder:
-      break;
+    case PathKind::stream: throw UsageError(quoted(option, path) + " is a file, not a folder");
+    case PathKind::folder: break;
   }
   std::error_code ec;
   if (fs::is_empty(path, ec) || is_ours(path) || force) return;

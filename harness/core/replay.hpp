@@ -85,7 +85,10 @@ struct RlStepAnswer {
                            std::to_string(4 + observation_size));
     const std::size_t head = n - observation_size;
     const double metric = head == 4 ? e.payload[3] : std::numeric_limits<double>::quiet_NaN();
-    return {e.payload[0] != 0.0, e.payload[1], e.payload[2], metric,
+    return {e.payload[0] != 0.0,
+            e.payload[1],
+            e.payload[2],
+            metric,
             {e.payload.begin() + static_cast<std::ptrdiff_t>(head), e.payload.end()}};
   }
 };

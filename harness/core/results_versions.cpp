@@ -52,7 +52,7 @@ std::string stale_reason(const std::string& env, const std::string& optimizer, c
   const auto part = [&](const std::string& what, int was, int is) {
     if (was == is && is > 0) return;
     why += (why.empty() ? "" : "; ") + what + " version " + std::to_string(was) + ", this binary's " +
-           (is > 0 ? std::to_string(is) : std::string("none (unknown here)"));
+        (is > 0 ? std::to_string(is) : std::string("none (unknown here)"));
   };
   part("env " + env, stored.env, now.env);
   part("optimizer " + optimizer, stored.optimizer, now.optimizer);

@@ -28,11 +28,11 @@ struct ResolvedConfig {
 struct RunSpec {
   std::string env;
   std::string optimizer;
-  int seed = 0;              // seed index 0..seeds-1
-  std::int64_t budget = 0;   // episodes
-  std::uint64_t rng_seed = 0;  // per-run seed = hash(seed index, env, optimizer)
-  std::map<std::string, std::string> knobs = {};  // optimizer knobs set on the command line (--set)
-  std::optional<ExtOptimizerSpec> ext = {};  // an external optimizer (ext:NAME), probed
+  int seed = 0;                                         // seed index 0..seeds-1
+  std::int64_t budget = 0;                              // episodes
+  std::uint64_t rng_seed = 0;                           // per-run seed = hash(seed index, env, optimizer)
+  std::map<std::string, std::string> knobs = {};        // optimizer knobs set on the command line (--set)
+  std::optional<ExtOptimizerSpec> ext = {};             // an external optimizer (ext:NAME), probed
   std::map<std::string, std::string> env_options = {};  // the env's options (--set ENV.KEY=VALUE)
 
   // resolved once, when the grid expands (plan/grid.hpp, expand_grid): every later step takes

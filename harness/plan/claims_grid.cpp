@@ -109,9 +109,9 @@ std::vector<GridRequest> claims_requests(const GridRequest& base, const std::vec
     // takes every optimizer, so every knob that names no env)
     for (const auto& [owner, settings] : base.knobs) {
       const bool is_env = std::any_of(envs.begin(), envs.end(), [&](const ClaimsEnv& x) { return x.env == owner; });
-      const bool mine = is_env ? owner == e.env
-                               : e.every_optimizer || std::find(e.optimizers.begin(), e.optimizers.end(), owner) !=
-                                                          e.optimizers.end();
+      const bool mine = is_env
+          ? owner == e.env
+          : e.every_optimizer || std::find(e.optimizers.begin(), e.optimizers.end(), owner) != e.optimizers.end();
       if (mine) {
         r.knobs[owner] = settings;
         owners_used.insert(owner);
@@ -122,14 +122,14 @@ std::vector<GridRequest> claims_requests(const GridRequest& base, const std::vec
   for (const auto& [owner, settings] : base.knobs) {
     if (owners_used.count(owner)) continue;
     const std::string what = "--set " + owner + "." + settings.begin()->first + ": ";
-    const bool claims_env =
-        std::any_of(envs.begin(), envs.end(), [&](const ClaimsEnv& x) { return x.env == owner; });
+    const bool claims_env = std::any_of(envs.begin(), envs.end(), [&](const ClaimsEnv& x) { return x.env == owner; });
     const auto& entries = optimizer_entries();
     const bool optimizer =
         std::any_of(entries.begin(), entries.end(), [&](const OptimizerEntry& o) { return o.name == owner; });
-    const bool claims_optimizer = optimizer && std::any_of(envs.begin(), envs.end(), [&](const ClaimsEnv& x) {
-      return x.every_optimizer || std::find(x.optimizers.begin(), x.optimizers.end(), owner) != x.optimizers.end();
-    });
+    const bool claims_optimizer =
+        optimizer && std::any_of(envs.begin(), envs.end(), [&](const ClaimsEnv& x) {
+          return x.every_optimizer || std::find(x.optimizers.begin(), x.optimizers.end(), owner) != x.optimizers.end();
+        });
     if (claims_env) throw UsageError(what + "env " + owner + " is in the claims grid, but --env leaves it out");
     if (claims_optimizer)
       throw UsageError(what + "optimizer " + owner + " runs on none of the claims grid's envs that --env keeps");

@@ -21,7 +21,8 @@ namespace {
 
 std::string default_cache_path() {
   if (const char* p = std::getenv("DSB_COST_CACHE"); p && *p) return p;
-  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return std::string(x) + "/diffsim-bench/episode-costs.json";
+  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x)
+    return std::string(x) + "/diffsim-bench/episode-costs.json";
   if (const char* h = std::getenv("HOME"); h && *h) return std::string(h) + "/.cache/diffsim-bench/episode-costs.json";
   return ".diffsim-bench-episode-costs.json";
 }
@@ -87,11 +88,13 @@ CostModel::CostModel() : path_(default_cache_path()), build_(harness_build()), c
   try {
     const auto j = nlohmann::json::parse(text);
     for (const auto& [k, v] : j.at("costs").items()) {
-      table_[k] = {v.at("forward_s").get<double>(), v.at("gradient_s").get<double>(), v.at("decisions").get<int>(), true};
+      table_[k] = {v.at("forward_s").get<double>(), v.at("gradient_s").get<double>(), v.at("decisions").get<int>(),
+                   true};
       // env|env config hash|build|CPU model: another build's measurement on this CPU
       const auto a = k.find('|'), b = a == std::string::npos ? a : k.find('|', a + 1),
                  c = b == std::string::npos ? b : k.find('|', b + 1);
-      if (c != std::string::npos && k.compare(b + 1, c - b - 1, build_) != 0 && k.compare(c + 1, std::string::npos, cpu_) == 0)
+      if (c != std::string::npos && k.compare(b + 1, c - b - 1, build_) != 0 &&
+          k.compare(c + 1, std::string::npos, cpu_) == 0)
         other_builds_.insert(k.substr(0, b));
     }
     if (j.contains("runs"))
@@ -114,8 +117,8 @@ bool CostModel::measured_by_other_build(const std::string& env_name, const std::
 }
 
 std::string CostModel::run_key(const PlannedRun& run) const {
-  return run.spec.env + "|" + run.key.env_config_hash + "|" + run.spec.optimizer + "|" + run.key.opt_config_hash +
-         "|" + std::to_string(probe_episodes(run)) + "|" + build_ + "|" + cpu_;
+  return run.spec.env + "|" + run.key.env_config_hash + "|" + run.spec.optimizer + "|" + run.key.opt_config_hash + "|" +
+      std::to_string(probe_episodes(run)) + "|" + build_ + "|" + cpu_;
 }
 
 std::int64_t CostModel::probe_episodes(const PlannedRun& run) const {
@@ -157,9 +160,7 @@ void CostModel::calibrate_runs(const std::vector<PlannedRun>& runs, const ProbeT
     std::vector<double> run_s, replay_s;
     std::int64_t episodes = 1;
     double total = 0.0;
-    bool done() const {
-      return probe_timed_enough(static_cast<int>(run_s.size()), total);
-    }
+    bool done() const { return probe_timed_enough(static_cast<int>(run_s.size()), total); }
   };
   std::vector<Pending> pending;
   for (const PlannedRun& run : runs) {
@@ -223,7 +224,7 @@ double CostModel::run_seconds(const PlannedRun& run, double shared_share) const 
     if (probe_own > 0.0) {
       const double measured_own = std::max(0.0, p->seconds - per_episode * static_cast<double>(p->episodes));
       return per_episode * budget * (1.0 - shared_share) + replayed + measured_own +
-             std::max(0.0, own(run.spec.budget) - probe_own);
+          std::max(0.0, own(run.spec.budget) - probe_own);
     }
     return p->seconds / static_cast<double>(p->episodes) * budget * (1.0 - shared_share) + replayed;
   }
@@ -258,10 +259,11 @@ void CostModel::save() const {
   nlohmann::json runs = nlohmann::json::object();
   for (const auto& [k, v] : probes_)
     runs[k] = {{"episodes", v.episodes}, {"seconds", v.seconds}, {"replay_s_per_episode", v.replay_s_per_episode}};
-  const nlohmann::json j = {{"what", "diffsim-bench seconds per episode, one core: costs by env|env config hash|harness "
-                                     "build (version+commit)|CPU model; runs (short runs of cheap pairs, the "
-                                     "optimizer's own work included) by env|env config hash|optimizer|optimizer "
-                                     "config hash|episodes|harness build|CPU model"},
+  const nlohmann::json j = {{"what",
+                             "diffsim-bench seconds per episode, one core: costs by env|env config hash|harness "
+                             "build (version+commit)|CPU model; runs (short runs of cheap pairs, the "
+                             "optimizer's own work included) by env|env config hash|optimizer|optimizer "
+                             "config hash|episodes|harness build|CPU model"},
                             {"costs", costs},
                             {"runs", runs}};
   std::error_code ec;

@@ -130,7 +130,7 @@ class CostModel {
   std::string run_key(const PlannedRun& run) const;
   std::string path_, build_, cpu_;
   std::map<std::string, EpisodeCost> table_;
-  std::set<std::string> other_builds_;  // env|env config hash measured by other builds on this CPU
+  std::set<std::string> other_builds_;      // env|env config hash measured by other builds on this CPU
   std::map<std::string, RunProbe> probes_;  // by run_key
 };
 

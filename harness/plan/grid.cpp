@@ -58,7 +58,7 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
   }
   if (!(req.ext_timeout_s > 0.0 && req.ext_timeout_s <= 86400.0))
     throw UsageError("--ext-timeout must be from 0 to 86400 seconds, got " + std::to_string(req.ext_timeout_s));
-  std::map<std::string, ExtOptimizerSpec> ext;  // by optimizer name, probed
+  std::map<std::string, ExtOptimizerSpec> ext;           // by optimizer name, probed
   std::map<std::string, const OptimizerEntry*> entries;  // by optimizer name, the registry's
   for (const auto& name : optimizers) {
     if (!seen.insert("opt:" + name).second) throw UsageError("optimizer '" + name + "' given twice");
@@ -78,7 +78,8 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
   std::map<std::string, std::shared_ptr<const ResolvedConfig>> opt_configs;  // by optimizer name
   for (const auto& [name, settings] : knobs) {
     if (!seen.count("opt:" + name))
-      throw UsageError("--set names '" + name + "', which is neither an env nor an optimizer of the grid "
+      throw UsageError("--set names '" + name +
+                       "', which is neither an env nor an optimizer of the grid "
                        "(--set ENV.KEY=VALUE, --set OPTIMIZER.KNOB=VALUE)");
     if (ext.count(name)) throw UsageError("optimizer '" + name + "' has no knobs to --set");
     // unknown knob, malformed or out-of-range value: UsageError
@@ -98,7 +99,13 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
     const auto options = env_options.find(envs[e]);
     const ResultsVersions versions = current_results_versions(envs[e], opt);
     for (int s = 0; s < req.seeds; ++s) {
-      RunSpec spec{envs[e], opt, s, req.budget, per_run_seed(envs[e], opt, s), settings, program,
+      RunSpec spec{envs[e],
+                   opt,
+                   s,
+                   req.budget,
+                   per_run_seed(envs[e], opt, s),
+                   settings,
+                   program,
                    options == env_options.end() ? EnvOptions{} : options->second};
       spec.resolved_env = env_objects[e];
       spec.entry = entry;
@@ -117,8 +124,7 @@ std::vector<RunSpec> expand_grid(const GridRequest& req) {
       const OptimizerEntry& entry = *entries.at(opt);
       if (entry.needs_gradient && !env_objects[e]->differentiable()) {
         if (envs_explicit && opts_explicit)
-          throw UsageError("optimizer '" + opt + "' needs gradients; env '" + envs[e] +
-                           "' is not differentiable");
+          throw UsageError("optimizer '" + opt + "' needs gradients; env '" + envs[e] + "' is not differentiable");
         continue;
       }
       if (entry.needs_rl && !env_objects[e]->supports_rl()) {

@@ -23,7 +23,7 @@ struct GridRequest {
   // --set OWNER.KEY=VALUE: owner -> key -> value, an env of the grid (its options) or an optimizer
   // (its knobs)
   std::map<std::string, KnobSettings> knobs;
-  std::map<std::string, std::string> ext;     // NAME -> COMMAND of ext:NAME (--ext NAME=COMMAND)
+  std::map<std::string, std::string> ext;      // NAME -> COMMAND of ext:NAME (--ext NAME=COMMAND)
   double ext_timeout_s = kExtDefaultTimeoutS;  // per reply of an external optimizer (--ext-timeout)
 };
 

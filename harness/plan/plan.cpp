@@ -20,12 +20,13 @@ int shard_of(const PlannedRun& run, int count, bool group_seeds) {
   return static_cast<int>(splitmix64(h) % static_cast<std::uint64_t>(count));
 }
 
-GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done,
-                   const std::string& harness_version, Shard shard) {
+GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done, const std::string& harness_version,
+                   Shard shard) {
   GridPlan plan;
   for (const auto& spec : grid) {
-    PlannedRun run{spec, RunKey{spec.env, spec.optimizer, spec.seed, spec.budget, spec.env_config->hash,
-                                spec.opt_config->hash, harness_version, spec.versions}};
+    PlannedRun run{spec,
+                   RunKey{spec.env, spec.optimizer, spec.seed, spec.budget, spec.env_config->hash,
+                          spec.opt_config->hash, harness_version, spec.versions}};
     if (shard.count > 1 && shard_of(run, shard.count, shard.group_seeds) != shard.index) continue;
     ++plan.runs;
     if (done.count(run.key)) {
@@ -71,8 +72,7 @@ void estimate_sharing(GridPlan& plan, const std::map<std::string, std::int64_t>&
 void use_measured_walls(GridPlan& plan, const std::map<std::string, double>& walls) {
   plan.measured_wall_s.assign(plan.pending.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t i = 0; i < plan.pending.size(); ++i)
-    if (const auto w = walls.find(plan.pending[i].key.group()); w != walls.end())
-      plan.measured_wall_s[i] = w->second;
+    if (const auto w = walls.find(plan.pending[i].key.group()); w != walls.end()) plan.measured_wall_s[i] = w->second;
 }
 
 }  // namespace dsb

@@ -45,8 +45,8 @@ struct Shard {
 // with group_seeds false (nothing is shared: --no-sharing) every run hashes its own seed
 int shard_of(const PlannedRun& run, int count, bool group_seeds = true);
 
-GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done,
-                   const std::string& harness_version, Shard shard = {});
+GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& done, const std::string& harness_version,
+                   Shard shard = {});
 
 // For each run of `runs`: the index of its lead (the run of its group, RunKey::group, with the smallest seed)
 // when the run may share and is not the lead itself, else -1. A run waits for its lead.

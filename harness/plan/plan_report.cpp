@@ -71,8 +71,8 @@ std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs) {
   c.reserve(plan.pending.size());
   for (std::size_t i = 0; i < plan.pending.size(); ++i) {
     const double share = plan.shared_share.empty() ? 0.0 : plan.shared_share[i];
-    const double measured = plan.measured_wall_s.empty() ? std::numeric_limits<double>::quiet_NaN()
-                                                         : plan.measured_wall_s[i];
+    const double measured =
+        plan.measured_wall_s.empty() ? std::numeric_limits<double>::quiet_NaN() : plan.measured_wall_s[i];
     // a group's done runs in the database measure it; the cost model estimates the rest
     c.push_back(std::isfinite(measured) ? measured * (1.0 - share) : costs.run_seconds(plan.pending[i], share));
   }
@@ -93,8 +93,7 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
       t->names.insert(p.spec.optimizer);
     }
     (costs.episode(p.spec).measured ? measured : hinted).insert(p.spec.env);
-    if (!costs.episode(p.spec).measured &&
-        costs.measured_by_other_build(p.spec.env, p.key.env_config_hash))
+    if (!costs.episode(p.spec).measured && costs.measured_by_other_build(p.spec.env, p.key.env_config_hash))
       other_build.insert(p.spec.env);
     total += cost[i];
     longest = std::max(longest, cost[i]);
@@ -102,22 +101,24 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
   out << fmt::format("plan: {} runs in the grid; {} already done in {}; {} to run ({} episodes)\n", plan.runs,
                      plan.skipped, ctx.db, plan.pending.size(), plan.pending_episodes);
   if (plan.pending.empty()) return;
-  out << fmt::format("  episode costs: measured on this machine for {} of {} envs (cache {}){}\n", measured.size(),
-                     measured.size() + hinted.size(), costs.path(),
-                     hinted.empty() ? std::string()
-                                    : "; the others from their cost hints (forward and gradient episodes on the "
-                                      "2-core machine the project measures on): `harness calibrate " + ctx.grid_flags +
-                                          "` measures them, one episode each" +
-                                          (other_build.empty()
-                                               ? std::string()
-                                               : fmt::format(" ({} of them were measured by another build of the "
-                                                             "harness: a calibration belongs to the binary that made it)",
-                                                             other_build.size())));
+  out << fmt::format(
+      "  episode costs: measured on this machine for {} of {} envs (cache {}){}\n", measured.size(),
+      measured.size() + hinted.size(), costs.path(),
+      hinted.empty() ? std::string()
+                     : "; the others from their cost hints (forward and gradient episodes on the "
+                       "2-core machine the project measures on): `harness calibrate " +
+              ctx.grid_flags + "` measures them, one episode each" +
+              (other_build.empty() ? std::string()
+                                   : fmt::format(" ({} of them were measured by another build of the "
+                                                 "harness: a calibration belongs to the binary that made it)",
+                                                 other_build.size())));
   out << fmt::format("  {:<26} {:>6} {:>11} {:>12}\n", "env", "runs", "core-hours", "longest run");
   std::vector<std::pair<std::string, Tally>> envs(by_env.begin(), by_env.end());
-  std::stable_sort(envs.begin(), envs.end(), [](const auto& a, const auto& b) { return a.second.seconds > b.second.seconds; });
+  std::stable_sort(envs.begin(), envs.end(),
+                   [](const auto& a, const auto& b) { return a.second.seconds > b.second.seconds; });
   for (const auto& [name, t] : envs)
-    out << fmt::format("  {:<26} {:>6} {:>11.2f} {:>12}\n", name, t.runs, t.seconds / 3600.0, human_duration(t.longest));
+    out << fmt::format("  {:<26} {:>6} {:>11.2f} {:>12}\n", name, t.runs, t.seconds / 3600.0,
+                       human_duration(t.longest));
   out << fmt::format("  {:<26} {:>6} {:>11}  {}\n", "optimizer family", "runs", "core-hours", "optimizers");
   for (const auto& [name, t] : by_family) {
     std::string names;
@@ -137,27 +138,31 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
     sharing_runs += share > 0.0;
   }
   if (measured_runs > 0)
-    out << fmt::format("  {} runs costed from the median wall time of their group's done runs in {} (the same env, "
-                       "optimizer, budget and configs)\n",
-                       measured_runs, ctx.db);
+    out << fmt::format(
+        "  {} runs costed from the median wall time of their group's done runs in {} (the same env, "
+        "optimizer, budget and configs)\n",
+        measured_runs, ctx.db);
   if (sharing_runs > 0)
-    out << fmt::format("  sharing across seeds: {} runs take about {:.0f} episodes from an earlier seed's run of "
-                       "their group (the episodes before the optimizer's first draw, replayed: at the replay's measured "
-                       "cost on cheap envs, else free), saving about {:.4g} of {:.4g} core-hours; --no-sharing simulates them\n",
-                       sharing_runs, shared_episodes, (unshared - total) / 3600.0, unshared / 3600.0);
+    out << fmt::format(
+        "  sharing across seeds: {} runs take about {:.0f} episodes from an earlier seed's run of "
+        "their group (the episodes before the optimizer's first draw, replayed: at the replay's measured "
+        "cost on cheap envs, else free), saving about {:.4g} of {:.4g} core-hours; --no-sharing simulates them\n",
+        sharing_runs, shared_episodes, (unshared - total) / 3600.0, unshared / 3600.0);
   // wall: the work over the runs at once, but never less than the longest run
   const int parallel = std::max(1, std::min<int>(ctx.jobs, static_cast<int>(plan.pending.size())));
   const double wall = std::max(total / parallel, longest);
-  out << fmt::format("  total: about {:.4g} core-hours (with the GP optimizers' and RL learners' own time, roughly); "
-                     "with --jobs {} --threads {}: about {} wall (the longest run alone {})\n",
-                     total / 3600.0, ctx.jobs, ctx.threads, human_duration(wall), human_duration(longest));
+  out << fmt::format(
+      "  total: about {:.4g} core-hours (with the GP optimizers' and RL learners' own time, roughly); "
+      "with --jobs {} --threads {}: about {} wall (the longest run alone {})\n",
+      total / 3600.0, ctx.jobs, ctx.threads, human_duration(wall), human_duration(longest));
   // array tasks of about kShardTargetSeconds each, or one per job when --jobs names a cluster's cores
-  const int shards = static_cast<int>(std::clamp<double>(std::max(std::ceil(total / kShardTargetSeconds), 1.0 * ctx.jobs),
-                                                         1.0, static_cast<double>(plan.pending.size())));
+  const int shards = static_cast<int>(std::clamp<double>(
+      std::max(std::ceil(total / kShardTargetSeconds), 1.0 * ctx.jobs), 1.0, static_cast<double>(plan.pending.size())));
   if (wall > 24.0 * 3600.0 || shards > 1)
-    out << fmt::format("  on a Slurm cluster: harness slurm {} --shards {} --dir slurm-run && bash slurm-run/submit.sh "
-                       "({} array tasks of about {} on one core each; docs/running.md, \"Running on a Slurm cluster\")\n",
-                       ctx.grid_flags, shards, shards, human_duration(std::max(total / shards, longest)));
+    out << fmt::format(
+        "  on a Slurm cluster: harness slurm {} --shards {} --dir slurm-run && bash slurm-run/submit.sh "
+        "({} array tasks of about {} on one core each; docs/running.md, \"Running on a Slurm cluster\")\n",
+        ctx.grid_flags, shards, shards, human_duration(std::max(total / shards, longest)));
 }
 
 void print_stale_runs(std::ostream& out, const std::vector<StaleRuns>& stale) {
@@ -167,9 +172,10 @@ void print_stale_runs(std::ostream& out, const std::vector<StaleRuns>& stale) {
     done += s.done;
     unfinished += s.unfinished;
   }
-  out << fmt::format("  stale: {} stored runs of this grid's envs and optimizers ({} done, {} unfinished) were made by "
-                     "other results versions: never resumed or counted as done, left in the database as they are\n",
-                     done + unfinished, done, unfinished);
+  out << fmt::format(
+      "  stale: {} stored runs of this grid's envs and optimizers ({} done, {} unfinished) were made by "
+      "other results versions: never resumed or counted as done, left in the database as they are\n",
+      done + unfinished, done, unfinished);
   for (const auto& s : stale)
     out << fmt::format("    {} / {}: {} done, {} unfinished: {}\n", s.env, s.optimizer, s.done, s.unfinished, s.reason);
 }

@@ -14,7 +14,7 @@
 namespace dsb {
 
 struct PlanContext {
-  std::string db;          // the results file
+  std::string db;  // the results file
   int jobs = 1, threads = 1;
   std::string grid_flags;  // the grid as command-line flags (for the Slurm command)
 };

@@ -10,7 +10,8 @@ namespace dsb {
 std::vector<std::size_t> cheapest_first(const std::vector<double>& run_cost_s) {
   std::vector<std::size_t> order(run_cost_s.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return run_cost_s[a] < run_cost_s[b]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return run_cost_s[a] < run_cost_s[b]; });
   return order;
 }
 

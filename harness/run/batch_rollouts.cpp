@@ -16,8 +16,8 @@ Workspace& WorkspacePool::get(std::size_t slot) {
   return *workspaces_[slot];
 }
 
-void run_value_batch(const Env& env, ThreadTeam& team, WorkspacePool& pool, std::span<const double> xs,
-                     std::size_t d, std::span<const std::size_t> live, std::vector<RolloutOutcome>& outcomes) {
+void run_value_batch(const Env& env, ThreadTeam& team, WorkspacePool& pool, std::span<const double> xs, std::size_t d,
+                     std::span<const std::size_t> live, std::vector<RolloutOutcome>& outcomes) {
   const std::size_t slots = std::min<std::size_t>(live.size(), static_cast<std::size_t>(team.size()));
   for (std::size_t s = 0; s < slots; ++s) pool.get(s);  // made here, not on the team's threads
   team.run(static_cast<int>(slots), [&](int slot) {

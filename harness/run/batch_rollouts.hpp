@@ -38,7 +38,7 @@ struct RolloutOutcome {
 };
 
 // The value rollouts of the points xs[i*d .. (i+1)*d) for i in `live` into outcomes[i].
-void run_value_batch(const Env& env, ThreadTeam& team, WorkspacePool& pool, std::span<const double> xs,
-                     std::size_t d, std::span<const std::size_t> live, std::vector<RolloutOutcome>& outcomes);
+void run_value_batch(const Env& env, ThreadTeam& team, WorkspacePool& pool, std::span<const double> xs, std::size_t d,
+                     std::span<const std::size_t> live, std::vector<RolloutOutcome>& outcomes);
 
 }  // namespace dsb

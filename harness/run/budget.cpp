@@ -12,9 +12,12 @@
 
 namespace dsb {
 
-BudgetedObjective::BudgetedObjective(const Env& env, std::int64_t budget,
-                                     std::atomic<std::int64_t>* episode_counter, ThreadTeam* team)
-    : env_(env), budget_(budget), team_(team ? *team : serial_team()), workspaces_(env, team_.size()),
+BudgetedObjective::BudgetedObjective(const Env& env, std::int64_t budget, std::atomic<std::int64_t>* episode_counter,
+                                     ThreadTeam* team)
+    : env_(env),
+      budget_(budget),
+      team_(team ? *team : serial_team()),
+      workspaces_(env, team_.size()),
       log_(budget, episode_counter) {}
 
 double BudgetedObjective::finish_episode(std::span<const double> x, double loss, bool used_grad, double wall_s,
@@ -206,7 +209,8 @@ void BudgetedObjective::rl_reset(std::span<double> observation) {
   rl_episode_.first_call = journal_.calls();
   if (const ReplayEntry* r = journal_.begin_call(ReplayKind::rl_reset, {}, rl_episode_.open)) {
     // the payload is the observation
-    if (r->payload.size() != observation.size()) throw ReplayDiverged("resume: a journal observation of the wrong size");
+    if (r->payload.size() != observation.size())
+      throw ReplayDiverged("resume: a journal observation of the wrong size");
     std::copy(r->payload.begin(), r->payload.end(), observation.begin());
     rl_episode_.open = true;
     rl_episode_.served = true;
@@ -228,8 +232,8 @@ RlStep BudgetedObjective::rl_step(std::span<const double> action, std::span<doub
   if (rl_episode_.served) {
     // an episode of the journal: its decisions are answered from it, to its end
     if (!journal_.entries_left()) throw ReplayDiverged("resume: the journal ends inside an RL episode");
-    const auto a = RlStepAnswer::from(*journal_.begin_call(ReplayKind::rl_step, action, rl_episode_.open),
-                                      observation.size());
+    const auto a =
+        RlStepAnswer::from(*journal_.begin_call(ReplayKind::rl_step, action, rl_episode_.open), observation.size());
     std::copy(a.observation.begin(), a.observation.end(), observation.begin());
     if (!a.done) return {false, 0.0};
     rl_episode_ = {};

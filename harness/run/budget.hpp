@@ -48,8 +48,8 @@ class BudgetedObjective : public Objective {
  public:
   // episode_counter (may be null) is incremented after every episode, for progress lines; team
   // (may be null: one thread) runs the threads inside a rollout and the points of a batch
-  BudgetedObjective(const Env& env, std::int64_t budget,
-                    std::atomic<std::int64_t>* episode_counter = nullptr, ThreadTeam* team = nullptr);
+  BudgetedObjective(const Env& env, std::int64_t budget, std::atomic<std::int64_t>* episode_counter = nullptr,
+                    ThreadTeam* team = nullptr);
 
   int dim() const override { return env_.dim(); }
   bool has_gradient() const override { return env_.differentiable(); }

@@ -10,7 +10,10 @@ namespace dsb {
 
 Progress::Progress(std::int64_t total_runs, std::int64_t total_episodes, double total_cost_s, int workers,
                    std::FILE* out)
-    : total_runs_(total_runs), total_episodes_(total_episodes), total_cost_s_(total_cost_s), out_(out),
+    : total_runs_(total_runs),
+      total_episodes_(total_episodes),
+      total_cost_s_(total_cost_s),
+      out_(out),
       tty_(out && isatty(fileno(out)) == 1) {
   for (int w = 0; w < std::max(1, workers); ++w) slots_.push_back(std::make_unique<Slot>());
 }
@@ -51,11 +54,11 @@ std::int64_t Progress::episodes() const {
 }
 
 std::string Progress::line() const {
-  const double elapsed =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   // the estimated work done: finished runs, and running runs' episodes at their estimated cost
   double done_s = finished_cost_s_.load();
-  for (const auto& s : slots_) done_s += static_cast<double>(s->episodes.load() - s->run_start.load()) * s->per_episode_s.load();
+  for (const auto& s : slots_)
+    done_s += static_cast<double>(s->episodes.load() - s->run_start.load()) * s->per_episode_s.load();
   // the ETA: the speed seen so far once 2% of the estimated work is done; before that an
   // extrapolation from a few cheap runs or the first episodes of a GP run is noise (it printed
   // 50 hours for a 30-minute grid), so the plan's own estimate, the work left over the workers

@@ -55,7 +55,8 @@ const ReplayEntry* ReplayJournal::recall(std::uint64_t key, bool rl_open) {
     return nullptr;
   }
   if (e.input_hash != key)
-    throw ReplayDiverged("resume: the optimizer's work at call " + std::to_string(calls_) + " differs from the journal's");
+    throw ReplayDiverged("resume: the optimizer's work at call " + std::to_string(calls_) +
+                         " differs from the journal's");
   ++calls_;
   ++cursor_;
   ++recalled_work_;

@@ -154,8 +154,8 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
       const std::size_t i = *next_run;
       const PlannedRun& p = pending[i];
       try {
-        RunStart start = store.begin_run(p.key, p.spec.rng_seed, p.spec.env_config->config,
-                                         p.spec.opt_config->config, share && p.spec.may_share_seeds());
+        RunStart start = store.begin_run(p.key, p.spec.rng_seed, p.spec.env_config->config, p.spec.opt_config->config,
+                                         share && p.spec.may_share_seeds());
         if (start.committed_episodes > 0 && start.journal.empty()) {
           // episodes without the journal that regenerates them (e.g. left by an older harness):
           // nothing to replay, so the run starts over

@@ -23,7 +23,7 @@ constexpr int kFormat = 1;
 bool is_archive_file(const fs::path& p) {
   const std::string name = p.filename().string();
   return name.size() > std::string(kSuffix).size() &&
-         name.compare(name.size() - std::string(kSuffix).size(), std::string::npos, kSuffix) == 0;
+      name.compare(name.size() - std::string(kSuffix).size(), std::string::npos, kSuffix) == 0;
 }
 
 [[noreturn]] void damaged(const std::string& file, std::size_t line, const std::string& why) {

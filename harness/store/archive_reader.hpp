@@ -13,9 +13,9 @@
 namespace dsb {
 
 struct ArchivedRuns {
-  std::vector<IohRun> runs;          // this binary's results versions (all with include_stale, marked)
-  std::int64_t stale_left_out = 0;   // archived runs of other results versions, left out
-  int files = 0;                     // archive files read
+  std::vector<IohRun> runs;         // this binary's results versions (all with include_stale, marked)
+  std::int64_t stale_left_out = 0;  // archived runs of other results versions, left out
+  int files = 0;                    // archive files read
 };
 
 // Every run of the archive files under `folder` (recursively; or `folder` itself when it is a

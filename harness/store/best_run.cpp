@@ -16,10 +16,10 @@ BestRun best_run_of(const std::string& db_path, const std::string& env) {
     Database db(db_path, Database::Mode::read_only);
     const int schema = check_schema(db);
     // the best done run whose results versions are this binary's (a stale one is another code's)
-    Statement q(db.handle(), std::string("SELECT optimizer, seed, best_loss, best_x, ") +
-                                 (schema >= 5 ? "results_versions" : "''") +
-                                 " FROM runs WHERE env=? AND status='done' AND best_loss IS NOT NULL AND best_x IS NOT "
-                                 "NULL ORDER BY best_loss ASC, run_id ASC");
+    Statement q(db.handle(),
+                std::string("SELECT optimizer, seed, best_loss, best_x, ") + (schema >= 5 ? "results_versions" : "''") +
+                    " FROM runs WHERE env=? AND status='done' AND best_loss IS NOT NULL AND best_x IS NOT "
+                    "NULL ORDER BY best_loss ASC, run_id ASC");
     q.bind(1, env);
     bool found = false, stale_only = false;
     while (!found && q.step()) {

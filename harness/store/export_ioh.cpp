@@ -78,8 +78,8 @@ std::string join(const std::set<std::string>& items) {
 std::string ioh_file_safe(const std::string& name) {
   std::string s = name;
   for (char& c : s) {
-    const bool ok = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' ||
-                    c == '_' || c == '-';
+    const bool ok =
+        (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
     if (!ok) c = '_';
   }
   return s;
@@ -91,9 +91,11 @@ std::vector<IohRun> read_ioh_runs(Database& db, bool include_stale, std::int64_t
   if (stale_left_out) *stale_left_out = 0;
   {
     const int schema = check_schema(db);
-    Statement q(db.handle(), std::string(R"sql(
+    Statement q(db.handle(),
+                std::string(R"sql(
       SELECT run_id, env, optimizer, seed, budget, env_config_hash, opt_config_hash, episodes, best_x,
-             COALESCE(harness_version, ''), )sql") + (schema >= 5 ? "results_versions" : "''") + R"sql(
+             COALESCE(harness_version, ''), )sql") +
+                    (schema >= 5 ? "results_versions" : "''") + R"sql(
       FROM runs WHERE status = 'done'
       ORDER BY env, optimizer, budget, opt_config_hash, env_config_hash, seed, run_id)sql");
     while (q.step()) {
@@ -270,10 +272,10 @@ IohExportSummary write_ioh_export(const std::vector<IohRun>& all, const fs::path
     meta["function_id"] = fid;
     meta["function_name"] = function;
     meta["maximization"] = false;
-    meta["algorithm"] = {
-        {"name", algorithm},
-        {"info", fmt::format("diffsim-bench optimizer {}, budget {}, optimizer config {}, env config {}",
-                             first.optimizer, first.budget, first.opt_hash, first.env_hash)}};
+    meta["algorithm"] = {{"name", algorithm},
+                         {"info",
+                          fmt::format("diffsim-bench optimizer {}, budget {}, optimizer config {}, env config {}",
+                                      first.optimizer, first.budget, first.opt_hash, first.env_hash)}};
     meta["experiment_attributes"] = nlohmann::ordered_json::array();
     meta["run_attributes"] = nlohmann::ordered_json::array();
     meta["attributes"] = {"evaluations", "raw_y"};

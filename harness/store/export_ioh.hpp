@@ -17,11 +17,11 @@ namespace dsb {
 class Database;
 
 struct IohExportSummary {
-  int algorithms = 0;       // folders written, one per algorithm
-  int functions = 0;        // distinct functions (envs)
-  int runs = 0;             // runs written
-  int runs_left_out = 0;    // 'done' runs without a single finite loss
-  std::int64_t rows = 0;    // .dat data rows (improvements)
+  int algorithms = 0;     // folders written, one per algorithm
+  int functions = 0;      // distinct functions (envs)
+  int runs = 0;           // runs written
+  int runs_left_out = 0;  // 'done' runs without a single finite loss
+  std::int64_t rows = 0;  // .dat data rows (improvements)
 };
 
 // One 'done' run as exported: its key, episodes, best_x and the improvements of its best loss.
@@ -33,10 +33,10 @@ struct IohRun {
   std::string env_hash, opt_hash;
   std::int64_t episodes = 0;
   bool has_best_x = false;
-  nlohmann::json best_x;  // array, normalized units ([] when none)
-  std::string results_versions;  // "env E, optimizer O, run R" ("" before versions)
-  bool stale = false;            // versions not this binary's
-  std::string version;    // harness_version
+  nlohmann::json best_x;                              // array, normalized units ([] when none)
+  std::string results_versions;                       // "env E, optimizer O, run R" ("" before versions)
+  bool stale = false;                                 // versions not this binary's
+  std::string version;                                // harness_version
   std::vector<std::pair<std::int64_t, double>> rows;  // improvements: (episode + 1, loss)
 };
 

@@ -23,12 +23,13 @@ namespace {
 // (files before version 4), the results versions as '' (files before version 5: made before
 // versions, stale for every binary that has them; kept apart from the runs of any version)
 std::string run_columns(int version) {
-  return std::string("env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, "
-                     "failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
-                     "COALESCE(harness_version, ''), git_sha, host, diagnostics, ") +
-         (version >= 4 ? "seed_free_episodes, seed_free_calls, shared_episodes, shared_from_seed"
-                       : "NULL, NULL, 0, NULL") +
-         (version >= 5 ? ", results_versions" : ", ''");
+  return std::string(
+             "env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, "
+             "failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
+             "COALESCE(harness_version, ''), git_sha, host, diagnostics, ") +
+      (version >= 4 ? "seed_free_episodes, seed_free_calls, shared_episodes, shared_from_seed"
+                    : "NULL, NULL, 0, NULL") +
+      (version >= 5 ? ", results_versions" : ", ''");
 }
 constexpr int kRunColumnCount = 25;
 const char* kEvalColumns = "episode, loss, best_loss, used_grad, wall_s, failed, metric";
@@ -67,24 +68,29 @@ void bind_row(Statement& st, const Row& row, int first_index) {
   for (std::size_t c = 0; c < row.size(); ++c) {
     const int index = first_index + static_cast<int>(c);
     const Cell& cell = row[c];
-    if (cell.type == 1) st.bind(index, cell.i);
-    else if (cell.type == 2) st.bind(index, cell.d);
-    else if (cell.type == 3) st.bind(index, cell.s);
-    else if (cell.type == 4) st.bind_blob(index, cell.s);
-    else st.bind_null(index);
+    if (cell.type == 1)
+      st.bind(index, cell.i);
+    else if (cell.type == 2)
+      st.bind(index, cell.d);
+    else if (cell.type == 3)
+      st.bind(index, cell.s);
+    else if (cell.type == 4)
+      st.bind_blob(index, cell.s);
+    else
+      st.bind_null(index);
   }
 }
 
 struct RunRecord {
-  Row run;                       // run_columns()
-  std::vector<Row> evals;        // kEvalColumns, by episode
-  std::vector<Row> journal;      // seq, kind, input_hash, payload (running runs)
-  std::vector<Row> prefix;       // the same, of a done run's kept seed-free episodes
+  Row run;                   // run_columns()
+  std::vector<Row> evals;    // kEvalColumns, by episode
+  std::vector<Row> journal;  // seq, kind, input_hash, payload (running runs)
+  std::vector<Row> prefix;   // the same, of a done run's kept seed-free episodes
   RunStatus status() const { return stored_status(run[7].s).value_or(RunStatus::running); }
   std::int64_t committed() const { return static_cast<std::int64_t>(evals.size()); }
   RunKey key() const {
-    return {run[0].s, run[1].s, static_cast<int>(run[2].i), run[3].i, run[4].s, run[5].s, run[16].s,
-            stored_results_versions(run[24].s)};
+    return {run[0].s, run[1].s,  static_cast<int>(run[2].i),        run[3].i, run[4].s,
+            run[5].s, run[16].s, stored_results_versions(run[24].s)};
   }
 };
 
@@ -127,8 +133,14 @@ std::optional<std::int64_t> find_run(Database& db, const RunKey& k) {
   Statement q(db.handle(),
               "SELECT run_id FROM runs WHERE env=? AND optimizer=? AND seed=? AND budget=? AND env_config_hash=? AND "
               "opt_config_hash=? AND harness_version=? AND results_versions=?");
-  q.bind(1, k.env).bind(2, k.optimizer).bind(3, static_cast<std::int64_t>(k.seed)).bind(4, k.budget)
-      .bind(5, k.env_config_hash).bind(6, k.opt_config_hash).bind(7, k.harness_version).bind(8, k.versions.text());
+  q.bind(1, k.env)
+      .bind(2, k.optimizer)
+      .bind(3, static_cast<std::int64_t>(k.seed))
+      .bind(4, k.budget)
+      .bind(5, k.env_config_hash)
+      .bind(6, k.opt_config_hash)
+      .bind(7, k.harness_version)
+      .bind(8, k.versions.text());
   if (!q.step()) return std::nullopt;
   return q.column_int(0);
 }
@@ -142,26 +154,28 @@ void delete_run(Database& db, std::int64_t run_id) {
 }
 
 void insert_run(Database& db, const RunRecord& r) {
-  Statement run(db.handle(), std::string("INSERT INTO runs(") +
-                                 "env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, "
-                                 "episodes, failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
-                                 "harness_version, git_sha, host, diagnostics, seed_free_episodes, seed_free_calls, "
-                                 "shared_episodes, shared_from_seed, results_versions) VALUES (" +
-                                 "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING run_id");
+  Statement run(db.handle(),
+                std::string("INSERT INTO runs(") +
+                    "env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, "
+                    "episodes, failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
+                    "harness_version, git_sha, host, diagnostics, seed_free_episodes, seed_free_calls, "
+                    "shared_episodes, shared_from_seed, results_versions) VALUES (" +
+                    "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING run_id");
   bind_row(run, r.run, 1);
   if (!run.step()) throw StoreError("merge: no run_id returned");
   const std::int64_t id = run.column_int(0);
   run.reset();
-  Statement ev(db.handle(), std::string("INSERT INTO evals(run_id, ") + kEvalColumns +
-                                ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+  Statement ev(db.handle(),
+               std::string("INSERT INTO evals(run_id, ") + kEvalColumns + ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
   for (const auto& e : r.evals) {
     ev.bind(1, id);
     bind_row(ev, e, 2);
     ev.run();
   }
   for (const auto& [table, rows] : {std::pair{"replay", &r.journal}, std::pair{"prefix", &r.prefix}}) {
-    Statement j(db.handle(), std::string("INSERT INTO ") + table +
-                                 "(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
+    Statement j(
+        db.handle(),
+        std::string("INSERT INTO ") + table + "(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
     for (const auto& e : *rows) {
       j.bind(1, id);
       bind_row(j, e, 2);
@@ -240,9 +254,8 @@ void check_merge_input(const std::string& in, const std::string& into) {
                 "env_config_hash ELSE opt_config_hash END FROM runs WHERE env_config_hash NOT IN (SELECT hash FROM "
                 "configs) OR opt_config_hash NOT IN (SELECT hash FROM configs) ORDER BY run_id LIMIT 1");
     if (q.step())
-      throw StoreError("run " + q.column_text(0) + "/" + q.column_text(1) + "/seed " +
-                       std::to_string(q.column_int(2)) + " names config " + q.column_text(3) +
-                       ", which its configs table lacks");
+      throw StoreError("run " + q.column_text(0) + "/" + q.column_text(1) + "/seed " + std::to_string(q.column_int(2)) +
+                       " names config " + q.column_text(3) + ", which its configs table lacks");
     return 0;
   });
 }

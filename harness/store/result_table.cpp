@@ -69,22 +69,31 @@ ResultTable read_result_table(Database& db, bool include_stale) {
   std::map<std::tuple<std::string, std::string, std::string>, std::int64_t> stale_runs;  // (env, optimizer, reason)
   {
     // the stale done runs, counted once each
-    Statement q(db.handle(), std::string("SELECT env, optimizer, ") + (version >= 5 ? "results_versions" : "''") +
-                                 ", count(*) FROM runs r WHERE status = 'done' GROUP BY 1, 2, 3");
+    Statement q(db.handle(),
+                std::string("SELECT env, optimizer, ") + (version >= 5 ? "results_versions" : "''") +
+                    ", count(*) FROM runs r WHERE status = 'done' GROUP BY 1, 2, 3");
     while (q.step()) {
-      const std::string why = stale_reason(q.column_text(0), q.column_text(1), stored_results_versions(q.column_text(2)));
+      const std::string why =
+          stale_reason(q.column_text(0), q.column_text(1), stored_results_versions(q.column_text(2)));
       if (!why.empty()) stale_runs[{q.column_text(0), q.column_text(1), why}] += q.column_int(3);
     }
   }
   for (const auto& [k, n] : stale_runs) table.stale.push_back({std::get<0>(k), std::get<1>(k), std::get<2>(k), n});
-  Statement q(db.handle(), "SELECT r.env, r.optimizer, r.seed, r.budget, r.env_config_hash, r.opt_config_hash, " +
-                               versions + ", e.episode, e.loss FROM runs r JOIN evals e USING(run_id) "
-                               "WHERE r.status = 'done' ORDER BY r.env, r.optimizer, r.seed, r.budget, e.episode");
+  Statement q(db.handle(),
+              "SELECT r.env, r.optimizer, r.seed, r.budget, r.env_config_hash, r.opt_config_hash, " + versions +
+                  ", e.episode, e.loss FROM runs r JOIN evals e USING(run_id) "
+                  "WHERE r.status = 'done' ORDER BY r.env, r.optimizer, r.seed, r.budget, e.episode");
   std::map<std::pair<std::string, std::string>, bool> stale_of;  // (env, optimizer + versions) -> stale
   while (q.step()) {
-    ResultRow row{q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)),
-                  q.column_int(3), q.column_text(4), q.column_text(5), stored_results_versions(q.column_text(6)),
-                  q.column_int(7), format_loss(q.column_double(8))};
+    ResultRow row{q.column_text(0),
+                  q.column_text(1),
+                  static_cast<int>(q.column_int(2)),
+                  q.column_int(3),
+                  q.column_text(4),
+                  q.column_text(5),
+                  stored_results_versions(q.column_text(6)),
+                  q.column_int(7),
+                  format_loss(q.column_double(8))};
     const auto at = std::make_pair(row.env, row.optimizer + "\n" + q.column_text(6));
     auto it = stale_of.find(at);
     if (it == stale_of.end())
@@ -100,8 +109,8 @@ ResultTable read_result_table(Database& db, bool include_stale) {
 std::string stale_note(const ResultTable& table, bool included) {
   if (table.stale.empty()) return {};
   std::string text = (included ? "included " : "left out ") + std::to_string(table.stale_runs()) +
-                     " stale done runs (made by other results versions" +
-                     (included ? ", marked stale = 1" : "; --include-stale shows them") + "):";
+      " stale done runs (made by other results versions" +
+      (included ? ", marked stale = 1" : "; --include-stale shows them") + "):";
   for (std::size_t i = 0; i < table.stale.size(); ++i) {
     const auto& s = table.stale[i];
     text += (i ? "; " : " ") + s.env + " / " + s.optimizer + ": " + std::to_string(s.runs) + " (" + s.reason + ")";
@@ -153,8 +162,7 @@ std::vector<ResultRow> read_result_csv(const std::string& path) {
   }
   std::stable_sort(rows.begin(), rows.end(), row_less);
   for (std::size_t i = 1; i < rows.size(); ++i)
-    if (!row_less(rows[i - 1], rows[i]))
-      throw BaselineError("baseline '" + path + "': duplicate row " + rows[i].csv());
+    if (!row_less(rows[i - 1], rows[i])) throw BaselineError("baseline '" + path + "': duplicate row " + rows[i].csv());
   return rows;
 }
 
@@ -186,16 +194,18 @@ TableDiff compare_tables(const std::vector<ResultRow>& baseline, const std::vect
 }
 
 void print_diff(const TableDiff& d, std::ostream& out, std::size_t limit) {
-  out << "check: " << d.equal << " rows equal, " << d.changed.size() << " changed, " << d.missing.size()
-      << " missing, " << d.added.size() << " added\n";
+  out << "check: " << d.equal << " rows equal, " << d.changed.size() << " changed, " << d.missing.size() << " missing, "
+      << d.added.size() << " added\n";
   if (!d.changed.empty()) {
     out << "changed (baseline -> now):\n";
     for (std::size_t k = 0; k < std::min(limit, d.changed.size()); ++k) {
       const auto& [b, c] = d.changed[k];
-      out << "  " << b.env << " " << b.optimizer << " seed " << b.seed << " budget " << b.budget
-          << " episode " << b.episode << ": loss " << b.loss << " -> " << c.loss;
-      if (b.env_config_hash != c.env_config_hash) out << ", env config " << b.env_config_hash << " -> " << c.env_config_hash;
-      if (b.opt_config_hash != c.opt_config_hash) out << ", optimizer config " << b.opt_config_hash << " -> " << c.opt_config_hash;
+      out << "  " << b.env << " " << b.optimizer << " seed " << b.seed << " budget " << b.budget << " episode "
+          << b.episode << ": loss " << b.loss << " -> " << c.loss;
+      if (b.env_config_hash != c.env_config_hash)
+        out << ", env config " << b.env_config_hash << " -> " << c.env_config_hash;
+      if (b.opt_config_hash != c.opt_config_hash)
+        out << ", optimizer config " << b.opt_config_hash << " -> " << c.opt_config_hash;
       if (b.versions != c.versions) out << ", results versions " << b.versions.text() << " -> " << c.versions.text();
       out << "\n";
     }

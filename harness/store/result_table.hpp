@@ -29,7 +29,7 @@ struct ResultRow {
   std::string env_config_hash, opt_config_hash;
   ResultsVersions versions;
   std::int64_t episode = 0;
-  std::string loss;  // "%.17g", or "nan" for a failed episode
+  std::string loss;    // "%.17g", or "nan" for a failed episode
   bool stale = false;  // versions not this binary's (rows of such runs are only read with include_stale)
 
   auto key() const { return std::tie(env, optimizer, seed, budget, episode); }
@@ -70,8 +70,8 @@ std::string stale_note(const ResultTable& table, bool included);
 
 struct TableDiff {
   std::vector<std::pair<ResultRow, ResultRow>> changed;  // (baseline, current)
-  std::vector<ResultRow> missing;  // in the baseline, not in the database
-  std::vector<ResultRow> added;    // in the database, not in the baseline
+  std::vector<ResultRow> missing;                        // in the baseline, not in the database
+  std::vector<ResultRow> added;                          // in the database, not in the baseline
   std::size_t equal = 0;
   bool empty() const { return changed.empty() && missing.empty() && added.empty(); }
 };

@@ -11,7 +11,8 @@ namespace dsb {
 namespace {
 
 // runs' columns of version 4, in the order a migration adds them
-const std::string kSharingColumns = R"sql(  seed_free_episodes INTEGER,   -- episodes before the optimizer's first draw (NULL: unknown)
+const std::string kSharingColumns =
+    R"sql(  seed_free_episodes INTEGER,   -- episodes before the optimizer's first draw (NULL: unknown)
   seed_free_calls INTEGER,      -- the journal entries that produced them
   shared_episodes INTEGER NOT NULL DEFAULT 0,  -- episodes replayed from another seed's run
   shared_from_seed INTEGER,     -- that run's seed
@@ -21,9 +22,9 @@ const std::string kSharingColumns = R"sql(  seed_free_episodes INTEGER,   -- epi
 // the old one). Columns added by migrations come last, so a migrated file and a new one have the
 // same column order.
 std::string runs_table_sql(const std::string& name, int version) {
-  const std::string versions_column =
-      version >= 5 ? "  results_versions TEXT NOT NULL DEFAULT '',  -- part of the run key (version 5): 'env E, optimizer O, run R'\n"
-                   : "";
+  const std::string versions_column = version >= 5
+      ? "  results_versions TEXT NOT NULL DEFAULT '',  -- part of the run key (version 5): 'env E, optimizer O, run R'\n"
+      : "";
   const std::string key = version >= 5 ? ", results_versions" : "";
   return "CREATE TABLE " + name + R"sql((
   run_id INTEGER PRIMARY KEY,
@@ -47,8 +48,9 @@ std::string runs_table_sql(const std::string& name, int version) {
   git_sha TEXT,
   host TEXT,
   diagnostics TEXT,             -- JSON {"optimizer": {...}, "objective": {...}} (version 2)
-)sql" + (version >= 4 ? kSharingColumns : std::string()) + versions_column +
-         "  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version" + key + "));\n";
+)sql" +
+      (version >= 4 ? kSharingColumns : std::string()) + versions_column +
+      "  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version" + key + "));\n";
 }
 
 // The journal of a done run's seed-free episodes (version 4): what a run of another seed replays
@@ -86,8 +88,9 @@ CREATE TABLE configs(
   hash TEXT PRIMARY KEY,
   kind TEXT NOT NULL,           -- 'env' or 'optimizer'
   json TEXT NOT NULL);          -- resolved config, canonical JSON
-)sql" + runs_table_sql("runs", kSchemaVersion) +
-         R"sql(
+)sql" +
+      runs_table_sql("runs", kSchemaVersion) +
+      R"sql(
 CREATE TABLE evals(
   run_id INTEGER NOT NULL REFERENCES runs(run_id),
   episode INTEGER NOT NULL,     -- 0-based
@@ -98,7 +101,8 @@ CREATE TABLE evals(
   failed INTEGER NOT NULL DEFAULT 0,
   metric REAL,                  -- optional second per-episode metric, NULL when none (version 2)
   PRIMARY KEY(run_id, episode)) WITHOUT ROWID;
-)sql" + kReplayTable + kPrefixTable;
+)sql" +
+      kReplayTable + kPrefixTable;
 }
 
 // One step of the chain: SQL that takes a database of version `from` to version from + 1.
@@ -121,22 +125,30 @@ std::vector<Migration> migrations() {
   };
   const std::string v4_columns = ", seed_free_episodes, seed_free_calls, shared_episodes, shared_from_seed";
   return {
-      {1, "ALTER TABLE runs ADD COLUMN diagnostics TEXT;"
-          "ALTER TABLE evals ADD COLUMN metric REAL;"},
-      {2, runs_table_sql("runs_v3", 3) + "INSERT INTO runs_v3(" + with("harness_version") + ") SELECT " +
-              with("COALESCE(harness_version, '')") + " FROM runs;"
-              "DROP TABLE runs;"
-              "ALTER TABLE runs_v3 RENAME TO runs;" + kReplayTable},
-      {3, "ALTER TABLE runs ADD COLUMN seed_free_episodes INTEGER;"
-          "ALTER TABLE runs ADD COLUMN seed_free_calls INTEGER;"
-          "ALTER TABLE runs ADD COLUMN shared_episodes INTEGER NOT NULL DEFAULT 0;"
-          "ALTER TABLE runs ADD COLUMN shared_from_seed INTEGER;" + std::string(kPrefixTable)},
+      {1,
+       "ALTER TABLE runs ADD COLUMN diagnostics TEXT;"
+       "ALTER TABLE evals ADD COLUMN metric REAL;"},
+      {2,
+       runs_table_sql("runs_v3", 3) + "INSERT INTO runs_v3(" + with("harness_version") + ") SELECT " +
+           with("COALESCE(harness_version, '')") +
+           " FROM runs;"
+           "DROP TABLE runs;"
+           "ALTER TABLE runs_v3 RENAME TO runs;" +
+           kReplayTable},
+      {3,
+       "ALTER TABLE runs ADD COLUMN seed_free_episodes INTEGER;"
+       "ALTER TABLE runs ADD COLUMN seed_free_calls INTEGER;"
+       "ALTER TABLE runs ADD COLUMN shared_episodes INTEGER NOT NULL DEFAULT 0;"
+       "ALTER TABLE runs ADD COLUMN shared_from_seed INTEGER;" +
+           std::string(kPrefixTable)},
       // 4 -> 5: the run key gains results_versions ('' in every old row: made before versions, so
       // stale for every binary that has them); the table is rebuilt as for 3, run_ids kept
-      {4, runs_table_sql("runs_v5", 5) + "INSERT INTO runs_v5(" + with("harness_version") + v4_columns +
-              ") SELECT " + with("harness_version") + v4_columns + " FROM runs;"
-              "DROP TABLE runs;"
-              "ALTER TABLE runs_v5 RENAME TO runs;"},
+      {4,
+       runs_table_sql("runs_v5", 5) + "INSERT INTO runs_v5(" + with("harness_version") + v4_columns + ") SELECT " +
+           with("harness_version") + v4_columns +
+           " FROM runs;"
+           "DROP TABLE runs;"
+           "ALTER TABLE runs_v5 RENAME TO runs;"},
   };
 }
 
@@ -145,9 +157,10 @@ std::map<std::string, std::vector<std::string>> required_columns(int version) {
   std::map<std::string, std::vector<std::string>> cols = {
       {"meta", {"key", "value"}},
       {"configs", {"hash", "kind", "json"}},
-      {"runs", {"run_id", "env", "optimizer", "seed", "budget", "env_config_hash", "opt_config_hash",
-                "rng_seed", "status", "episodes", "failed_episodes", "best_loss", "best_x", "wall_s",
-                "error", "started_at", "finished_at", "harness_version", "git_sha", "host"}},
+      {"runs", {"run_id",          "env",      "optimizer", "seed",       "budget",          "env_config_hash",
+                "opt_config_hash", "rng_seed", "status",    "episodes",   "failed_episodes", "best_loss",
+                "best_x",          "wall_s",   "error",     "started_at", "finished_at",     "harness_version",
+                "git_sha",         "host"}},
       {"evals", {"run_id", "episode", "loss", "best_loss", "used_grad", "wall_s", "failed"}},
   };
   if (version >= 2) {
@@ -165,7 +178,8 @@ std::map<std::string, std::vector<std::string>> required_columns(int version) {
 }
 
 std::set<std::string> table_names(Database& db) {
-  Statement q(db.handle(), "SELECT name FROM sqlite_master WHERE type='table' AND name NOT LIKE 'sqlite\\_%' ESCAPE '\\'");
+  Statement q(db.handle(),
+              "SELECT name FROM sqlite_master WHERE type='table' AND name NOT LIKE 'sqlite\\_%' ESCAPE '\\'");
   std::set<std::string> names;
   while (q.step()) names.insert(q.column_text(0));
   return names;
@@ -198,20 +212,18 @@ int check_schema(Database& db) {
   const auto tables = table_names(db);
   if (tables.empty()) return 0;
   if (!tables.count("meta")) not_ours(db, "it has tables but no 'meta' table");
-  if (const auto c = missing_column(db, "meta", 1); !c.empty())
-    not_ours(db, "table 'meta' has no column '" + c + "'");
+  if (const auto c = missing_column(db, "meta", 1); !c.empty()) not_ours(db, "table 'meta' has no column '" + c + "'");
 
   Statement q(db.handle(), "SELECT value FROM meta WHERE key='schema_version'");
   if (!q.step()) not_ours(db, "no meta.schema_version");
   const std::string text = q.column_text(0);
   const bool digits = !text.empty() && text.size() < 9 &&
-                      std::all_of(text.begin(), text.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
+      std::all_of(text.begin(), text.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
   const int version = digits ? std::stoi(text) : 0;
   if (version < 1) not_ours(db, "meta.schema_version is '" + text + "', not a version number");
   if (version > kSchemaVersion)
-    throw StoreError("database '" + db.path() + "' has schema_version " + text +
-                     ", newer than this harness (" + std::to_string(kSchemaVersion) +
-                     "): use a newer harness; nothing was written");
+    throw StoreError("database '" + db.path() + "' has schema_version " + text + ", newer than this harness (" +
+                     std::to_string(kSchemaVersion) + "): use a newer harness; nothing was written");
 
   for (const auto& [table, cols] : required_columns(version)) {
     if (!tables.count(table)) not_ours(db, "schema_version " + text + " but no table '" + table + "'");
@@ -248,8 +260,7 @@ void prepare_schema(Database& db) {
     while (version < kSchemaVersion) {
       const auto chain = migrations();
       const auto step = std::find_if(chain.begin(), chain.end(), [&](const Migration& m) { return m.from == version; });
-      if (step == chain.end())
-        throw StoreError("no migration from schema_version " + std::to_string(version));
+      if (step == chain.end()) throw StoreError("no migration from schema_version " + std::to_string(version));
       db.exec(step->sql);
       ++version;
     }

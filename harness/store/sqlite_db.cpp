@@ -67,8 +67,7 @@ bool Statement::step() {
 }
 
 void Statement::run() {
-  while (step()) {
-  }
+  while (step()) {}
   reset();
 }
 
@@ -96,9 +95,7 @@ std::string Statement::column_blob(int col) const {
 
 int Statement::column_type(int col) const { return sqlite3_column_type(stmt_, col); }
 
-bool Statement::column_is_null(int col) const {
-  return sqlite3_column_type(stmt_, col) == SQLITE_NULL;
-}
+bool Statement::column_is_null(int col) const { return sqlite3_column_type(stmt_, col) == SQLITE_NULL; }
 
 void check_database_path(const std::string& option, const std::string& path, bool must_exist) {
   if (path.empty()) throw UsageError(option + " must name a file, got ''");
@@ -112,7 +109,7 @@ Database::Database(const std::string& path, Mode mode) : path_(path) {
   // SQLite's open(2) of a FIFO for reading waits for a writer forever: refused before it
   refuse_special_file("database", path);
   const int flags = (mode == Mode::read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE) |
-                    (mode == Mode::write_create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
+      (mode == Mode::write_create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
   open(path, flags);
   if (mode == Mode::read_only && !readable() && !wal_has_frames(path)) {
     // A WAL database read where its -shm file cannot be made (a read-only folder or mount, a file
@@ -180,8 +177,7 @@ Transaction::~Transaction() {
   if (!done_) {
     try {
       db_.exec("ROLLBACK");
-    } catch (...) {
-    }
+    } catch (...) {}
   }
 }
 

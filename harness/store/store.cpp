@@ -40,8 +40,7 @@ void Store::refuse_if_moved() {
   try {
     Statement cp(db_.handle(), "PRAGMA wal_checkpoint(TRUNCATE)");
     complete = cp.step() && cp.column_int(0) == 0;  // busy = 0: every frame copied
-  } catch (const StoreError&) {
-  }
+  } catch (const StoreError&) {}
   const std::string now = lock_.current_path();
   const std::string was = "database '" + shown_value(path_) + "' was ";
   if (!now.empty() && complete)
@@ -56,7 +55,8 @@ void Store::refuse_if_moved() {
   } catch (const StoreError& e) {
     throw StoreError(was + (now.empty() ? "deleted" : "moved or replaced") +
                      " while this harness wrote it, and it stopped writing; a copy of what it committed could not be "
-                     "made (" + e.what() + ")");
+                     "made (" +
+                     e.what() + ")");
   }
   throw StoreError(was + (now.empty() ? "deleted" : "moved or replaced") +
                    " while this harness wrote it, and it stopped writing: a copy of everything it committed is in '" +
@@ -66,9 +66,10 @@ void Store::refuse_if_moved() {
 std::set<RunKey> Store::done_keys() {
   std::lock_guard lock(mutex_);
   std::set<RunKey> keys;
-  Statement q(db_.handle(),
-              "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, results_versions "
-              "FROM runs WHERE status='done'");
+  Statement q(
+      db_.handle(),
+      "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, results_versions "
+      "FROM runs WHERE status='done'");
   while (q.step())
     keys.insert({q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
                  q.column_text(4), q.column_text(5), q.column_text(6), stored_results_versions(q.column_text(7))});
@@ -83,8 +84,12 @@ const char* kGroupSql =
     "results_versions=?";
 
 void bind_group(Statement& st, int first, const RunKey& key) {
-  st.bind(first, key.env).bind(first + 1, key.optimizer).bind(first + 2, key.budget)
-      .bind(first + 3, key.env_config_hash).bind(first + 4, key.opt_config_hash).bind(first + 5, key.harness_version)
+  st.bind(first, key.env)
+      .bind(first + 1, key.optimizer)
+      .bind(first + 2, key.budget)
+      .bind(first + 3, key.env_config_hash)
+      .bind(first + 4, key.opt_config_hash)
+      .bind(first + 5, key.harness_version)
       .bind(first + 6, key.versions.text());
 }
 
@@ -112,12 +117,13 @@ struct Donor {
 
 Donor find_donor(Database& db, const RunKey& key) {
   Donor best;
-  Statement q(db.handle(), std::string("SELECT run_id, seed, status, seed_free_episodes, seed_free_calls, "
-                                       "(SELECT count(*) FROM evals e WHERE e.run_id=r.run_id), "
-                                       "(SELECT count(*) FROM replay j WHERE j.run_id=r.run_id), "
-                                       "(SELECT count(*) FROM prefix p WHERE p.run_id=r.run_id) "
-                                       "FROM runs r WHERE ") +
-                               kGroupSql + " AND seed<>? AND status IN ('done', 'running') ORDER BY seed");
+  Statement q(db.handle(),
+              std::string("SELECT run_id, seed, status, seed_free_episodes, seed_free_calls, "
+                          "(SELECT count(*) FROM evals e WHERE e.run_id=r.run_id), "
+                          "(SELECT count(*) FROM replay j WHERE j.run_id=r.run_id), "
+                          "(SELECT count(*) FROM prefix p WHERE p.run_id=r.run_id) "
+                          "FROM runs r WHERE ") +
+                  kGroupSql + " AND seed<>? AND status IN ('done', 'running') ORDER BY seed");
   bind_group(q, 1, key);
   q.bind(8, static_cast<std::int64_t>(key.seed));
   while (q.step()) {
@@ -155,8 +161,13 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
   Statement find(db_.handle(),
                  "SELECT run_id, status FROM runs WHERE env=? AND optimizer=? AND seed=? AND budget=? AND "
                  "env_config_hash=? AND opt_config_hash=? AND harness_version=? AND results_versions=?");
-  find.bind(1, key.env).bind(2, key.optimizer).bind(3, static_cast<std::int64_t>(key.seed)).bind(4, key.budget)
-      .bind(5, key.env_config_hash).bind(6, key.opt_config_hash).bind(7, key.harness_version)
+  find.bind(1, key.env)
+      .bind(2, key.optimizer)
+      .bind(3, static_cast<std::int64_t>(key.seed))
+      .bind(4, key.budget)
+      .bind(5, key.env_config_hash)
+      .bind(6, key.opt_config_hash)
+      .bind(7, key.harness_version)
       .bind(8, key.versions.text());
   const bool resumable = find.step() && find.column_text(1) == "running";
   if (resumable) {
@@ -199,10 +210,18 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
       git_sha=excluded.git_sha, host=excluded.host, seed_free_episodes=NULL, seed_free_calls=NULL,
       shared_episodes=0, shared_from_seed=NULL
     RETURNING run_id)sql");
-  up.bind(1, key.env).bind(2, key.optimizer).bind(3, static_cast<std::int64_t>(key.seed))
-      .bind(4, key.budget).bind(5, key.env_config_hash).bind(6, key.opt_config_hash)
-      .bind(7, std::string(seed_hex)).bind(8, utc_now()).bind(9, key.harness_version)
-      .bind(10, provenance_.git_sha).bind(11, provenance_.host).bind(12, key.versions.text());
+  up.bind(1, key.env)
+      .bind(2, key.optimizer)
+      .bind(3, static_cast<std::int64_t>(key.seed))
+      .bind(4, key.budget)
+      .bind(5, key.env_config_hash)
+      .bind(6, key.opt_config_hash)
+      .bind(7, std::string(seed_hex))
+      .bind(8, utc_now())
+      .bind(9, key.harness_version)
+      .bind(10, provenance_.git_sha)
+      .bind(11, provenance_.host)
+      .bind(12, key.versions.text());
   if (!up.step()) throw StoreError("sqlite: no run_id returned");
   start.run_id = up.column_int(0);
   up.reset();
@@ -218,8 +237,10 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
     if (donor.episodes > 0) {
       start.journal = read_journal(db_, donor.table, donor.run_id, donor.calls);
       if (static_cast<std::int64_t>(start.journal.size()) == donor.calls) {
-        Statement copy(db_.handle(), "INSERT INTO replay(run_id, seq, kind, input_hash, payload) SELECT ?, seq, kind, "
-                                     "input_hash, payload FROM " + donor.table + " WHERE run_id=? AND seq<?");
+        Statement copy(db_.handle(),
+                       "INSERT INTO replay(run_id, seq, kind, input_hash, payload) SELECT ?, seq, kind, "
+                       "input_hash, payload FROM " +
+                           donor.table + " WHERE run_id=? AND seq<?");
         copy.bind(1, start.run_id).bind(2, donor.run_id).bind(3, donor.calls).run();
         Statement mark(db_.handle(), "UPDATE runs SET shared_episodes=?, shared_from_seed=? WHERE run_id=?");
         mark.bind(1, donor.episodes).bind(2, static_cast<std::int64_t>(donor.seed)).bind(3, start.run_id).run();
@@ -241,9 +262,14 @@ void insert_evals(Database& db, std::int64_t run_id, std::span<const EvalRecord>
                 "INSERT OR REPLACE INTO evals(run_id, episode, loss, best_loss, used_grad, wall_s, failed, metric) "
                 "VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
   for (const auto& e : evals) {
-    ins.bind(1, run_id).bind(2, e.episode).bind(3, e.loss).bind(4, e.best_loss)
-        .bind(5, static_cast<std::int64_t>(e.used_grad)).bind(6, e.wall_s)
-        .bind(7, static_cast<std::int64_t>(std::isnan(e.loss))).bind(8, e.metric);
+    ins.bind(1, run_id)
+        .bind(2, e.episode)
+        .bind(3, e.loss)
+        .bind(4, e.best_loss)
+        .bind(5, static_cast<std::int64_t>(e.used_grad))
+        .bind(6, e.wall_s)
+        .bind(7, static_cast<std::int64_t>(std::isnan(e.loss)))
+        .bind(8, e.metric);
     ins.run();
   }
 }
@@ -260,8 +286,11 @@ void Store::append_progress(std::int64_t run_id, std::span<const EvalRecord> eva
                 "INSERT OR REPLACE INTO replay(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
   std::int64_t seq = first_seq;
   for (const auto& e : journal) {
-    ins.bind(1, run_id).bind(2, seq++).bind(3, static_cast<std::int64_t>(e.kind))
-        .bind(4, static_cast<std::int64_t>(e.input_hash)).bind_blob(5, replay_payload_bytes(e.payload));
+    ins.bind(1, run_id)
+        .bind(2, seq++)
+        .bind(3, static_cast<std::int64_t>(e.kind))
+        .bind(4, static_cast<std::int64_t>(e.input_hash))
+        .bind_blob(5, replay_payload_bytes(e.payload));
     ins.run();
   }
   Statement upd(db_.handle(), "UPDATE runs SET episodes=(SELECT count(*) FROM evals WHERE run_id=?) WHERE run_id=?");
@@ -298,20 +327,25 @@ void Store::keep_seed_free_prefix(std::int64_t run_id, const RunResult& r) {
       "o.opt_config_hash=me.opt_config_hash AND o.harness_version=me.harness_version AND "
       "o.results_versions=me.results_versions AND o.status='done' "
       "WHERE EXISTS (SELECT 1 FROM prefix p WHERE p.run_id=o.run_id)";
-  Statement longest(db_.handle(), "SELECT COALESCE(max(seed_free_calls), 0) FROM runs WHERE run_id IN (" + others + ")");
+  Statement longest(db_.handle(),
+                    "SELECT COALESCE(max(seed_free_calls), 0) FROM runs WHERE run_id IN (" + others + ")");
   longest.bind(1, run_id);
   if (longest.step() && longest.column_int(0) >= calls) return;
   // the committed journal's entries of the prefix, then those not committed yet
-  Statement copy(db_.handle(), "INSERT OR REPLACE INTO prefix(run_id, seq, kind, input_hash, payload) SELECT run_id, "
-                               "seq, kind, input_hash, payload FROM replay WHERE run_id=? AND seq<?");
+  Statement copy(db_.handle(),
+                 "INSERT OR REPLACE INTO prefix(run_id, seq, kind, input_hash, payload) SELECT run_id, "
+                 "seq, kind, input_hash, payload FROM replay WHERE run_id=? AND seq<?");
   copy.bind(1, run_id).bind(2, calls).run();
   Statement ins(db_.handle(),
                 "INSERT OR REPLACE INTO prefix(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
   std::int64_t seq = r.journal_tail_first_seq;
   for (const auto& e : r.journal_tail) {
     if (seq >= calls) break;
-    ins.bind(1, run_id).bind(2, seq++).bind(3, static_cast<std::int64_t>(e.kind))
-        .bind(4, static_cast<std::int64_t>(e.input_hash)).bind_blob(5, replay_payload_bytes(e.payload));
+    ins.bind(1, run_id)
+        .bind(2, seq++)
+        .bind(3, static_cast<std::int64_t>(e.kind))
+        .bind(4, static_cast<std::int64_t>(e.input_hash))
+        .bind_blob(5, replay_payload_bytes(e.payload));
     ins.run();
   }
   Statement count(db_.handle(), "SELECT count(*) FROM prefix WHERE run_id=?");
@@ -321,8 +355,9 @@ void Store::keep_seed_free_prefix(std::int64_t run_id, const RunResult& r) {
   count.reset();
   // a prefix with a gap (a journal lost to an older harness) is not kept; a whole one replaces
   // the group's shorter ones
-  Statement drop(db_.handle(), whole ? "DELETE FROM prefix WHERE run_id IN (" + others + ")"
-                                     : std::string("DELETE FROM prefix WHERE run_id=?"));
+  Statement drop(
+      db_.handle(),
+      whole ? "DELETE FROM prefix WHERE run_id IN (" + others + ")" : std::string("DELETE FROM prefix WHERE run_id=?"));
   drop.bind(1, run_id).run();
 }
 

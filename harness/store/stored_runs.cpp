@@ -13,13 +13,18 @@ namespace {
 // or older): 8 columns, in RunKey's order
 std::string key_columns(int version) {
   return std::string("env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, ") +
-         (version >= 5 ? "results_versions" : "''");
+      (version >= 5 ? "results_versions" : "''");
 }
 
 RunKey read_key(const Statement& q, int first) {
-  return {q.column_text(first),     q.column_text(first + 1), static_cast<int>(q.column_int(first + 2)),
-          q.column_int(first + 3),  q.column_text(first + 4), q.column_text(first + 5),
-          q.column_text(first + 6), stored_results_versions(q.column_text(first + 7))};
+  return {q.column_text(first),
+          q.column_text(first + 1),
+          static_cast<int>(q.column_int(first + 2)),
+          q.column_int(first + 3),
+          q.column_text(first + 4),
+          q.column_text(first + 5),
+          q.column_text(first + 6),
+          stored_results_versions(q.column_text(first + 7))};
 }
 
 // a results file that does not exist yet reads as none: every answer empty
@@ -50,9 +55,10 @@ std::map<RunKey, std::string> StoredRuns::with_status(const std::string& status)
 std::map<std::string, std::int64_t> StoredRuns::kept_prefixes() const {
   std::map<std::string, std::int64_t> kept;
   if (version_ < 4) return kept;
-  Statement q(db_->handle(), "SELECT " + key_columns(version_) +
-                                 ", seed_free_episodes FROM runs r WHERE status='done' AND seed_free_episodes > 0 AND "
-                                 "EXISTS (SELECT 1 FROM prefix p WHERE p.run_id=r.run_id)");
+  Statement q(db_->handle(),
+              "SELECT " + key_columns(version_) +
+                  ", seed_free_episodes FROM runs r WHERE status='done' AND seed_free_episodes > 0 AND "
+                  "EXISTS (SELECT 1 FROM prefix p WHERE p.run_id=r.run_id)");
   while (q.step()) {
     std::int64_t& e = kept[read_key(q, 0).group()];
     e = std::max(e, q.column_int(8));
@@ -63,8 +69,9 @@ std::map<std::string, std::int64_t> StoredRuns::kept_prefixes() const {
 std::map<std::string, double> StoredRuns::measured_walls() const {
   std::map<std::string, std::vector<double>> by_group;
   if (version_ == 0) return {};
-  Statement q(db_->handle(), "SELECT " + key_columns(version_) + ", wall_s FROM runs WHERE status='done' AND wall_s > 0" +
-                                 (version_ >= 4 ? " AND shared_episodes = 0" : ""));
+  Statement q(db_->handle(),
+              "SELECT " + key_columns(version_) + ", wall_s FROM runs WHERE status='done' AND wall_s > 0" +
+                  (version_ >= 4 ? " AND shared_episodes = 0" : ""));
   while (q.step()) by_group[read_key(q, 0).group()].push_back(q.column_double(8));
   std::map<std::string, double> walls;
   for (auto& [group, w] : by_group) {
@@ -78,8 +85,9 @@ std::map<std::string, double> StoredRuns::measured_walls() const {
 std::vector<StaleRuns> StoredRuns::stale(const std::set<std::pair<std::string, std::string>>& pairs) const {
   std::map<std::string, StaleRuns> by_reason;
   if (version_ == 0) return {};
-  Statement q(db_->handle(), std::string("SELECT env, optimizer, ") + (version_ >= 5 ? "results_versions" : "''") +
-                                 ", status, count(*) FROM runs GROUP BY 1, 2, 3, 4 ORDER BY 1, 2, 3, 4");
+  Statement q(db_->handle(),
+              std::string("SELECT env, optimizer, ") + (version_ >= 5 ? "results_versions" : "''") +
+                  ", status, count(*) FROM runs GROUP BY 1, 2, 3, 4 ORDER BY 1, 2, 3, 4");
   while (q.step()) {
     const std::string env = q.column_text(0), optimizer = q.column_text(1);
     if (!pairs.empty() && !pairs.count({env, optimizer})) continue;

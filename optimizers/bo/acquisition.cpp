@@ -18,14 +18,12 @@ namespace dsb {
 void LcbConfig::validate(const std::string& owner) const {
   if (!(beta >= 0.0 && std::isfinite(beta))) throw ConfigError(owner, "beta", "must be finite and >= 0");
   if (raw_samples < 1) throw ConfigError(owner, "raw_samples", "must be >= 1");
-  if (restarts < 1 || restarts > raw_samples)
-    throw ConfigError(owner, "restarts", "must be in 1..raw_samples");
+  if (restarts < 1 || restarts > raw_samples) throw ConfigError(owner, "restarts", "must be in 1..raw_samples");
   if (max_evaluations < 1) throw ConfigError(owner, "max_evaluations", "must be >= 1");
 }
 
 nlohmann::json LcbConfig::to_json() const {
-  return {{"beta", beta}, {"raw_samples", raw_samples}, {"restarts", restarts},
-          {"max_evaluations", max_evaluations}};
+  return {{"beta", beta}, {"raw_samples", raw_samples}, {"restarts", restarts}, {"max_evaluations", max_evaluations}};
 }
 
 double lcb(const GaussianProcess& gp, double beta, const Eigen::VectorXd& u, Eigen::VectorXd* grad) {

@@ -12,10 +12,10 @@
 namespace dsb {
 
 struct LcbConfig {
-  double beta = 1.0;          // LCB exploration weight: alpha = sqrt(beta) = 1 (paper)
-  int raw_samples = 512;      // Sobol points scored before refinement (BoTorch tutorials: 512)
-  int restarts = 5;           // best raw samples refined by L-BFGS (chosen here; tutorials: 10)
-  int max_evaluations = 60;   // L-BFGS evaluations per restart (chosen here)
+  double beta = 1.0;         // LCB exploration weight: alpha = sqrt(beta) = 1 (paper)
+  int raw_samples = 512;     // Sobol points scored before refinement (BoTorch tutorials: 512)
+  int restarts = 5;          // best raw samples refined by L-BFGS (chosen here; tutorials: 10)
+  int max_evaluations = 60;  // L-BFGS evaluations per restart (chosen here)
   void validate(const std::string& owner) const;
   nlohmann::json to_json() const;
 };

@@ -19,9 +19,12 @@ void BoConfig::validate() const {
 }
 
 nlohmann::json BoConfig::to_json() const {
-  return {{"initial_points", initial_points}, {"initial_design", "scrambled Sobol"},
-          {"refit_every_until", refit_every_until}, {"refit_growth", refit_growth},
-          {"lcb", lcb.to_json()}, {"gp", gp.to_json()}};
+  return {{"initial_points", initial_points},
+          {"initial_design", "scrambled Sobol"},
+          {"refit_every_until", refit_every_until},
+          {"refit_growth", refit_growth},
+          {"lcb", lcb.to_json()},
+          {"gp", gp.to_json()}};
 }
 
 int BoConfig::initial_points_for(int dim) const {
@@ -72,8 +75,8 @@ void BoSurrogate::add(const Eigen::VectorXd& x, double loss, Rng& rng, bool defe
   }
   if (defer_fit) return;
   const int n = size();
-  const bool refit_now = n <= cfg_.refit_every_until ||
-                         n >= static_cast<int>(std::ceil((1.0 + cfg_.refit_growth) * last_fit_n_));
+  const bool refit_now =
+      n <= cfg_.refit_every_until || n >= static_cast<int>(std::ceil((1.0 + cfg_.refit_growth) * last_fit_n_));
   if (refit_now || factored_n_ != n - 1) {
     refit(rng);
   } else {

@@ -16,7 +16,7 @@
 namespace dsb {
 
 struct BoConfig {
-  int initial_points = 0;  // 0 = clamp(d + 1, 5, 20) (chosen here)
+  int initial_points = 0;      // 0 = clamp(d + 1, 5, 20) (chosen here)
   int refit_every_until = 50;  // refit after every point up to this many points
   double refit_growth = 0.1;   // then refit when n >= (1 + growth) n_last_fit
   LcbConfig lcb;

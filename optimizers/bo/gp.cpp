@@ -40,7 +40,7 @@ constexpr double kLog2Pi = 1.83787706640934548356;
 constexpr double kFailedObjective = -1e10;  // fit objective when no factorization succeeds
 constexpr int kJitterTries = 3;             // 1e-8, 1e-7, 1e-6 (times the outputscale)
 constexpr double kJitterBase = 1e-8;
-constexpr int kBlock = 48;                  // base size of the recursive triangular kernels
+constexpr int kBlock = 48;  // base size of the recursive triangular kernels
 
 // fit box on theta (see the file comment)
 constexpr double kLogLengthscaleMin = -6.907755278982137, kLogLengthscaleMax = 6.907755278982137;
@@ -152,7 +152,7 @@ void trtri_lower(Eigen::Ref<Eigen::MatrixXd> A) {
   auto Q = A.bottomLeftCorner(n2, n1);
   auto R = A.bottomRightCorner(n2, n2);
   trtri_lower(P);
-  Q = Q * P.triangularView<Eigen::Lower>();   // Q P^-1
+  Q = Q * P.triangularView<Eigen::Lower>();          // Q P^-1
   R.triangularView<Eigen::Lower>().solveInPlace(Q);  // R^-1 Q P^-1
   Q = -Q;
   trtri_lower(R);
@@ -384,8 +384,10 @@ void GaussianProcess::refactor() {
   kernel_lower(scaled_columns(X_, hyper_.lengthscales), hyper_.outputscale, K, nullptr);
   jitter_ = factor_with_jitter(K, hyper_.outputscale, hyper_.noise, L);
   if (std::isnan(jitter_))
-    throw std::runtime_error("gp: Cholesky factorization of the kernel matrix failed with jitter up to 1e-6 x "
-                             "outputscale (n = " + std::to_string(n) + ")");
+    throw std::runtime_error(
+        "gp: Cholesky factorization of the kernel matrix failed with jitter up to 1e-6 x "
+        "outputscale (n = " +
+        std::to_string(n) + ")");
   z_ = y_std_.array() - hyper_.mean;
   L.triangularView<Eigen::Lower>().solveInPlace(z_);
   alpha_ = z_;
@@ -470,8 +472,8 @@ double GaussianProcess::fit_objective(const Eigen::VectorXd& theta, Eigen::Vecto
   Eigen::VectorXd g = Eigen::VectorXd::Zero(d + 3);
   double value = 0.0;
   for (int i = 0; i < d; ++i)
-    value += log_gamma_density(h.lengthscales[i], cfg_.lengthscale_prior_concentration,
-                               cfg_.lengthscale_prior_rate, &g[i]);
+    value +=
+        log_gamma_density(h.lengthscales[i], cfg_.lengthscale_prior_concentration, cfg_.lengthscale_prior_rate, &g[i]);
   value += log_gamma_density(s, cfg_.outputscale_prior_concentration, cfg_.outputscale_prior_rate, &g[d]);
   {
     const double k = cfg_.noise_prior_concentration, rate = cfg_.noise_prior_rate;
@@ -517,7 +519,7 @@ double GaussianProcess::fit_objective(const Eigen::VectorXd& theta, Eigen::Vecto
       gn += 0.5 * wbb;
       for (int a = b + 1; a < n; ++a) {
         const double w = alpha[a] * ab - kinv[a];
-        gs += w * kb[a];  // s dK/ds = K (off the diagonal)
+        gs += w * kb[a];    // s dK/ds = K (off the diagonal)
         gb[a] = w * gb[a];  // l_i dk/dl_i = gneg ((a_i - b_i) / l_i)^2
       }
     }
@@ -564,8 +566,7 @@ GpFitStarts GaussianProcess::begin_fit(Rng& rng) {
     GpHyperparameters start = hyper_;
     if (attempt > 0) {  // draw from the priors; rng order: lengthscales, outputscale, noise
       for (int i = 0; i < d; ++i)
-        start.lengthscales[i] =
-            sample_gamma(rng, cfg_.lengthscale_prior_concentration, cfg_.lengthscale_prior_rate);
+        start.lengthscales[i] = sample_gamma(rng, cfg_.lengthscale_prior_concentration, cfg_.lengthscale_prior_rate);
       start.outputscale = sample_gamma(rng, cfg_.outputscale_prior_concentration, cfg_.outputscale_prior_rate);
       start.noise =
           std::max(sample_gamma(rng, cfg_.noise_prior_concentration, cfg_.noise_prior_rate), cfg_.noise_floor);
@@ -701,7 +702,7 @@ void GaussianProcess::predict(const Eigen::VectorXd& x, double* mean, double* va
 
   thread_local std::vector<double> buf_xs, buf_k, buf_g, buf_w;
   Eigen::Map<Eigen::VectorXd> xs(scratch(buf_xs, d), d);
-  Eigen::Map<Eigen::VectorXd> k(scratch(buf_k, n), n);  // k(X, x), then v = L^-1 k
+  Eigen::Map<Eigen::VectorXd> k(scratch(buf_k, n), n);                          // k(X, x), then v = L^-1 k
   Eigen::Map<Eigen::VectorXd> g(scratch(buf_g, grads ? n : 0), grads ? n : 0);  // -(dk/dr) / r
   xs = x.cwiseQuotient(hyper_.lengthscales);
   if (grads) {

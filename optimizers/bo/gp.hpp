@@ -112,8 +112,8 @@ class GaussianProcess {
   // With non-null gradients, also d mean / dx and d variance / dx (d); d variance is 0 where the
   // floor is active. Cost O(n d) for the mean, + n^2 / 2 for the variance (one triangular solve),
   // + n^2 / 2 for d variance (a second one). Without data: the prior.
-  void predict(const Eigen::VectorXd& x, double* mean, double* variance,
-               Eigen::VectorXd* dmean = nullptr, Eigen::VectorXd* dvariance = nullptr) const;
+  void predict(const Eigen::VectorXd& x, double* mean, double* variance, Eigen::VectorXd* dmean = nullptr,
+               Eigen::VectorXd* dvariance = nullptr) const;
 
   // The lower Cholesky factor of K + noise I (n x n), for tests: an O(n^2) copy out of the
   // growable storage, refreshed by each call (so not safe to call from two threads at once).
@@ -127,26 +127,26 @@ class GaussianProcess {
   GpConfig cfg_;
   GpHyperparameters hyper_;
   // implementation state: data, standardization, factor, alpha
-  Eigen::MatrixXd X_;   // (n x d)
-  Eigen::MatrixXd Xs_;  // (d x n) inputs divided by the lengthscales, one point per column
+  Eigen::MatrixXd X_;              // (n x d)
+  Eigen::MatrixXd Xs_;             // (d x n) inputs divided by the lengthscales, one point per column
   Eigen::VectorXd y_raw_, y_std_;  // (n) original and standardized outputs
   double y_mean_ = 0.0, y_scale_ = 1.0;
   // lower Cholesky factor of K + (noise + jitter) I: the top-left n x n block of Lbuf_, whose
   // spare capacity lets add_point grow it without moving the factor (only the lower part is kept)
-  Eigen::MatrixXd Lbuf_;        // (capacity x capacity)
-  mutable Eigen::MatrixXd L_;   // (n x n) copy made by cholesky(), upper part 0
-  Eigen::VectorXd z_;      // L^-1 (y_std - mean) (n), extended in O(n) by add_point
-  Eigen::VectorXd alpha_;  // (K + noise I)^-1 (y_std - mean) = L^-T z (n)
-  double jitter_ = 0.0;    // diagonal jitter of the current factor (0 when the plain one worked)
+  Eigen::MatrixXd Lbuf_;       // (capacity x capacity)
+  mutable Eigen::MatrixXd L_;  // (n x n) copy made by cholesky(), upper part 0
+  Eigen::VectorXd z_;          // L^-1 (y_std - mean) (n), extended in O(n) by add_point
+  Eigen::VectorXd alpha_;      // (K + noise I)^-1 (y_std - mean) = L^-T z (n)
+  double jitter_ = 0.0;        // diagonal jitter of the current factor (0 when the plain one worked)
   int n_ = 0;
   std::uint64_t inputs_digest_ = 0;  // FNV-1a over X_'s rows in order (set_data, add_point)
   int fit_failures_ = 0;
   mutable std::int64_t likelihood_evaluations_ = 0;
   mutable double likelihood_n3_ = 0.0;
-  void standardize();   // y_mean_, y_scale_, y_std_ from y_raw_
+  void standardize();                                                    // y_mean_, y_scale_, y_std_ from y_raw_
   void fit_box(std::vector<double>& lb, std::vector<double>& ub) const;  // the fit's box on theta
-  void rescale_inputs();  // Xs_ from X_ and the lengthscales
-  void refactor();      // factor, jitter_, z_, alpha_ from Xs_, y_std_ and hyper_ (jitter ladder)
+  void rescale_inputs();                                                 // Xs_ from X_ and the lengthscales
+  void refactor();                       // factor, jitter_, z_, alpha_ from Xs_, y_std_ and hyper_ (jitter ladder)
   void reserve_factor(int n, int keep);  // capacity of Lbuf_ >= n, keeping the top-left keep x keep
 };
 

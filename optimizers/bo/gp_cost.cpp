@@ -15,7 +15,7 @@ void for_each_fit(int dim, std::int64_t budget, const BoConfig& cfg, Fn&& fn) {
   std::int64_t last_fit = 0;
   for (std::int64_t n = first; n <= budget; ++n) {
     const bool fit = n == first || n <= cfg.refit_every_until ||
-                     n >= static_cast<std::int64_t>(std::ceil((1.0 + cfg.refit_growth) * static_cast<double>(last_fit)));
+        n >= static_cast<std::int64_t>(std::ceil((1.0 + cfg.refit_growth) * static_cast<double>(last_fit)));
     if (!fit) continue;
     fn(static_cast<double>(n));
     last_fit = n;
@@ -49,7 +49,7 @@ double bo_own_seconds(int dim, std::int64_t budget, const BoConfig& cfg) {
     n2 += n * n;
   });
   return kBoEvaluationsPerFit * (kBoSecondsPerN3 * n3 + kBoSecondsPerN2D * n2 * dim) +
-         bo_acquisition_seconds(dim, budget, cfg);
+      bo_acquisition_seconds(dim, budget, cfg);
 }
 
 namespace {
@@ -59,7 +59,8 @@ namespace {
 template <class Fn>
 void for_each_leap_fit(int dim, std::int64_t budget, int episodes_per_leap, const BoConfig& cfg, Fn&& fn) {
   const std::int64_t first = std::min<std::int64_t>(cfg.initial_points_for(dim), budget);
-  for (std::int64_t n = first; n == first || n < budget; n += std::max(1, episodes_per_leap)) fn(static_cast<double>(n));
+  for (std::int64_t n = first; n == first || n < budget; n += std::max(1, episodes_per_leap))
+    fn(static_cast<double>(n));
 }
 
 }  // namespace

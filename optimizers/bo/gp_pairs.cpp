@@ -3,7 +3,6 @@
 
 #include <cstddef>
 
-
 namespace dsb::gp_pairs {
 
 // gp_pairs_sse2.cpp, gp_pairs_avx.cpp

@@ -13,8 +13,6 @@ void AdamConfig::validate(const std::string& owner) const {
   if (!(eps > 0.0)) throw ConfigError(owner, "eps", "must be > 0");
 }
 
-nlohmann::json AdamConfig::to_json() const {
-  return {{"lr", lr}, {"beta1", beta1}, {"beta2", beta2}, {"eps", eps}};
-}
+nlohmann::json AdamConfig::to_json() const { return {{"lr", lr}, {"beta1", beta1}, {"beta2", beta2}, {"eps", eps}}; }
 
 }  // namespace dsb

@@ -23,9 +23,9 @@ nlohmann::json summarize(std::vector<T> values) {
   std::sort(values.begin(), values.end());
   const std::size_t n = values.size();
   // median: middle value, or the mean of the two middle values
-  const double median = n % 2 == 1 ? static_cast<double>(values[n / 2])
-                                   : 0.5 * (static_cast<double>(values[n / 2 - 1]) +
-                                            static_cast<double>(values[n / 2]));
+  const double median = n % 2 == 1
+      ? static_cast<double>(values[n / 2])
+      : 0.5 * (static_cast<double>(values[n / 2 - 1]) + static_cast<double>(values[n / 2]));
   s["min"] = values.front();
   s["median"] = median;
   s["max"] = values.back();

@@ -51,9 +51,12 @@ void KnobTable::apply(const KnobSettings& settings) const {
       **i = v;
     } else {
       bool* b = std::get<bool*>(it->second);
-      if (text == "true" || text == "1") *b = true;
-      else if (text == "false" || text == "0") *b = false;
-      else throw bad("true or false");
+      if (text == "true" || text == "1")
+        *b = true;
+      else if (text == "false" || text == "0")
+        *b = false;
+      else
+        throw bad("true or false");
     }
   }
 }

@@ -18,9 +18,9 @@ struct BudgetExhausted {};
 // decision may cover fewer), so an episode has at most `decisions` of them.
 struct RlSpec {
   int observation_dim = 0;
-  int action_dim = 0;       // actions in [-1, 1]^action_dim
-  int action_repeat = 1;    // env steps per decision
-  int decisions = 0;        // ceil(env horizon / action_repeat)
+  int action_dim = 0;     // actions in [-1, 1]^action_dim
+  int action_repeat = 1;  // env steps per decision
+  int decisions = 0;      // ceil(env horizon / action_repeat)
 };
 
 // What one decision returns. When `done`, the episode has been recorded as one budget unit and

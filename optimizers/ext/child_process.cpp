@@ -132,8 +132,7 @@ void ChildProcess::stop_watchdog() {
   }
   if (watchdog_pid_ > 0) {
     int status = 0;
-    while (::waitpid(watchdog_pid_, &status, 0) < 0 && errno == EINTR) {
-    }
+    while (::waitpid(watchdog_pid_, &status, 0) < 0 && errno == EINTR) {}
   }
   watchdog_pid_ = -1;
 }
@@ -319,8 +318,7 @@ std::optional<int> ChildProcess::wait_exit(Clock::time_point deadline) {
     if (r == 0 && info.si_pid == pid_) {
       unregister_group(slot_);
       int status = 0;
-      while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-      }
+      while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {}
       reaped_ = true;
       status_ = status;
       return status_;
@@ -339,8 +337,7 @@ void ChildProcess::kill() {
     ::kill(-pid_, SIGKILL);  // the group: the shell and what it started
     ::kill(pid_, SIGKILL);
     int status = 0;
-    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-    }
+    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {}
     reaped_ = true;
     status_ = status;
   }

@@ -64,7 +64,7 @@ class ChildProcess {
   // the last bytes of stderr, one line (newlines shown as " | "), at most max_chars
   std::string stderr_tail(std::size_t max_chars = 400) const;
 
-  static constexpr std::size_t kMaxLine = 256u << 20;   // 256 MiB: a 400-D batch of 10^4 gradients fits
+  static constexpr std::size_t kMaxLine = 256u << 20;    // 256 MiB: a 400-D batch of 10^4 gradients fits
   static constexpr std::size_t kStderrKeep = 16u << 10;  // bytes of stderr kept
 
  private:
@@ -87,10 +87,10 @@ class ChildProcess {
   bool reaped_ = false;
   int status_ = 0;
   int in_ = -1, out_fd_ = -1, err_fd_ = -1;  // our ends (in_ a socket: writes never raise SIGPIPE)
-  std::string out_;                           // stdout read but not yet returned as lines
-  std::size_t scanned_ = 0;                   // out_[0, scanned_) holds no '\n'
-  std::string err_;                           // the stderr tail
-  std::string_view pending_;                  // input still to write
+  std::string out_;                          // stdout read but not yet returned as lines
+  std::size_t scanned_ = 0;                  // out_[0, scanned_) holds no '\n'
+  std::string err_;                          // the stderr tail
+  std::string_view pending_;                 // input still to write
   bool too_long_ = false;
 };
 

@@ -142,7 +142,8 @@ class Conversation {
     switch (child_->write(line, deadline())) {
       case ChildProcess::Io::ok: return true;
       case ChildProcess::Io::closed: return false;
-      case ChildProcess::Io::timeout: fail("did not read its input within the timeout of " + seconds_text(spec_.timeout_s));
+      case ChildProcess::Io::timeout:
+        fail("did not read its input within the timeout of " + seconds_text(spec_.timeout_s));
     }
     return false;
   }
@@ -229,23 +230,35 @@ class ExtOptimizer : public Optimizer {
   // it is told in the hello whether gradients exist; it may run on any env
   bool needs_gradient() const override { return false; }
   Json config() const override {
-    return {{"protocol", kExtProtocol}, {"command", spec_.command}, {"name", spec_.reported_name},
+    return {{"protocol", kExtProtocol},
+            {"command", spec_.command},
+            {"name", spec_.reported_name},
             {"version", spec_.version}};
   }
   Json diagnostics() const override { return diag_; }
 
   void minimize(Objective& f, Rng& /*rng: the program seeds itself from the hello*/) override {
-    diag_ = {{"name", spec_.reported_name}, {"version", spec_.version}, {"asks", 0}, {"grad_asks", 0},
-             {"points", 0}, {"largest_ask", 0}, {"end", "failed"}};
+    diag_ = {{"name", spec_.reported_name},
+             {"version", spec_.version},
+             {"asks", 0},
+             {"grad_asks", 0},
+             {"points", 0},
+             {"largest_ask", 0},
+             {"end", "failed"}};
     Conversation c(spec_, name_ + ": ");
     const int d = f.dim();
-    c.send({{"protocol", kExtProtocol}, {"env", env_}, {"dim", d}, {"lower", std::vector<double>(d, -1.0)},
-            {"upper", std::vector<double>(d, 1.0)}, {"budget", f.budget()}, {"gradient", f.has_gradient()},
+    c.send({{"protocol", kExtProtocol},
+            {"env", env_},
+            {"dim", d},
+            {"lower", std::vector<double>(d, -1.0)},
+            {"upper", std::vector<double>(d, 1.0)},
+            {"budget", f.budget()},
+            {"gradient", f.has_gradient()},
             {"seed", seed_}});
     const auto [name, version] = c.receive_hello();
     if (name != spec_.reported_name || version != spec_.version)
-      c.fail("reports itself as " + name + " " + version + ", but the plan's probe saw " + spec_.reported_name +
-             " " + spec_.version + " (results of two versions would mix)");
+      c.fail("reports itself as " + name + " " + version + ", but the plan's probe saw " + spec_.reported_name + " " +
+             spec_.version + " (results of two versions would mix)");
 
     std::vector<double> xs, losses, grads;
     for (;;) {
@@ -335,8 +348,8 @@ class ExtOptimizer : public Optimizer {
                std::to_string(d) + ")");
       for (std::size_t j = 0; j < xs.size(); ++j)
         if (!(xs[j] >= -1.0 && xs[j] <= 1.0))
-          c.fail("point " + std::to_string(j / d) + " of the ask has x[" + std::to_string(j % d) + "] = " +
-                 number_text(xs[j]) + ", outside the box [-1, 1]");
+          c.fail("point " + std::to_string(j / d) + " of the ask has x[" + std::to_string(j % d) +
+                 "] = " + number_text(xs[j]) + ", outside the box [-1, 1]");
       return grad;
     }
     xs.reserve(ask.size() * static_cast<std::size_t>(d));
@@ -345,7 +358,8 @@ class ExtOptimizer : public Optimizer {
       if (!p.is_array() || p.size() != static_cast<std::size_t>(d))
         c.fail("point " + std::to_string(k) + " of the ask is not a list of " + std::to_string(d) + " numbers");
       for (std::size_t i = 0; i < p.size(); ++i) {
-        if (!p[i].is_number()) c.fail("point " + std::to_string(k) + " of the ask has a non-number x[" + std::to_string(i) + "]");
+        if (!p[i].is_number())
+          c.fail("point " + std::to_string(k) + " of the ask has a non-number x[" + std::to_string(i) + "]");
         const double v = p[i].get<double>();
         if (!(v >= -1.0 && v <= 1.0))
           c.fail("point " + std::to_string(k) + " of the ask has x[" + std::to_string(i) + "] = " + number_text(v) +

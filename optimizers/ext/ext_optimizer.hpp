@@ -16,8 +16,8 @@ inline constexpr double kExtDefaultTimeoutS = 60.0;
 
 // one `--ext NAME=COMMAND`, with what the program said of itself when probed (ext_probe)
 struct ExtOptimizerSpec {
-  std::string name;      // NAME of ext:NAME
-  std::string command;   // run with /bin/sh -c
+  std::string name;                        // NAME of ext:NAME
+  std::string command;                     // run with /bin/sh -c
   double timeout_s = kExtDefaultTimeoutS;  // per reply (not in the config: it changes no result)
   std::string reported_name, version;      // from the probe's hello; part of the config
 };

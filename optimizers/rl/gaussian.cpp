@@ -26,9 +26,8 @@ void check_optional(const char* who, std::size_t d, std::span<double> out) {
 
 }  // namespace
 
-double diag_gaussian_log_prob(std::span<const double> a, std::span<const double> mean,
-                              std::span<const double> log_std, std::span<double> d_mean,
-                              std::span<double> d_log_std) {
+double diag_gaussian_log_prob(std::span<const double> a, std::span<const double> mean, std::span<const double> log_std,
+                              std::span<double> d_mean, std::span<double> d_log_std) {
   const std::size_t d = mean.size();
   check_sizes("diag_gaussian_log_prob", d, {a.size(), log_std.size()});
   check_optional("diag_gaussian_log_prob", d, d_mean);
@@ -102,16 +101,14 @@ SquashedGaussian squashed_gaussian(std::span<const double> mean, std::span<const
   return r;
 }
 
-SquashedGaussian squashed_gaussian_sample(std::span<const double> mean,
-                                          std::span<const double> log_std, Rng& rng) {
+SquashedGaussian squashed_gaussian_sample(std::span<const double> mean, std::span<const double> log_std, Rng& rng) {
   std::vector<double> e(mean.size());
   for (double& x : e) x = rng.normal();
   return squashed_gaussian(mean, log_std, e);
 }
 
-void squashed_gaussian_backward(const SquashedGaussian& s, std::span<const double> d_a,
-                                double d_log_prob, std::span<double> d_mean,
-                                std::span<double> d_log_std) {
+void squashed_gaussian_backward(const SquashedGaussian& s, std::span<const double> d_a, double d_log_prob,
+                                std::span<double> d_mean, std::span<double> d_log_std) {
   const std::size_t d = s.a.size();
   check_sizes("squashed_gaussian_backward", d, {d_a.size()});
   check_optional("squashed_gaussian_backward", d, d_mean);
@@ -119,8 +116,7 @@ void squashed_gaussian_backward(const SquashedGaussian& s, std::span<const doubl
   // dL/dm = dL/da da/dm + dL/dlogpi dlogpi/dm (and the same for log_std)
   for (std::size_t i = 0; i < d; ++i) {
     if (!d_mean.empty()) d_mean[i] = d_a[i] * s.da_dmean[i] + d_log_prob * s.dlogp_dmean[i];
-    if (!d_log_std.empty())
-      d_log_std[i] = d_a[i] * s.da_dlog_std[i] + d_log_prob * s.dlogp_dlog_std[i];
+    if (!d_log_std.empty()) d_log_std[i] = d_a[i] * s.da_dlog_std[i] + d_log_prob * s.dlogp_dlog_std[i];
   }
 }
 

@@ -15,16 +15,14 @@ namespace dsb {
 
 // log N(a; mean, diag(exp(log_std))^2) = sum_i [-(a_i - m_i)^2 / (2 s_i^2) - log_std_i - log(2 pi)/2]
 // d/dm_i = (a_i - m_i) / s_i^2,  d/dlog_std_i = (a_i - m_i)^2 / s_i^2 - 1.   All spans d long.
-double diag_gaussian_log_prob(std::span<const double> a, std::span<const double> mean,
-                              std::span<const double> log_std, std::span<double> d_mean = {},
-                              std::span<double> d_log_std = {});
+double diag_gaussian_log_prob(std::span<const double> a, std::span<const double> mean, std::span<const double> log_std,
+                              std::span<double> d_mean = {}, std::span<double> d_log_std = {});
 
 // entropy = sum_i [1/2 + log(2 pi)/2 + log_std_i];  d/dlog_std_i = 1
 double diag_gaussian_entropy(std::span<const double> log_std, std::span<double> d_log_std = {});
 
 // a = mean + exp(log_std) * e, e_i = rng.normal() for i = 0 .. d-1
-void diag_gaussian_sample(std::span<const double> mean, std::span<const double> log_std, Rng& rng,
-                          std::span<double> a);
+void diag_gaussian_sample(std::span<const double> mean, std::span<const double> log_std, Rng& rng, std::span<double> a);
 
 // ---- tanh-squashed Gaussian (SAC) ------------------------------------------------------------
 
@@ -44,11 +42,11 @@ inline constexpr double kSquashEpsilon = 1e-6;  // SB3 SquashedDiagGaussianDistr
 // interval). The Gaussian term's total derivative is 0 in m and -1 in ls: the explicit
 // (u - m)/s^2 and the path through u cancel.
 struct SquashedGaussian {
-  std::vector<double> eps;             // e (d), the standard normal draw
-  std::vector<double> u;               // pre-squash action (d)
-  std::vector<double> a;               // action tanh(u) in (-1, 1) (d)
-  double log_prob = 0.0;               // log pi(a)
-  std::vector<double> da_dmean, da_dlog_std;      // (d)
+  std::vector<double> eps;                          // e (d), the standard normal draw
+  std::vector<double> u;                            // pre-squash action (d)
+  std::vector<double> a;                            // action tanh(u) in (-1, 1) (d)
+  double log_prob = 0.0;                            // log pi(a)
+  std::vector<double> da_dmean, da_dlog_std;        // (d)
   std::vector<double> dlogp_dmean, dlogp_dlog_std;  // (d)
 };
 
@@ -56,13 +54,11 @@ struct SquashedGaussian {
 SquashedGaussian squashed_gaussian(std::span<const double> mean, std::span<const double> log_std,
                                    std::span<const double> eps);
 // with e_i = rng.normal(), i = 0 .. d-1
-SquashedGaussian squashed_gaussian_sample(std::span<const double> mean,
-                                          std::span<const double> log_std, Rng& rng);
+SquashedGaussian squashed_gaussian_sample(std::span<const double> mean, std::span<const double> log_std, Rng& rng);
 
 // Chain rule for a loss L(a, log pi) (SAC actor: L = alpha log pi - Q(s, a), so d_log_prob = alpha
 // and d_a = -dQ/da): writes dL/dm_i = d_a_i da_i/dm_i + d_log_prob dlogpi/dm_i and likewise dL/dlog_std_i.
-void squashed_gaussian_backward(const SquashedGaussian& s, std::span<const double> d_a,
-                                double d_log_prob, std::span<double> d_mean,
-                                std::span<double> d_log_std);
+void squashed_gaussian_backward(const SquashedGaussian& s, std::span<const double> d_a, double d_log_prob,
+                                std::span<double> d_mean, std::span<double> d_log_std);
 
 }  // namespace dsb

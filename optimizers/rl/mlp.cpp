@@ -11,12 +11,10 @@ namespace dsb {
 
 const char* to_string(Activation a) { return a == Activation::tanh ? "tanh" : "relu"; }
 
-Mlp::Mlp(std::vector<int> sizes, Activation activation)
-    : sizes_(std::move(sizes)), activation_(activation) {
+Mlp::Mlp(std::vector<int> sizes, Activation activation) : sizes_(std::move(sizes)), activation_(activation) {
   if (sizes_.size() < 2) throw ConfigError("mlp", "sizes", "needs at least {in, out}");
   for (std::size_t l = 0; l < sizes_.size(); ++l)
-    if (sizes_[l] < 1)
-      throw ConfigError("mlp", "sizes", "entry " + std::to_string(l) + " must be >= 1");
+    if (sizes_[l] < 1) throw ConfigError("mlp", "sizes", "entry " + std::to_string(l) + " must be >= 1");
   // offsets: per layer W_l (n_{l+1} n_l) then b_l (n_{l+1})
   std::size_t n = 0;
   for (int l = 0; l < layer_count(); ++l) {
@@ -29,15 +27,9 @@ Mlp::Mlp(std::vector<int> sizes, Activation activation)
 Eigen::Map<const Eigen::MatrixXd> Mlp::weight(int l) const {
   return {params_.data() + weight_offset(l), sizes_[l + 1], sizes_[l]};
 }
-Eigen::Map<const Eigen::VectorXd> Mlp::bias(int l) const {
-  return {params_.data() + bias_offset(l), sizes_[l + 1]};
-}
-Eigen::Map<Eigen::MatrixXd> Mlp::weight(int l) {
-  return {params_.data() + weight_offset(l), sizes_[l + 1], sizes_[l]};
-}
-Eigen::Map<Eigen::VectorXd> Mlp::bias(int l) {
-  return {params_.data() + bias_offset(l), sizes_[l + 1]};
-}
+Eigen::Map<const Eigen::VectorXd> Mlp::bias(int l) const { return {params_.data() + bias_offset(l), sizes_[l + 1]}; }
+Eigen::Map<Eigen::MatrixXd> Mlp::weight(int l) { return {params_.data() + weight_offset(l), sizes_[l + 1], sizes_[l]}; }
+Eigen::Map<Eigen::VectorXd> Mlp::bias(int l) { return {params_.data() + bias_offset(l), sizes_[l + 1]}; }
 
 namespace {
 
@@ -62,8 +54,7 @@ void axpy_sum(double* y, const double* const* x, const double* a, int terms, Eig
 }
 
 // z = W x + b (z: rows x batch); z(i, b) = b_i + sum_k W(i, k) x(k, b), k increasing
-void affine(const double* w, const double* bias, int rows, int cols, const Eigen::MatrixXd& x,
-            Eigen::MatrixXd& z) {
+void affine(const double* w, const double* bias, int rows, int cols, const Eigen::MatrixXd& x, Eigen::MatrixXd& z) {
   const Eigen::Index batch = x.cols();
   z.resize(rows, batch);
   std::vector<const double*> wcols(cols);  // column k of W
@@ -77,8 +68,7 @@ void affine(const double* w, const double* bias, int rows, int cols, const Eigen
 
 // dx = W^T dz (cols x batch); dx(k, b) = sum_i W(i, k) dz(i, b), i increasing. Computed on the
 // transposes so the inner loop runs over contiguous samples (same order of the sum).
-void affine_input_grad(const double* w, int rows, int cols, const Eigen::MatrixXd& dz,
-                       Eigen::MatrixXd& dx) {
+void affine_input_grad(const double* w, int rows, int cols, const Eigen::MatrixXd& dz, Eigen::MatrixXd& dx) {
   const Eigen::Index batch = dz.cols();
   const Eigen::MatrixXd dzt = dz.transpose();  // batch x rows
   std::vector<const double*> dcols(rows);      // row i of dz, contiguous in dzt
@@ -106,8 +96,8 @@ void affine_param_grad(const Eigen::MatrixXd& delta, const Eigen::MatrixXd& a, d
 
 Eigen::MatrixXd Mlp::forward(const Eigen::MatrixXd& x, MlpCache* cache) const {
   if (x.rows() != in_dim())
-    throw std::invalid_argument("mlp forward: input has " + std::to_string(x.rows()) +
-                                " rows, the network takes " + std::to_string(in_dim()));
+    throw std::invalid_argument("mlp forward: input has " + std::to_string(x.rows()) + " rows, the network takes " +
+                                std::to_string(in_dim()));
   const int L = layer_count();
   if (cache) {
     cache->act.resize(L);
@@ -116,8 +106,7 @@ Eigen::MatrixXd Mlp::forward(const Eigen::MatrixXd& x, MlpCache* cache) const {
   Eigen::MatrixXd a = x, z;
   for (int l = 0; l < L; ++l) {
     // z_l = W_l a_l + b_l   (n_{l+1} x batch)
-    affine(params_.data() + weight_offset(l), params_.data() + bias_offset(l), sizes_[l + 1],
-           sizes_[l], a, z);
+    affine(params_.data() + weight_offset(l), params_.data() + bias_offset(l), sizes_[l + 1], sizes_[l], a, z);
     if (l == L - 1) break;  // linear output layer
     // a_{l+1} = f(z_l), f = tanh or relu
     if (activation_ == Activation::tanh)
@@ -130,9 +119,7 @@ Eigen::MatrixXd Mlp::forward(const Eigen::MatrixXd& x, MlpCache* cache) const {
   return z;
 }
 
-Eigen::VectorXd Mlp::forward_one(const Eigen::VectorXd& x) const {
-  return forward(Eigen::MatrixXd(x)).col(0);
-}
+Eigen::VectorXd Mlp::forward_one(const Eigen::VectorXd& x) const { return forward(Eigen::MatrixXd(x)).col(0); }
 
 void Mlp::backward(const MlpCache& cache, const Eigen::MatrixXd& dy, std::span<double> grad,
                    Eigen::MatrixXd* dx) const {
@@ -141,8 +128,8 @@ void Mlp::backward(const MlpCache& cache, const Eigen::MatrixXd& dy, std::span<d
     throw std::invalid_argument("mlp backward: the cache is not from a forward pass of this network");
   const Eigen::Index batch = cache.act[0].cols();
   if (dy.rows() != out_dim() || dy.cols() != batch)
-    throw std::invalid_argument("mlp backward: dy must be out x batch (" + std::to_string(out_dim()) +
-                                " x " + std::to_string(batch) + ")");
+    throw std::invalid_argument("mlp backward: dy must be out x batch (" + std::to_string(out_dim()) + " x " +
+                                std::to_string(batch) + ")");
   if (!grad.empty() && grad.size() != params_.size())
     throw std::invalid_argument("mlp backward: grad must be empty or hold param_count() values");
 
@@ -151,8 +138,7 @@ void Mlp::backward(const MlpCache& cache, const Eigen::MatrixXd& dy, std::span<d
     const int rows = sizes_[l + 1], cols = sizes_[l];
     const Eigen::MatrixXd& a = cache.act[l];  // input of layer l (cols x batch)
     // dL/dW_l += delta a_l^T, dL/db_l += delta 1
-    if (!grad.empty())
-      affine_param_grad(delta, a, grad.data() + weight_offset(l), grad.data() + bias_offset(l));
+    if (!grad.empty()) affine_param_grad(delta, a, grad.data() + weight_offset(l), grad.data() + bias_offset(l));
     if (l == 0 && !dx) break;
     // dL/da_l = W_l^T delta   (cols x batch)
     affine_input_grad(params_.data() + weight_offset(l), rows, cols, delta, da);

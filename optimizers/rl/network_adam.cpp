@@ -14,8 +14,9 @@ NetworkAdam::NetworkAdam(const AdamConfig& cfg, std::size_t dim) : dim_(dim), ad
 
 void NetworkAdam::step(std::span<double> p, std::span<const double> g) {
   if (p.size() != dim_ || g.size() != dim_)
-    throw std::invalid_argument("NetworkAdam::step: parameters and gradient must have the dimension "
-                                "given at construction");
+    throw std::invalid_argument(
+        "NetworkAdam::step: parameters and gradient must have the dimension "
+        "given at construction");
   adam_.step_unbounded(p, g);
 }
 

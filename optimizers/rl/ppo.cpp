@@ -22,7 +22,8 @@ void require(bool ok, const char* field, const std::string& why) {
 }  // namespace
 
 void PpoConfig::validate() const {
-  require(std::isfinite(learning_rate) && learning_rate > 0.0, "learning_rate", "must be > 0, got " + number_text(learning_rate));
+  require(std::isfinite(learning_rate) && learning_rate > 0.0, "learning_rate",
+          "must be > 0, got " + number_text(learning_rate));
   require(n_steps >= 1, "n_steps", "must be >= 1, got " + std::to_string(n_steps));
   require(batch_size >= 1 && batch_size <= n_steps, "batch_size",
           "must be in 1..n_steps, got " + std::to_string(batch_size));
@@ -32,7 +33,8 @@ void PpoConfig::validate() const {
   require(std::isfinite(clip_range) && clip_range > 0.0, "clip_range", "must be > 0, got " + number_text(clip_range));
   require(std::isfinite(ent_coef) && ent_coef >= 0.0, "ent_coef", "must be >= 0, got " + number_text(ent_coef));
   require(std::isfinite(vf_coef) && vf_coef >= 0.0, "vf_coef", "must be >= 0, got " + number_text(vf_coef));
-  require(std::isfinite(max_grad_norm) && max_grad_norm > 0.0, "max_grad_norm", "must be > 0, got " + number_text(max_grad_norm));
+  require(std::isfinite(max_grad_norm) && max_grad_norm > 0.0, "max_grad_norm",
+          "must be > 0, got " + number_text(max_grad_norm));
   require(std::isfinite(adam_eps) && adam_eps > 0.0, "adam_eps", "must be > 0, got " + number_text(adam_eps));
   require(std::isfinite(log_std_init), "log_std_init", "must be finite, got " + number_text(log_std_init));
   require(!hidden.empty() && std::all_of(hidden.begin(), hidden.end(), [](int h) { return h >= 1; }), "hidden",
@@ -41,13 +43,23 @@ void PpoConfig::validate() const {
 }
 
 nlohmann::json PpoConfig::to_json() const {
-  nlohmann::json j = {{"learning_rate", learning_rate}, {"n_steps", n_steps}, {"batch_size", batch_size},
-          {"n_epochs", n_epochs},           {"gamma", gamma},     {"gae_lambda", gae_lambda},
-          {"clip_range", clip_range},       {"ent_coef", ent_coef}, {"vf_coef", vf_coef},
-          {"max_grad_norm", max_grad_norm}, {"adam_eps", adam_eps}, {"log_std_init", log_std_init},
-          {"hidden", hidden},               {"activation", "tanh"},
-          {"networks", "separate policy and value MLPs"},
-          {"reward", "sparse: -episode loss at the last decision; failed episode: -2 x largest finite loss so far"}};
+  nlohmann::json j = {
+      {"learning_rate", learning_rate},
+      {"n_steps", n_steps},
+      {"batch_size", batch_size},
+      {"n_epochs", n_epochs},
+      {"gamma", gamma},
+      {"gae_lambda", gae_lambda},
+      {"clip_range", clip_range},
+      {"ent_coef", ent_coef},
+      {"vf_coef", vf_coef},
+      {"max_grad_norm", max_grad_norm},
+      {"adam_eps", adam_eps},
+      {"log_std_init", log_std_init},
+      {"hidden", hidden},
+      {"activation", "tanh"},
+      {"networks", "separate policy and value MLPs"},
+      {"reward", "sparse: -episode loss at the last decision; failed episode: -2 x largest finite loss so far"}};
   // the failed-episode loss enters only when it is not the default, so the default config (and
   // every run key made with it) is the one it always was
   const FailedEpisodeLoss standard = PpoConfig{}.failed_loss;
@@ -214,7 +226,8 @@ class Ppo : public Optimizer {
           obs.swap(next_obs);
         }
         // the value of where the rollout stopped (unused after a finished episode)
-        const double last_value = open ? nets.value.forward_one(Eigen::Map<const Eigen::VectorXd>(obs.data(), O))(0) : 0.0;
+        const double last_value =
+            open ? nets.value.forward_one(Eigen::Map<const Eigen::VectorXd>(obs.data(), O))(0) : 0.0;
         compute_gae(reward_buf, value_buf, done_buf, last_value, cfg_.gamma, cfg_.gae_lambda, adv, ret);
         update(nets, adam_pi, adam_v, adam_ls, obs_buf, act_buf, logp_buf, adv, ret, order, grad, batch, rng);
       }
@@ -225,8 +238,6 @@ class Ppo : public Optimizer {
   }
 
  private:
-
-
   void update(PpoNetworks& nets, NetworkAdam& adam_pi, NetworkAdam& adam_v, NetworkAdam& adam_ls,
               const Eigen::MatrixXd& obs_buf, const Eigen::MatrixXd& act_buf, const std::vector<double>& logp_buf,
               const std::vector<double>& adv, const std::vector<double>& ret, std::vector<int>& order,
@@ -273,8 +284,10 @@ class Ppo : public Optimizer {
     diag_["observations_sanitized"] = obs_sanitized_;
     diag_["policy_hash"] = params_digest({nets.policy.params(), nets.value.params(), nets.log_std});
     diag_["log_std"] = nets.log_std;
-    diag_["last_update"] = {{"policy_loss", last_.policy_loss}, {"value_loss", last_.value_loss},
-                            {"clip_fraction", last_.clip_fraction}, {"approx_kl", last_.approx_kl}};
+    diag_["last_update"] = {{"policy_loss", last_.policy_loss},
+                            {"value_loss", last_.value_loss},
+                            {"clip_fraction", last_.clip_fraction},
+                            {"approx_kl", last_.approx_kl}};
   }
 
   static constexpr int kBlock = 20;  // episodes per point of the learning curve

@@ -37,8 +37,8 @@ namespace dsb {
 
 struct PpoConfig {
   double learning_rate = 3e-4;
-  int n_steps = 2048;      // decisions per rollout
-  int batch_size = 64;     // minibatch
+  int n_steps = 2048;   // decisions per rollout
+  int batch_size = 64;  // minibatch
   int n_epochs = 10;
   double gamma = 0.99;
   double gae_lambda = 0.95;
@@ -77,8 +77,8 @@ void compute_gae(std::span<const double> rewards, std::span<const double> values
 
 // A minibatch of B decisions.
 struct PpoBatch {
-  Eigen::MatrixXd observations;  // (observation_dim x B)
-  Eigen::MatrixXd actions;       // (action_dim x B), as sampled (unclipped)
+  Eigen::MatrixXd observations;                           // (observation_dim x B)
+  Eigen::MatrixXd actions;                                // (action_dim x B), as sampled (unclipped)
   std::vector<double> old_log_prob, advantages, returns;  // (B)
 };
 

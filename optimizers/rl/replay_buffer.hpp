@@ -20,9 +20,9 @@ namespace dsb {
 
 // one sampled batch, one column (or entry) per transition
 struct ReplayBatch {
-  Eigen::MatrixXd obs;       // obs_dim x batch
-  Eigen::MatrixXd action;    // action_dim x batch
-  Eigen::MatrixXd next_obs;  // obs_dim x batch
+  Eigen::MatrixXd obs;               // obs_dim x batch
+  Eigen::MatrixXd action;            // action_dim x batch
+  Eigen::MatrixXd next_obs;          // obs_dim x batch
   std::vector<double> reward, done;  // batch each; done is 0 or 1
 };
 
@@ -46,8 +46,8 @@ class ReplayBuffer {
   int obs_dim() const { return obs_dim_; }
   int action_dim() const { return action_dim_; }
 
-  void add(std::span<const double> obs, std::span<const double> action, double reward,
-           std::span<const double> next_obs, bool done) {
+  void add(std::span<const double> obs, std::span<const double> action, double reward, std::span<const double> next_obs,
+           bool done) {
     if (obs.size() != std::size_t(obs_dim_) || next_obs.size() != std::size_t(obs_dim_) ||
         action.size() != std::size_t(action_dim_))
       throw std::invalid_argument("replay buffer: transition has the wrong dimensions");

@@ -14,7 +14,8 @@ namespace dsb {
 
 void require_rl_view(const Objective& f, const std::string& optimizer) {
   if (!f.has_rl())
-    throw UsageError(optimizer + " needs an env with an RL view (`harness list`, column rl), and this objective has none");
+    throw UsageError(optimizer +
+                     " needs an env with an RL view (`harness list`, column rl), and this objective has none");
 }
 
 std::vector<int> mlp_layer_sizes(int in, const std::vector<int>& hidden, int out) {

@@ -53,8 +53,8 @@ class EpisodeLosses {
   std::int64_t episodes_ = 0, failed_ = 0;
   bool any_finite_ = false;
   double worst_finite_ = 0.0;
-  std::vector<double> block_sum_;       // sum of finite losses per block
-  std::vector<std::int64_t> block_n_;   // finite episodes per block
+  std::vector<double> block_sum_;      // sum of finite losses per block
+  std::vector<std::int64_t> block_n_;  // finite episodes per block
 };
 
 // Observations of a blown-up simulation may be NaN, infinite or huge, which would make every

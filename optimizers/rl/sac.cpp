@@ -97,8 +97,8 @@ void Sac::minimize(Objective& f, Rng& rng) {
   buffer_capacity_ = static_cast<std::size_t>(std::min(cfg_.buffer_size, std::max<std::int64_t>(can_fill, 1)));
   buffer_ = std::make_unique<ReplayBuffer>(buffer_capacity_, obs_dim_, act_dim_);
   // the learning curve: at most kDiagnosticsListCap blocks over the remaining budget
-  episodes_ = EpisodeLosses(cfg_.failed_loss(), (remaining + std::int64_t(kDiagnosticsListCap) - 1) /
-                                                    std::int64_t(kDiagnosticsListCap));
+  episodes_ = EpisodeLosses(cfg_.failed_loss(),
+                            (remaining + std::int64_t(kDiagnosticsListCap) - 1) / std::int64_t(kDiagnosticsListCap));
 
   std::vector<double> obs(obs_dim_), next_obs(obs_dim_), action(act_dim_);
   Eigen::VectorXd x(obs_dim_);
@@ -113,8 +113,9 @@ void Sac::minimize(Objective& f, Rng& rng) {
       } else {
         for (int i = 0; i < obs_dim_; ++i) x[i] = obs[i];
         const Eigen::VectorXd out = actor_->forward_one(x);
-        const SquashedGaussian g = squashed_gaussian_sample(std::span<const double>(out.data(), act_dim_),
-                                                           std::span<const double>(out.data() + act_dim_, act_dim_), rng);
+        const SquashedGaussian g =
+            squashed_gaussian_sample(std::span<const double>(out.data(), act_dim_),
+                                     std::span<const double>(out.data() + act_dim_, act_dim_), rng);
         for (int i = 0; i < act_dim_; ++i) action[i] = g.a[i];
         for (double a : action)
           if (!(a >= -1.0 && a <= 1.0)) throw std::runtime_error("sac: the policy diverged (non-finite action)");
@@ -168,22 +169,25 @@ void Sac::train(Rng& rng, int gradient_steps) {
     actor_adam_->step(actor_->params(), actor_grad_);
     // target critics
     if (step % cfg_.target_update_interval == 0)
-      for (std::size_t k = 0; k < critics_.size(); ++k) polyak_update(targets_[k].params(), critics_[k].params(), cfg_.tau);
+      for (std::size_t k = 0; k < critics_.size(); ++k)
+        polyak_update(targets_[k].params(), critics_[k].params(), cfg_.tau);
     ++gradient_steps_;
   }
 }
 
 nlohmann::json Sac::diagnostics() const {
-  nlohmann::json d = {{"timesteps", timesteps_},
-                      {"gradient_steps", gradient_steps_},
-                      {"buffer_capacity", buffer_capacity_},
-                      {"observations_sanitized", obs_sanitized_},
-                      {"alpha", actor_ ? nlohmann::json(dm::exp(log_alpha_)) : nlohmann::json(nullptr)},
-                      {"target_entropy", target_entropy_},
-                      {"last_critic_loss", std::isfinite(last_critic_loss_) ? nlohmann::json(last_critic_loss_) : nlohmann::json(nullptr)},
-                      {"last_actor_loss", std::isfinite(last_actor_loss_) ? nlohmann::json(last_actor_loss_) : nlohmann::json(nullptr)},
-                      {"last_alpha_loss", std::isfinite(last_alpha_loss_) ? nlohmann::json(last_alpha_loss_) : nlohmann::json(nullptr)},
-                      {"policy_hash", actor_ ? nlohmann::json(params_digest({actor_->params()})) : nlohmann::json(nullptr)}};
+  nlohmann::json d = {
+      {"timesteps", timesteps_},
+      {"gradient_steps", gradient_steps_},
+      {"buffer_capacity", buffer_capacity_},
+      {"observations_sanitized", obs_sanitized_},
+      {"alpha", actor_ ? nlohmann::json(dm::exp(log_alpha_)) : nlohmann::json(nullptr)},
+      {"target_entropy", target_entropy_},
+      {"last_critic_loss",
+       std::isfinite(last_critic_loss_) ? nlohmann::json(last_critic_loss_) : nlohmann::json(nullptr)},
+      {"last_actor_loss", std::isfinite(last_actor_loss_) ? nlohmann::json(last_actor_loss_) : nlohmann::json(nullptr)},
+      {"last_alpha_loss", std::isfinite(last_alpha_loss_) ? nlohmann::json(last_alpha_loss_) : nlohmann::json(nullptr)},
+      {"policy_hash", actor_ ? nlohmann::json(params_digest({actor_->params()})) : nlohmann::json(nullptr)}};
   episodes_.put_diagnostics(d);
   return d;
 }
@@ -192,7 +196,8 @@ nlohmann::json Sac::diagnostics() const {
 
 void SacConfig::validate() const {
   auto pos_finite = [](double v) { return v > 0.0 && std::isfinite(v); };
-  if (!pos_finite(learning_rate)) bad("learning_rate", "must be a finite number > 0 (got " + number_text(learning_rate) + ")");
+  if (!pos_finite(learning_rate))
+    bad("learning_rate", "must be a finite number > 0 (got " + number_text(learning_rate) + ")");
   if (!pos_finite(adam_eps)) bad("adam_eps", "must be a finite number > 0 (got " + number_text(adam_eps) + ")");
   if (buffer_size < 1) bad("buffer_size", "must be >= 1 (got " + std::to_string(buffer_size) + ")");
   if (learning_starts < 0) bad("learning_starts", "must be >= 0 (got " + std::to_string(learning_starts) + ")");
@@ -207,7 +212,8 @@ void SacConfig::validate() const {
   if (net_arch.empty()) bad("net_arch", "must list at least one hidden layer");
   for (int h : net_arch)
     if (h < 1) bad("net_arch", "layer sizes must be >= 1 (got " + std::to_string(h) + ")");
-  if (!pos_finite(ent_coef_init)) bad("ent_coef_init", "must be a finite number > 0 (got " + number_text(ent_coef_init) + ")");
+  if (!pos_finite(ent_coef_init))
+    bad("ent_coef_init", "must be a finite number > 0 (got " + number_text(ent_coef_init) + ")");
   // the floor is also the stand-in before any finite loss, so it must be > 0
   if (!pos_finite(failed_loss_floor))
     bad("failed_loss_floor", "must be a finite number > 0 (got " + number_text(failed_loss_floor) + ")");

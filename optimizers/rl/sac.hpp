@@ -60,21 +60,21 @@
 namespace dsb {
 
 struct SacConfig {
-  double learning_rate = 3e-4;           // actor, critics, entropy coefficient (SB3)
-  double adam_eps = 1e-8;                // torch default
-  std::int64_t buffer_size = 1000000;    // SB3
-  int learning_starts = 100;             // SB3
-  int batch_size = 256;                  // SB3
-  double tau = 0.005;                    // SB3
-  double gamma = 0.99;                   // SB3
-  int train_freq = 1;                    // steps between trainings (SB3: 1 step)
-  int gradient_steps = 1;                // per training (SB3)
-  int target_update_interval = 1;        // SB3
-  int n_critics = 2;                     // SB3
+  double learning_rate = 3e-4;               // actor, critics, entropy coefficient (SB3)
+  double adam_eps = 1e-8;                    // torch default
+  std::int64_t buffer_size = 1000000;        // SB3
+  int learning_starts = 100;                 // SB3
+  int batch_size = 256;                      // SB3
+  double tau = 0.005;                        // SB3
+  double gamma = 0.99;                       // SB3
+  int train_freq = 1;                        // steps between trainings (SB3: 1 step)
+  int gradient_steps = 1;                    // per training (SB3)
+  int target_update_interval = 1;            // SB3
+  int n_critics = 2;                         // SB3
   std::vector<int> net_arch = {64, 64, 64};  // the seed (SB3: [256, 256])
-  double ent_coef_init = 1.0;            // SB3 "auto": initial alpha
-  double failed_loss_factor = 2.0;       // penalty for a failed episode (chosen here)
-  double failed_loss_floor = 1.0;        // ... at least this loss, and this loss before any finite one
+  double ent_coef_init = 1.0;                // SB3 "auto": initial alpha
+  double failed_loss_factor = 2.0;           // penalty for a failed episode (chosen here)
+  double failed_loss_floor = 1.0;            // ... at least this loss, and this loss before any finite one
   FailedEpisodeLoss failed_loss() const { return {failed_loss_factor, failed_loss_floor, failed_loss_floor}; }
   // throws ConfigError naming the field
   void validate() const;

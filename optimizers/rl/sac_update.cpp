@@ -27,8 +27,9 @@ double sac_alpha_loss(double log_alpha, std::span<const double> log_prob, double
 SacActorPass sac_actor_pass(const Mlp& actor, const Eigen::MatrixXd& obs, const Eigen::MatrixXd& eps) {
   const int d = actor.out_dim() / 2;
   if (actor.out_dim() != 2 * d || eps.rows() != d || eps.cols() != obs.cols())
-    throw std::invalid_argument("sac_actor_pass: the actor must output 2 action_dim values and eps be "
-                                "action_dim x batch");
+    throw std::invalid_argument(
+        "sac_actor_pass: the actor must output 2 action_dim values and eps be "
+        "action_dim x batch");
   SacActorPass p;
   const Eigen::MatrixXd out = actor.forward(obs, &p.cache);
   const Eigen::Index n = obs.cols();
@@ -65,9 +66,8 @@ std::vector<double> sac_min_q(const std::vector<Mlp>& critics, const Eigen::Matr
   return m;
 }
 
-double sac_critic_loss(const std::vector<Mlp>& critics, const Eigen::MatrixXd& obs,
-                       const Eigen::MatrixXd& action, std::span<const double> y,
-                       std::vector<std::vector<double>>* grads) {
+double sac_critic_loss(const std::vector<Mlp>& critics, const Eigen::MatrixXd& obs, const Eigen::MatrixXd& action,
+                       std::span<const double> y, std::vector<std::vector<double>>* grads) {
   const Eigen::MatrixXd x = sac_critic_input(obs, action);
   const Eigen::Index n = x.cols();
   if (y.size() != std::size_t(n)) throw std::invalid_argument("sac_critic_loss: y must hold one value per sample");

@@ -33,10 +33,10 @@ double sac_alpha_loss_grad(std::span<const double> log_prob, double target_entro
 // One reparameterised actor pass on a batch: out = actor(obs), per column j a squashed Gaussian
 // draw at the given noise eps.col(j) (action_dim x batch).
 struct SacActorPass {
-  MlpCache cache;                        // of actor.forward(obs)
-  std::vector<SquashedGaussian> draws;   // one per sample
-  Eigen::MatrixXd actions;               // action_dim x batch, tanh-squashed
-  std::vector<double> log_prob;          // batch
+  MlpCache cache;                       // of actor.forward(obs)
+  std::vector<SquashedGaussian> draws;  // one per sample
+  Eigen::MatrixXd actions;              // action_dim x batch, tanh-squashed
+  std::vector<double> log_prob;         // batch
 };
 SacActorPass sac_actor_pass(const Mlp& actor, const Eigen::MatrixXd& obs, const Eigen::MatrixXd& eps);
 
@@ -49,9 +49,8 @@ std::vector<double> sac_min_q(const std::vector<Mlp>& critics, const Eigen::Matr
 
 // Critic loss 0.5 sum_k mean_j (Q_k(s_j, a_j) - y_j)^2 (SB3: 0.5 * sum of F.mse_loss). When grads
 // is given (one vector of param_count() per critic), ADDS dLoss/dparams of critic k to (*grads)[k].
-double sac_critic_loss(const std::vector<Mlp>& critics, const Eigen::MatrixXd& obs,
-                       const Eigen::MatrixXd& action, std::span<const double> y,
-                       std::vector<std::vector<double>>* grads = nullptr);
+double sac_critic_loss(const std::vector<Mlp>& critics, const Eigen::MatrixXd& obs, const Eigen::MatrixXd& action,
+                       std::span<const double> y, std::vector<std::vector<double>>* grads = nullptr);
 
 // Actor loss mean_j (alpha log pi_j - min_k Q_k(s_j, a_j)) for the actions and log pi of `pass`
 // (made by sac_actor_pass on the same obs). When grad is non-empty, ADDS dLoss/d(actor params)

@@ -33,8 +33,8 @@ namespace dsb::perf {
 struct AllocationCounter {
   long long start = g_allocations.load();
   void report(benchmark::State& state) const {
-    state.counters["allocs/rollout"] = benchmark::Counter(
-        static_cast<double>(g_allocations.load() - start) / static_cast<double>(state.iterations()));
+    state.counters["allocs/rollout"] =
+        benchmark::Counter(static_cast<double>(g_allocations.load() - start) / static_cast<double>(state.iterations()));
   }
 };
 

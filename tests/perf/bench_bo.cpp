@@ -198,7 +198,9 @@ int main(int argc, char** argv) {
         std::printf("ratio (same run): %s at n = 1000, d = 400, scalar / sse2 = %.2f%s\n", kernel, scalar / sse2,
                     avx > 0 ? (", scalar / avx = " + std::to_string(scalar / avx)).c_str() : "");
     }
-    for (const char* name : {"BM_FullBoRun1000Rastrigin10/iterations:1", "BM_FullBoleapRun1000Rastrigin10/iterations:1"})
-      if (rep.seconds(name) > 0) std::printf("%s: %.1f s (targets: bo < 300 s, boleap < 60 s)\n", name, rep.seconds(name));
+    for (const char* name :
+         {"BM_FullBoRun1000Rastrigin10/iterations:1", "BM_FullBoleapRun1000Rastrigin10/iterations:1"})
+      if (rep.seconds(name) > 0)
+        std::printf("%s: %.1f s (targets: bo < 300 s, boleap < 60 s)\n", name, rep.seconds(name));
   });
 }

@@ -105,8 +105,7 @@ BENCHMARK(BM_GdRun1000EpisodesCartpole3)->Unit(benchmark::kMillisecond);
 
 int main(int argc, char** argv) {
   return dsb::perf::run_benchmarks(argc, argv, [&](const dsb::perf::TimingReporter& reporter) {
-    const double fwd = reporter.seconds("BM_Cartpole3Forward"),
-                 grad = reporter.seconds("BM_Cartpole3ForwardGradient"),
+    const double fwd = reporter.seconds("BM_Cartpole3Forward"), grad = reporter.seconds("BM_Cartpole3ForwardGradient"),
                  fresh = reporter.seconds("BM_Cartpole3ForwardGradientFreshWorkspace"),
                  fd = reporter.seconds("BM_Cartpole3CentralDifferences"),
                  gd = reporter.seconds("BM_GdRun1000EpisodesCartpole3");

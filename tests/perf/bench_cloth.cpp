@@ -26,9 +26,13 @@ namespace {
 using namespace dsb;
 
 const std::vector<std::string>& tasks() {
-  static const std::vector<std::string> names = {
-      "swing-stiffness-single", "swing-stiffness-corner", "swing-stiffness-mesh", "swing-velocity-single",
-      "swing-velocity-corner",  "swing-velocity-mesh",    "flip"};
+  static const std::vector<std::string> names = {"swing-stiffness-single",
+                                                 "swing-stiffness-corner",
+                                                 "swing-stiffness-mesh",
+                                                 "swing-velocity-single",
+                                                 "swing-velocity-corner",
+                                                 "swing-velocity-mesh",
+                                                 "flip"};
   return names;
 }
 
@@ -53,12 +57,8 @@ void episodes(benchmark::State& state, const std::string& env_name, Kind kind) {
   std::vector<double> g(x.size());
   for (auto _ : state) {
     switch (kind) {
-      case Kind::forward:
-        benchmark::DoNotOptimize(env->loss(x, *ws, team));
-        break;
-      case Kind::gradient:
-        benchmark::DoNotOptimize(env->loss_and_grad(x, g, *ws, team));
-        break;
+      case Kind::forward: benchmark::DoNotOptimize(env->loss(x, *ws, team)); break;
+      case Kind::gradient: benchmark::DoNotOptimize(env->loss_and_grad(x, g, *ws, team)); break;
       case Kind::central_difference:
         // (L(x + h e_i) - L(x - h e_i)) / 2h for every i
         for (std::size_t i = 0; i < x.size(); ++i) {
@@ -121,8 +121,9 @@ int main(int argc, char** argv) {
   if (full)
     for (const auto& task : tasks()) rss.push_back(child_peak_rss_mb(task));
   return perf::run_benchmarks(argc, argv, [&](const perf::TimingReporter& reporter) {
-    std::printf("\n| task | dims | forward ms | gradient ms | gradient / forward | central differences ms "
-                "(peer) | peer / gradient | 1,000 gradients s | peak MB |\n|---|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "\n| task | dims | forward ms | gradient ms | gradient / forward | central differences ms "
+        "(peer) | peer / gradient | 1,000 gradients s | peak MB |\n|---|---|---|---|---|---|---|---|---|\n");
     for (std::size_t i = 0; i < tasks().size(); ++i) {
       const std::string& task = tasks()[i];
       const double f = reporter.seconds("BM_ClothForward/" + task + "/real_time");

@@ -35,14 +35,16 @@ void run_unary(benchmark::State& state, F f, double lo, double hi) {
 }
 
 // one benchmark per (function, implementation); the range is where the code calls it
-#define DSB_BENCH_UNARY(fn, lo, hi)                                                          \
-  void BM_##fn##_glibc(benchmark::State& s) {                                                \
-    run_unary(s, [](double v) { return ::fn(v); }, lo, hi);                                  \
-  }                                                                                          \
-  void BM_##fn##_det(benchmark::State& s) {                                                  \
-    run_unary(s, [](double v) { return dsb::dm::fn(v); }, lo, hi);                           \
-  }                                                                                          \
-  BENCHMARK(BM_##fn##_glibc);                                                                \
+#define DSB_BENCH_UNARY(fn, lo, hi)                          \
+  void BM_##fn##_glibc(benchmark::State& s) {                \
+    run_unary(                                               \
+        s, [](double v) { return ::fn(v); }, lo, hi);        \
+  }                                                          \
+  void BM_##fn##_det(benchmark::State& s) {                  \
+    run_unary(                                               \
+        s, [](double v) { return dsb::dm::fn(v); }, lo, hi); \
+  }                                                          \
+  BENCHMARK(BM_##fn##_glibc);                                \
   BENCHMARK(BM_##fn##_det);
 
 DSB_BENCH_UNARY(exp, -20.0, 5.0)
@@ -52,10 +54,12 @@ DSB_BENCH_UNARY(cos, -4.0, 4.0)
 DSB_BENCH_UNARY(tanh, -5.0, 5.0)
 
 void BM_pow_glibc(benchmark::State& s) {
-  run_unary(s, [](double v) { return ::pow(v, 0.37); }, 1e-3, 1e3);
+  run_unary(
+      s, [](double v) { return ::pow(v, 0.37); }, 1e-3, 1e3);
 }
 void BM_pow_det(benchmark::State& s) {
-  run_unary(s, [](double v) { return dsb::dm::pow(v, 0.37); }, 1e-3, 1e3);
+  run_unary(
+      s, [](double v) { return dsb::dm::pow(v, 0.37); }, 1e-3, 1e3);
 }
 BENCHMARK(BM_pow_glibc);
 BENCHMARK(BM_pow_det);
@@ -68,8 +72,7 @@ int main(int argc, char** argv) {
     for (const char* fn : {"exp", "log", "sin", "cos", "tanh", "pow"}) {
       const double g = reporter.seconds(std::string("BM_") + fn + "_glibc") / kArgs,
                    d = reporter.seconds(std::string("BM_") + fn + "_det") / kArgs;
-      if (g > 0 && d > 0)
-        std::printf("  %-5s %6.1f ns vs %6.1f ns  = %5.2f x\n", fn, 1e9 * d, 1e9 * g, d / g);
+      if (g > 0 && d > 0) std::printf("  %-5s %6.1f ns vs %6.1f ns  = %5.2f x\n", fn, 1e9 * d, 1e9 * g, d / g);
     }
   });
 }

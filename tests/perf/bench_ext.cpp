@@ -25,7 +25,7 @@ constexpr std::int64_t kShort = 256, kLong = 2048;
 
 std::string echo_command(int batch, bool binary) {
   return std::string("/usr/bin/python3 " DSB_SOURCE_DIR "/tests/ext/test_optimizer.py ") +
-         (binary ? "echo-binary " : "echo ") + std::to_string(batch);
+      (binary ? "echo-binary " : "echo ") + std::to_string(batch);
 }
 
 std::string sphere(int dim) { return "sphere-" + std::to_string(dim); }
@@ -50,14 +50,14 @@ void BM_ExtEchoRun(benchmark::State& state) {
     dsb::Rng rng(1);
     try {
       opt->minimize(f, rng);
-    } catch (const dsb::BudgetExhausted&) {
-    }
+    } catch (const dsb::BudgetExhausted&) {}
     if (f.used() != episodes) state.SkipWithError("the echo run did not use its budget");
   }
 }
 BENCHMARK(BM_ExtEchoRun)
     ->ArgsProduct({{10, 400}, {1, 16, 64}, {kShort, kLong}, {0, 1}})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // the same episodes without the protocol: batches through the budget wrapper in-process
 void BM_InProcessRun(benchmark::State& state) {
@@ -70,17 +70,17 @@ void BM_InProcessRun(benchmark::State& state) {
     while (f.remaining() >= batch) f.values(xs, out);
   }
 }
-BENCHMARK(BM_InProcessRun)->ArgsProduct({{10, 400}, {1, 16, 64}})
-    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_InProcessRun)->ArgsProduct({{10, 400}, {1, 16, 64}})->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
 int main(int argc, char** argv) {
   return dsb::perf::run_benchmarks(argc, argv, [&](const dsb::perf::TimingReporter& reporter) {
     const double rollout = reporter.seconds("BM_Cartpole3Forward");
-    std::printf("\nprotocol overhead per episode (same run; (%lld-episode run - %lld-episode run) / %lld, minus the "
-                "in-process episode):\n", static_cast<long long>(kLong), static_cast<long long>(kShort),
-                static_cast<long long>(kLong - kShort));
+    std::printf(
+        "\nprotocol overhead per episode (same run; (%lld-episode run - %lld-episode run) / %lld, minus the "
+        "in-process episode):\n",
+        static_cast<long long>(kLong), static_cast<long long>(kShort), static_cast<long long>(kLong - kShort));
     for (const int binary : {0, 1}) {
       for (const int dim : {10, 400}) {
         for (const int batch : {1, 16, 64}) {
@@ -89,7 +89,8 @@ int main(int argc, char** argv) {
             return reporter.seconds("BM_ExtEchoRun/" + args + "/" + std::to_string(episodes) + "/" +
                                     std::to_string(binary) + "/real_time");
           };
-          const double long_run = run(kLong), short_run = run(kShort), direct = reporter.seconds("BM_InProcessRun/" + args);
+          const double long_run = run(kLong), short_run = run(kShort),
+                       direct = reporter.seconds("BM_InProcessRun/" + args);
           if (long_run <= 0 || short_run <= 0 || direct <= 0) continue;
           const double per_episode =
               (long_run - short_run) / static_cast<double>(kLong - kShort) - direct / static_cast<double>(kLong);

@@ -86,8 +86,8 @@ PhaseTimes forward_phases, gradient_phases, gradient_taped_phases, forward_scala
 
 // tape: the bytes of substep tapes the forward pass may keep (episode.hpp; 0 recomputes every env
 // step in the reverse pass, kTapeEverything keeps them all)
-void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phases,
-         SimdPath path = default_lane_path(), std::size_t tape = 0) {
+void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phases, SimdPath path = default_lane_path(),
+         std::size_t tape = 0) {
   const MpmModel& m = plb_sized_model();
   const testing::SmoothObjective objective;
   ThreadTeam team(static_cast<int>(state.range(0)));
@@ -106,12 +106,11 @@ void run(benchmark::State& state, int env_steps, bool gradient, PhaseTimes* phas
   if (phases && state.range(0) == 1) {
     *phases = times;
     const double n = static_cast<double>(state.iterations());
-    for (double* t : {&phases->bin, &phases->stress, &phases->p2g, &phases->grid, &phases->g2p,
-                      &phases->reverse_g2p, &phases->reverse_grid, &phases->reverse_particles, &phases->other})
+    for (double* t : {&phases->bin, &phases->stress, &phases->p2g, &phases->grid, &phases->g2p, &phases->reverse_g2p,
+                      &phases->reverse_grid, &phases->reverse_particles, &phases->other})
       *t /= n;
   }
-  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kParticles) * env_steps *
-                          m.config.substeps);
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kParticles) * env_steps * m.config.substeps);
 }
 
 void BM_ForwardEpisodeFull(benchmark::State& s) { run(s, kEnvSteps, false, &forward_phases); }
@@ -208,7 +207,8 @@ void fluid_rollouts(benchmark::State& state, bool gradient) {
   env->loss_and_grad(x, g, *ws, serial_team());  // the first rollout sizes the buffers
   const perf::AllocationCounter allocations;
   for (auto _ : state)
-    benchmark::DoNotOptimize(gradient ? env->loss_and_grad(x, g, *ws, serial_team()) : env->loss(x, *ws, serial_team()));
+    benchmark::DoNotOptimize(gradient ? env->loss_and_grad(x, g, *ws, serial_team())
+                                      : env->loss(x, *ws, serial_team()));
   allocations.report(state);
 }
 void BM_FluidH5Forward(benchmark::State& s) { fluid_rollouts(s, false); }
@@ -249,8 +249,8 @@ std::string cpu_model() {
 }
 
 void print_phases(const char* what, const PhaseTimes& t) {
-  const double total = t.bin + t.stress + t.p2g + t.grid + t.g2p + t.reverse_g2p + t.reverse_grid +
-                       t.reverse_particles + t.other;
+  const double total =
+      t.bin + t.stress + t.p2g + t.grid + t.g2p + t.reverse_g2p + t.reverse_grid + t.reverse_particles + t.other;
   if (total <= 0.0) return;
   std::printf("%s phases (1 thread, s): stress %.2f, p2g %.2f, g2p %.2f, grid %.2f, binning %.2f", what, t.stress,
               t.p2g, t.g2p, t.grid, t.bin);
@@ -286,28 +286,32 @@ int main(int argc, char** argv) {
     const char* lanes = simd_path_name(default_lane_path());
     std::printf("\nCPU: %s; lanes path: %s (scalar forced by the *Scalar* benchmarks)\n", cpu_model().c_str(), lanes);
     if (alternating_lanes_seconds > 0.0)
-      std::printf("forward episode alternating the paths env step by env step (25 each, same load): %s %.2f s, "
-                  "scalar %.2f s: %.2fx\n",
-                  lanes, alternating_lanes_seconds, alternating_scalar_seconds,
-                  alternating_scalar_seconds / alternating_lanes_seconds);
+      std::printf(
+          "forward episode alternating the paths env step by env step (25 each, same load): %s %.2f s, "
+          "scalar %.2f s: %.2fx\n",
+          lanes, alternating_lanes_seconds, alternating_scalar_seconds,
+          alternating_scalar_seconds / alternating_lanes_seconds);
     if (alternating_gradient_lanes_seconds > 0.0)
-      std::printf("gradient episodes of 5 env steps, the paths taking turns (3 each): %s %.2f s, scalar %.2f s: "
-                  "%.2fx\n",
-                  lanes, alternating_gradient_lanes_seconds, alternating_gradient_scalar_seconds,
-                  alternating_gradient_scalar_seconds / alternating_gradient_lanes_seconds);
+      std::printf(
+          "gradient episodes of 5 env steps, the paths taking turns (3 each): %s %.2f s, scalar %.2f s: "
+          "%.2fx\n",
+          lanes, alternating_gradient_lanes_seconds, alternating_gradient_scalar_seconds,
+          alternating_gradient_scalar_seconds / alternating_gradient_lanes_seconds);
     if (step > 0.0 && step_scalar > 0.0)
       std::printf("one env step, %s lanes against scalar: forward %.2fx", lanes, step_scalar / step);
     if (gstep > 0.0 && gstep_scalar > 0.0) std::printf(", gradient %.2fx", gstep_scalar / gstep);
     if (step > 0.0 && step_scalar > 0.0) std::printf("\n");
     if (f1 > 0.0) {
-      std::printf("\nmodel: %d particles, %dx%dx%d grid, dt %g, %.0f substeps\n", kParticles, plb_sized_model().config.grid[0],
-                  plb_sized_model().config.grid[1], plb_sized_model().config.grid[2], plb_sized_model().config.dt, substeps);
+      std::printf("\nmodel: %d particles, %dx%dx%d grid, dt %g, %.0f substeps\n", kParticles,
+                  plb_sized_model().config.grid[0], plb_sized_model().config.grid[1], plb_sized_model().config.grid[2],
+                  plb_sized_model().config.dt, substeps);
       std::printf("forward: %.2f s = %.2f M particle-substeps/s (1 thread)\n", f1, kParticles * substeps / f1 / 1e6);
       if (g1 > 0.0) std::printf("gradient episode: %.2f s = %.2fx the forward (1 thread)\n", g1, g1 / f1);
       if (gt > 0.0)
         std::printf("gradient episode with every substep's tape kept: %.2f s = %.2fx the forward (1 thread)\n", gt,
                     gt / f1);
-      if (f2 > 0.0) std::printf("2 threads: forward %.2fx, gradient %.2fx one thread\n", f1 / f2, g2 > 0 ? g1 / g2 : 0.0);
+      if (f2 > 0.0)
+        std::printf("2 threads: forward %.2fx, gradient %.2fx one thread\n", f1 / f2, g2 > 0 ? g1 / g2 : 0.0);
       if (fs > 0.0)
         std::printf("scalar path: forward %.2f s = %.2f M particle-substeps/s, gradient %.2f s (1 thread)\n", fs,
                     kParticles * substeps / fs / 1e6, gs);
@@ -321,8 +325,9 @@ int main(int argc, char** argv) {
       print_phases("gradient, scalar path,", gradient_scalar_phases);
     }
     if (full)
-      std::printf("peak RSS of a process running one episode: forward %.0f MB, gradient %.0f MB (full history of "
-                  "the particle states: %.0f MB)\n",
-                  rss_forward, rss_gradient, substeps * kParticles * sizeof(Particle) / 1e6);
+      std::printf(
+          "peak RSS of a process running one episode: forward %.0f MB, gradient %.0f MB (full history of "
+          "the particle states: %.0f MB)\n",
+          rss_forward, rss_gradient, substeps * kParticles * sizeof(Particle) / 1e6);
   });
 }

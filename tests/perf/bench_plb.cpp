@@ -54,7 +54,8 @@ void episodes(benchmark::State& state, const std::string& env_name, bool gradien
 
 // peak RSS (MB) of a child process that builds the env and runs one gradient episode
 double child_peak_rss_mb(const std::string& env_name, std::size_t tape = 0) {
-  return perf::gradient_episode_peak_rss_mb(env_name, [](int dim) { return point(dim); }, tape);
+  return perf::gradient_episode_peak_rss_mb(
+      env_name, [](int dim) { return point(dim); }, tape);
 }
 
 std::string full_name(const char* what, const std::string& task, int threads) {
@@ -73,15 +74,26 @@ int main(int argc, char** argv) {
       benchmark::RegisterBenchmark(
           (std::string("BM_Plb") + (gradient ? "Gradient" : "Forward") + "Full/" + task.name).c_str(),
           [env, gradient](benchmark::State& s) { episodes(s, env, gradient); })
-          ->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+          ->Arg(1)
+          ->Arg(2)
+          ->Iterations(1)
+          ->Unit(benchmark::kSecond)
+          ->UseRealTime();
     benchmark::RegisterBenchmark((std::string("BM_PlbGradientTapedFull/") + task.name).c_str(),
                                  [env](benchmark::State& s) { episodes(s, env, true, mpm::kTapeEverything); })
-        ->Arg(1)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+        ->Arg(1)
+        ->Iterations(1)
+        ->Unit(benchmark::kSecond)
+        ->UseRealTime();
   }
   benchmark::RegisterBenchmark("BM_PlbForwardH5/pinch", [](benchmark::State& s) { episodes(s, "plb-pinch-h5", false); })
-      ->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+      ->Arg(1)
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
   benchmark::RegisterBenchmark("BM_PlbGradientH5/pinch", [](benchmark::State& s) { episodes(s, "plb-pinch-h5", true); })
-      ->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+      ->Arg(1)
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
 
   std::vector<double> rss, rss_taped;
   if (full)
@@ -91,9 +103,10 @@ int main(int argc, char** argv) {
     }
   return perf::run_benchmarks(argc, argv, [&](const perf::TimingReporter& reporter) {
     if (reporter.seconds(full_name("Forward", mpm::plb_tasks().front().name, 1)) <= 0.0) return;
-    std::printf("\n| task | particles | dims | forward s (1 / 2 threads) | gradient s, recomputed (1 / 2 threads) | "
-                "gradient s, taped (1 thread) | gradient / forward, recomputed / taped | peak MB, recomputed / taped "
-                "|\n|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "\n| task | particles | dims | forward s (1 / 2 threads) | gradient s, recomputed (1 / 2 threads) | "
+        "gradient s, taped (1 thread) | gradient / forward, recomputed / taped | peak MB, recomputed / taped "
+        "|\n|---|---|---|---|---|---|---|---|\n");
     for (std::size_t i = 0; i < mpm::plb_tasks().size(); ++i) {
       const auto& task = mpm::plb_tasks()[i];
       const auto env = make_env("plb-" + task.name);

@@ -157,24 +157,20 @@ BENCHMARK(BM_BounceCentralDifferencesMujoco)->Unit(benchmark::kMicrosecond);
 
 int main(int argc, char** argv) {
   return perf::run_benchmarks(argc, argv, [&](const perf::TimingReporter& reporter) {
-    const double ours = reporter.seconds("BM_Cartpole3StepOurs"),
-                 mj = reporter.seconds("BM_Cartpole3StepMujoco"),
+    const double ours = reporter.seconds("BM_Cartpole3StepOurs"), mj = reporter.seconds("BM_Cartpole3StepMujoco"),
                  mj_vc = reporter.seconds("BM_Cartpole3StepMujocoVelocityControl"),
-                 bt = reporter.seconds("BM_Cartpole3StepBullet"),
-                 grad = reporter.seconds("BM_BounceGradientOurs"),
+                 bt = reporter.seconds("BM_Cartpole3StepBullet"), grad = reporter.seconds("BM_BounceGradientOurs"),
                  fd = reporter.seconds("BM_BounceCentralDifferencesMujoco");
     std::printf("\nratios (same run):\n");
     if (ours > 0) {
       std::printf("  cartpole3 step, ours                          = %8.3f us\n", 1e6 * ours / kSteps);
       if (mj > 0)
-        std::printf("  mj_step / our step                            = %8.2f   (target >= 1: ours not slower)\n", mj / ours);
-      if (mj_vc > 0)
-        std::printf("  MuJoCo velocity-controlled step / our step    = %8.2f\n", mj_vc / ours);
-      if (bt > 0)
-        std::printf("  Bullet btMultiBody step / our step            = %8.2f\n", bt / ours);
+        std::printf("  mj_step / our step                            = %8.2f   (target >= 1: ours not slower)\n",
+                    mj / ours);
+      if (mj_vc > 0) std::printf("  MuJoCo velocity-controlled step / our step    = %8.2f\n", mj_vc / ours);
+      if (bt > 0) std::printf("  Bullet btMultiBody step / our step            = %8.2f\n", bt / ours);
     }
     if (grad > 0 && fd > 0)
-      std::printf("  bounce gradient: MuJoCo central differences (6 rollouts) / our reverse pass = %6.2f\n",
-                  fd / grad);
+      std::printf("  bounce gradient: MuJoCo central differences (6 rollouts) / our reverse pass = %6.2f\n", fd / grad);
   });
 }

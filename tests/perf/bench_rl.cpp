@@ -103,8 +103,7 @@ void run_on_cartpole3(benchmark::State& state, std::unique_ptr<Optimizer> (*make
     Rng rng(3);
     try {
       opt->minimize(f, rng);
-    } catch (const BudgetExhausted&) {
-    }
+    } catch (const BudgetExhausted&) {}
     benchmark::DoNotOptimize(f.best_loss());
   }
 }
@@ -130,20 +129,23 @@ int main(int argc, char** argv) {
     std::printf("\n| per decision on cartpole3 | us | x env step |\n|---|---|---|\n");
     std::printf("| env step (peer) | %.3f | 1 |\n", 1e6 * env);
     std::printf("| ppo acting (2 forward passes, sample, log-prob) | %.2f | %.0f |\n", 1e6 * act, act / env);
-    std::printf("| ppo update, amortised (%.0f minibatches of %d per %d decisions; one minibatch %.0f us) | %.2f | %.0f |\n",
-                minibatches, cfg.batch_size, cfg.n_steps, 1e6 * mb, 1e6 * update, update / env);
+    std::printf(
+        "| ppo update, amortised (%.0f minibatches of %d per %d decisions; one minibatch %.0f us) | %.2f | %.0f |\n",
+        minibatches, cfg.batch_size, cfg.n_steps, 1e6 * mb, 1e6 * update, update / env);
     std::printf("| ppo learner in all | %.2f | %.0f |\n", 1e6 * (act + update), (act + update) / env);
     const double sac = reporter.seconds("BM_SacRunCartpole3");
     if (sac > 0.0) {
       const double per_step = (sac - 300 * env) / 200;
-      std::printf("| sac end to end: a 3-episode run (300 decisions, 200 gradient steps of batch 256) minus its env "
-                  "steps, per gradient step | %.0f | %.0f |\n",
-                  1e6 * per_step, per_step / env);
+      std::printf(
+          "| sac end to end: a 3-episode run (300 decisions, 200 gradient steps of batch 256) minus its env "
+          "steps, per gradient step | %.0f | %.0f |\n",
+          1e6 * per_step, per_step / env);
     }
     if (run > 0.0) {
       const double learner = (run - 2100 * env) / 2100;
-      std::printf("| ppo end to end: a 21-episode run (2,100 decisions, one update) minus its env steps | %.2f | %.0f |\n",
-                  1e6 * learner, learner / env);
+      std::printf(
+          "| ppo end to end: a 21-episode run (2,100 decisions, one update) minus its env steps | %.2f | %.0f |\n",
+          1e6 * learner, learner / env);
     }
   });
 }

@@ -24,11 +24,11 @@ bool smooth_at(const ContactEnv& env, const std::vector<double>& x, double h) {
 // What the loss and the gradient do across a contact switch along coordinate i: bisected from x
 // towards x + width until the pattern changes within 1e-13 (a keeps x's pattern, b does not).
 struct ContactSwitch {
-  bool found = false;          // the pattern changes within width, and x - h stays on a's piece
+  bool found = false;              // the pattern changes within width, and x - h stays on a's piece
   double at = 0.0, bracket = 0.0;  // a[i] and b[i] - a[i]
-  double jump = 0.0;           // loss(b) - loss(a)
-  double left_difference = 0.0;  // (loss(a) - loss(a - h e_i)) / h, inside a's piece
-  double analytic = 0.0;       // dLoss/dx_i at a (loss_and_grad)
+  double jump = 0.0;               // loss(b) - loss(a)
+  double left_difference = 0.0;    // (loss(a) - loss(a - h e_i)) / h, inside a's piece
+  double analytic = 0.0;           // dLoss/dx_i at a (loss_and_grad)
   bool gradient_finite = false;
 };
 

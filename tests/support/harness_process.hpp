@@ -31,8 +31,8 @@ inline std::string read_file(const std::filesystem::path& p) {
 inline HarnessResult run_harness(const std::filesystem::path& dir, const std::string& args,
                                  const std::string& env_prefix = "") {
   const auto out = dir / "stdout", err = dir / "stderr";
-  const std::string cmd = env_prefix + " " + DSB_HARNESS_EXE + " " + args + " > " + out.string() + " 2> " +
-                          err.string() + " < /dev/null";
+  const std::string cmd =
+      env_prefix + " " + DSB_HARNESS_EXE + " " + args + " > " + out.string() + " 2> " + err.string() + " < /dev/null";
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out), read_file(err)};
 }

@@ -17,8 +17,8 @@ class TempDirTest : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("dsb_") + info->test_suite_name() + "_" + info->name() + "_" +
-                       std::to_string(::getpid());
+    std::string name =
+        std::string("dsb_") + info->test_suite_name() + "_" + info->name() + "_" + std::to_string(::getpid());
     std::replace(name.begin(), name.end(), '/', '_');
     dir_ = std::filesystem::temp_directory_path() / name;
     std::filesystem::remove_all(dir_);
