@@ -22,7 +22,8 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REQUIRED = ("pandas", "matplotlib", "scipy", "scipy.stats")
-OWN_FILES = re.compile(r"^(curves_.+\.png|final_.+\.(png|csv)|landscape_.+\.png|render_.+\.png|"
+# the report's files that are not charts (charts.writes knows the charts' own, from plots.CHARTS)
+OWN_FILES = re.compile(r"^(final_.+\.csv|landscape_.+\.png|render_.+\.png|"
                        r"gradient_quality\.csv|gallery\.html|stale_runs\.csv|sources\.csv)$")
 DEFAULT_GRADIENT_QUALITY = os.path.join(os.path.dirname(HERE), "data", "gradient_quality.csv")
 
@@ -115,7 +116,7 @@ def main(argv=None) -> int:
     args = parse_args(sys.argv[1:] if argv is None else argv)
     if HERE not in sys.path:
         sys.path.insert(0, HERE)
-    from dsb_report import build, claims, registry
+    from dsb_report import build, charts, claims, plots, registry
     from dsb_report import gradient_quality as gq
     from dsb_report.data import DataError, load
 
@@ -161,7 +162,7 @@ def main(argv=None) -> int:
     written = build.build(data, args.out, args.landscapes, args.build_type, made, claim_list,
                           gq_table, gq_path, args.renders, env_registry)
     for name in sorted(os.listdir(args.out)):        # stale figures/tables of an older report
-        if OWN_FILES.match(name) and name not in written:
+        if (OWN_FILES.match(name) or charts.writes(plots.CHARTS, name)) and name not in written:
             os.remove(os.path.join(args.out, name))
     n_png = sum(f.endswith(".png") for f in written)
     print(f"make_report: wrote {os.path.join(args.out, 'index.html')} ({len(written)} files, "

@@ -160,6 +160,36 @@ def read_csv(path):
         return list(csv.DictReader(f))
 
 
+def png_size(path):
+    """(width, height) from a PNG's IHDR; fails on a file that is not a PNG."""
+    import struct
+    with open(path, "rb") as f:
+        head = f.read(24)
+    assert head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR", f"{path} is not a PNG"
+    return struct.unpack(">II", head[16:24])
+
+
+FIGURE = re.compile(r'<figure><img src="([^"]*)" alt="([^"]*)"><figcaption>(.*?)</figcaption></figure>', re.S)
+
+
+def figures_in(page):
+    """[(png, alt, caption)] of the <figure>s of an HTML fragment, in order, unescaped."""
+    return [(html.unescape(p), html.unescape(a), html.unescape(c)) for p, a, c in FIGURE.findall(page)]
+
+
+def env_section(page, stem):
+    """The HTML of the env section id="env-<stem>", up to the next <h3> or <h2>."""
+    return re.split(r"<h[23]", page.split(f'id="env-{stem}"', 1)[1], maxsplit=1)[0]
+
+
+def chart_modules():
+    """dsb_report's charts and plots modules (the registry of the report's charts)."""
+    if HERE not in sys.path:
+        sys.path.insert(0, HERE)
+    from dsb_report import charts, plots
+    return charts, plots
+
+
 def cells(db):
     """(env, budget) -> optimizer -> list of best_loss of 'done' runs, straight from SQLite."""
     con = sqlite3.connect(db)
@@ -266,6 +296,33 @@ class TestReport(ReportCase):
         self.assertGreater(len(pngs), 3)
         for p in pngs:
             self.assertIn(f'src="{p}"', self.html, f"{p} not shown in index.html")
+
+    def test_every_declared_chart_is_drawn_and_placed_in_its_section(self):
+        charts, plots = chart_modules()
+        per_env = [c for c in plots.CHARTS if c.section == charts.PER_ENV]
+        across = [c for c in plots.CHARTS if c.section == charts.ACROSS]
+        self.assertEqual([c.name for c in per_env], ["curves", "final"])
+        self.assertEqual([c.name for c in across], ["ranks", "ecdf"])
+        keys = list(self.cells)
+        for env, budget in keys:
+            stem = final_csv_name(env, budget, keys)[len("final_"):-len(".csv")]
+            shown = figures_in(env_section(self.html, stem))
+            # the env's charts in declaration order, and nothing else (no renders here)
+            self.assertEqual([f[0] for f in shown], [c.png.format(slug=stem) for c in per_env], env)
+            for c, (png, alt, caption) in zip(per_env, shown):
+                w, h = png_size(self.file(png))
+                self.assertGreater(min(w, h), 200, f"{png}: {w} x {h} px")
+                self.assertEqual(alt, c.alt.format(env=env))
+                head, _, tail = c.caption.partition("{scale}")
+                self.assertTrue(caption.startswith(head) and caption.endswith(tail), caption)
+                self.assertRegex(caption[len(head):], r"^(Linear|Log) y axis")   # the env's scale sentence
+        shown = figures_in(section(self.html, "across"))
+        self.assertEqual(shown, [(c.png, c.alt, c.caption) for c in across])
+        for c in across:
+            self.assertGreater(min(png_size(self.file(c.png))), 200, c.png)
+        # every <figure> of the page: the charts, and the two landscapes of --landscapes
+        self.assertEqual(len(figures_in(self.html)), len(per_env) * len(keys) + len(across) + 2)
+        self.assertEqual(self.html.count("<figure>"), len(figures_in(self.html)))
 
     def test_html_self_contained(self):
         self.assertNotIn("<script", self.html.lower())
@@ -1599,6 +1656,151 @@ class TestOneRunAgainstSeeds(unittest.TestCase):
         self.assertTrue(stats.too_few_seeds(1, 4, 1, sides=1, constant2=True))    # 1/16
         self.assertFalse(stats.too_few_seeds(1, 5, 1, sides=1, constant2=True))   # 1/32
         self.assertEqual(stats.holm([1 / 32, 6 / 32]), [2 / 32, 6 / 32])
+
+
+class TestChartDeclarations(unittest.TestCase):
+    """charts.check refuses a wrong declaration, naming the chart and what is wrong; charts.writes
+    knows a chart's files (what make_report.py may remove) and nothing else."""
+
+    def chart(self, name="bars", section=None, png="bars_{slug}.png"):
+        charts, _ = chart_modules()
+        return charts.Chart(name=name, section=section or charts.PER_ENV, png=png,
+                            draw=lambda view, path: None, alt="bars {env}", caption="Bars.")
+
+    def assert_refused(self, declared, *words):
+        charts, _ = chart_modules()
+        with self.assertRaises(ValueError) as e:
+            charts.check(declared)
+        for w in words:
+            self.assertIn(w, str(e.exception))
+
+    def test_the_report_charts_pass(self):
+        charts, plots = chart_modules()
+        charts.check(plots.CHARTS)
+        self.assertEqual(len({c.name for c in plots.CHARTS}), len(plots.CHARTS))
+
+    def test_a_name_declared_twice(self):
+        self.assert_refused((self.chart(), self.chart(png="other_{slug}.png")), "'bars'", "twice")
+
+    def test_an_unknown_section(self):
+        self.assert_refused((self.chart(section="sidebar"),), "'bars'", "'sidebar'")
+
+    def test_a_per_env_file_without_slug(self):
+        self.assert_refused((self.chart(png="bars.png"),), "'bars'", "'bars.png'", "{slug}")
+
+    def test_a_file_naming_another_field(self):
+        self.assert_refused((self.chart(png="bars_{slug}_{env}.png"),), "'bars'", "{env}")
+
+    def test_writes(self):
+        charts, plots = chart_modules()
+        for name in ("curves_sphere-2.png", "final_branin_b20.png", "ranks.png", "ecdf.png"):
+            self.assertTrue(charts.writes(plots.CHARTS, name), name)
+        for name in ("curves_.png", "final_branin.csv", "ranks.csv", "xcurves_a.png", "curves_a.pngx",
+                     "notes.png"):
+            self.assertFalse(charts.writes(plots.CHARTS, name), name)
+
+
+class TestDeclaredChart(unittest.TestCase):
+    """A chart is its function and its declaration: two more declared in plots.CHARTS (one per env,
+    one across envs) are drawn and placed in their sections with their alt texts and captions,
+    with no other change to the report's code."""
+
+    @classmethod
+    def setUpClass(cls):
+        charts, plots = chart_modules()
+        from dsb_report import build, data, style
+        cls.tmp = tempfile.mkdtemp(prefix="dsb_report_chart_")
+        db = copy_db(os.path.join(cls.tmp, "copy.sqlite"))
+        cls.out = os.path.join(cls.tmp, "report")
+        os.makedirs(cls.out)
+        cls.calls = []   # (chart name, view, path) of every call of the two drawing functions
+
+        def seeds_bars(view, path):   # the seeds of each optimizer on the env [optimizers]
+            cls.calls.append(("seeds", view, path))
+            fig, ax = style.plt.subplots(figsize=(4, 3))
+            ax.bar(range(len(view.table)), view.table["n_seeds"])
+            style.save(fig, path)
+
+        def env_count(view, path):
+            cls.calls.append(("envs", view, path))
+            fig, ax = style.plt.subplots(figsize=(4, 3))
+            ax.set_title(f"{view.n_envs} envs")
+            style.save(fig, path)
+
+        cls.extra = (charts.Chart("seeds", charts.PER_ENV, "seeds_{slug}.png", seeds_bars, "seeds {env}",
+                                  "Seeds per optimizer on {env}. {scale}"),
+                     charts.Chart("envs", charts.ACROSS, "envs.png", env_count, "env count",
+                                  "How many envs were ranked."))
+        saved = plots.CHARTS
+        plots.CHARTS = saved + cls.extra
+        try:
+            cls.written = build.build(data.load(db), cls.out, None, "TestBuild", "2026-12-05T00:00:00Z")
+        finally:
+            plots.CHARTS = saved
+        with open(os.path.join(cls.out, "index.html"), encoding="utf-8") as f:
+            cls.html = f.read()
+        cls.cells = cells(db)
+
+    @classmethod
+    def tearDownClass(cls):
+        if not os.environ.get("DSB_REPORT_KEEP"):
+            shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def test_per_env_chart_in_every_env_section(self):
+        keys = list(self.cells)
+        self.assertEqual(len(keys), 2)
+        for env, budget in keys:
+            stem = final_csv_name(env, budget, keys)[len("final_"):-len(".csv")]
+            png = f"seeds_{stem}.png"
+            self.assertIn(png, self.written)
+            # drawn once, into that file, from this env's panel and final table (seeds as in SQLite)
+            views = [v for name, v, path in self.calls if name == "seeds" and path == os.path.join(self.out, png)]
+            self.assertEqual(len(views), 1, png)
+            self.assertEqual((views[0].panel.env, views[0].panel.budget), (env, budget))
+            self.assertEqual(int(views[0].table["n_seeds"].sum()),
+                             sum(len(v) for v in self.cells[(env, budget)].values()))
+            w, h = png_size(os.path.join(self.out, png))
+            self.assertTrue(300 < w <= 440 and 200 < h <= 330, (w, h))   # 4 x 3 in at 110 dpi, trimmed
+            shown = figures_in(env_section(self.html, stem))
+            self.assertEqual([f[0] for f in shown], [f"curves_{stem}.png", f"final_{stem}.png", png])
+            self.assertEqual(shown[2][1], f"seeds {env}")
+            self.assertTrue(shown[2][2].startswith(f"Seeds per optimizer on {env}. "), shown[2][2])
+            self.assertRegex(shown[2][2], r"\. (Linear|Log) y axis")
+
+    def test_across_chart_after_the_others_and_their_tables(self):
+        sec = section(self.html, "across")
+        self.assertEqual(figures_in(sec)[-1], ("envs.png", "env count", "How many envs were ranked."))
+        self.assertEqual([f[0] for f in figures_in(sec)], ["ranks.png", "ecdf.png", "envs.png"])
+        # the tables of ranks and of the data profile's targets stay under their charts
+        at = [sec.index(x) for x in ('src="ranks.png"', "Mean rank at each episode count", 'src="ecdf.png"',
+                                      "Targets per env", 'src="envs.png"')]
+        self.assertEqual(at, sorted(at))
+        self.assertEqual([(v.n_envs, path) for name, v, path in self.calls if name == "envs"],
+                         [(2, os.path.join(self.out, "envs.png"))])
+        w, h = png_size(os.path.join(self.out, "envs.png"))
+        self.assertTrue(300 < w <= 440 and 200 < h <= 330, (w, h))
+        self.assertIn('<a href="envs.png">', self.html)   # and in the list of files
+
+
+class TestOldChartFiles(unittest.TestCase):
+    """A report into a folder of an older one removes the older charts of envs no longer in the
+    database (their names known from plots.CHARTS) and keeps a file that is not the report's."""
+
+    def test_removed_and_kept(self):
+        tmp = tempfile.mkdtemp(prefix="dsb_report_old_")
+        self.addCleanup(shutil.rmtree, tmp, True)
+        out = os.path.join(tmp, "report")
+        os.makedirs(out)
+        old = ["curves_gone.png", "final_gone.png", "final_gone.csv"]
+        for name in old + ["notes.png"]:
+            with open(os.path.join(out, name), "w") as f:
+                f.write("old\n")
+        proc = run_report(db_path(), out)
+        self.assertEqual(proc.returncode, 0, proc.stderr)
+        left = set(os.listdir(out))
+        self.assertFalse(left & set(old), sorted(left & set(old)))
+        self.assertIn("notes.png", left)
+        self.assertIn("curves_sphere-2.png", left)
 
 
 class TestBadInput(unittest.TestCase):

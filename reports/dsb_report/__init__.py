@@ -9,7 +9,8 @@ Modules, one purpose each:
   metric_counts  per optimizer, the seeds over a metric claim's threshold (the cube over the rim)
   registry    `harness list`: which envs exist, which optimizers --all runs on each
   style       palette (one fixed color per optimizer), fonts, the log-scale rule
-  plots       the figures: curves, finals, ranks, ECDF
+  charts      what a chart declaration holds (file, section, alt text, caption), drawing a section's charts
+  plots       the charts: curves, finals, ranks, ECDF, each a function and its declaration (CHARTS)
   landscape   heat maps with gradient arrows from `harness landscape` CSVs
   tables      CSV and Markdown writers
   html        index.html

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import scipy
 
-from . import (captions, claims, grid, html, landscape, metric_counts, optima, plots, renders, stats, style,
+from . import (captions, charts, claims, grid, html, landscape, metric_counts, optima, plots, renders, stats, style,
                summary, with_archive)
 from .data import current_view, main_panels, slugify
 from .tables import FINAL_COLUMNS, SIGNIFICANCE_COLUMNS, failures, mark, overview, write_csv
@@ -100,6 +100,7 @@ def _provenance(data, build_type, made, stored_episodes, registry=None) -> list:
 def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=(),
           gradient_quality=None, gradient_quality_path: str = "", render_dir=None,
           registry=None) -> list:
+    charts.check(plots.CHARTS)
     style.setup()
     pal = style.palette(data.optimizers)
     marks = style.markers(data.optimizers)
@@ -118,10 +119,9 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
         t["f_star"] = np.nan if fs is None else fs
         t["regret_median"] = t["median"] - fs if fs is not None else np.nan
         it = dict(panel=pn, table=t, scale_text=_scale_text(ys), f_star=fs,
-                  curves_png=f"curves_{pn.slug}.png", final_png=f"final_{pn.slug}.png",
                   final_csv=f"final_{pn.slug}.csv")
-        plots.curves(pn, pal, ys, path(it["curves_png"]), marks)
-        plots.finals(pn, t, pal, ys, path(it["final_png"]))
+        it["figures"] = charts.draw(plots.CHARTS, charts.PER_ENV, charts.EnvView(pn, t, pal, ys, marks),
+                                    path, slug=pn.slug, env=pn.env, scale=it["scale_text"])
         write_csv(t, path(it["final_csv"]), FINAL_COLUMNS)
         items.append(it)
         tables.append(t)
@@ -139,11 +139,10 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
     mr = stats.mean_ranks(by_env)
     write_csv(mr, path("ranks.csv"))
     write_csv(by_env, path("ranks_by_env.csv"))
-    plots.ranks(mr, pal, len(mp), path("ranks.png"))
     ecdf_table, tinfo = stats.ecdf(mp, data.optimizers)
     write_csv(ecdf_table, path("ecdf.csv"))
     write_csv(tinfo, path("ecdf_targets.csv"))
-    plots.ecdf(ecdf_table, pal, len(mp), path("ecdf.png"))
+    across = charts.draw(plots.CHARTS, charts.ACROSS, charts.AcrossView(mr, ecdf_table, pal, len(mp)), path)
 
     sig = pd.concat(tables, ignore_index=True) if tables else pd.DataFrame(columns=FINAL_COLUMNS)
     sig["mark"] = [mark(r) for _, r in sig.iterrows()] if len(sig) else []
@@ -208,8 +207,7 @@ def build(data, out: str, landscape_dir, build_type: str, made: str, claim_list=
         notes=notes,
         provenance=_provenance(data, build_type, made, int(sum(p.best.size for p in data.panels)),
                                registry),
-        claims=verdicts, metric_counts=reached, panels=items, mean_ranks=mr, ranks_png="ranks.png",
-        ecdf_png="ecdf.png",
+        claims=verdicts, metric_counts=reached, panels=items, mean_ranks=mr, across_figures=across,
         targets=tinfo, gradient_quality=gradient_quality,
         gradient_quality_path=gradient_quality_path,
         overview=overview(items, data.optimizers),

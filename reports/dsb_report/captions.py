@@ -1,8 +1,6 @@
-"""How to read each figure: the text under it in index.html (and the notes of summary.md)."""
-
-CURVES = ("Each line is the median over seeds of the best loss found so far after that many "
-          "episodes; the shaded band spans the 25th to 75th percentile over seeds. Lower is better. "
-          "The legend gives n, the number of completed seeds. {scale}")
+"""How to read the report's tables and sections: the texts in index.html and summary.md, and the
+y-axis sentences ({scale}) of the per-env charts. A chart's own caption is in its declaration
+(plots.CHARTS)."""
 
 SCALE_LINEAR = "Linear y axis."
 SCALE_LOG = "Log y axis: the losses are positive and span more than two decades."
@@ -14,14 +12,6 @@ SCALE_REGRET = ("Log y axis of the regret f − f*: the loss minus the env's kno
                 "(data/known_optima.csv, from envs/synthetic), not the best loss found, so 1e-6 means "
                 "within 1e-6 of the true minimum; a regret at or below {floor} (a loss at f* to "
                 "rounding) is drawn at {floor}.")
-
-FINALS = ("Bars: mean over seeds of the final best loss at the budget; whiskers: 95% confidence "
-          "interval of the mean (Student t with n−1 degrees of freedom, no bootstrap); dots: the "
-          "individual seeds. '(best)' marks the optimizer with the lowest median final loss; '≈ best' "
-          "marks those that a one-sided Mann-Whitney U test (worse than it?), Holm-corrected over this "
-          "env's comparisons, cannot tell apart at α = 0.05; '(too few seeds)' where the seeds are "
-          "too few for any test to tell them apart (even perfectly separated samples would not "
-          "reach α). The number on each bar is its mean (the mean regret on a regret axis). {scale}")
 
 OVERVIEW = ("Each cell: the optimizer's median final best loss over seeds, normalised per env as "
             "(median − lowest median) / (highest median − lowest median): 0 = the env's winner, "
@@ -40,19 +30,6 @@ FAILURES = ("Failed episodes: the episodes of the analysed 'done' runs whose sim
             "(loss NaN, stored as NULL; such an episode never becomes the best); failed runs: runs "
             "with status 'failed' (excluded from every statistic, listed under Failed runs). "
             "Cells: failed episodes / failed runs; — = no run of that pair.")
-
-RANKS = ("For each env and episode count, the optimizers are ranked by the median over seeds of "
-         "their best loss so far (1 = best; ties share the average rank). Each line is the mean rank "
-         "over the envs the optimizer ran on. Gradient optimizers do not run on non-differentiable "
-         "envs, so they may be ranked over fewer envs and among fewer competitors (see the env count "
-         "in the legend).")
-
-ECDF = ("COCO-style data profile. For each env, f* is the best loss any optimizer found and f0 the "
-        "median loss of the first episode over all its runs; the targets are f* + (f0 − f*)·10^−k "
-        "for k = 1, 2, 3, 4, 5 (relative targets). An (env, seed, target) triple is solved after e "
-        "episodes when the best loss so far is ≤ the target. Each line is the fraction of the "
-        "optimizer's triples solved after e episodes (over the envs it ran on): higher and further "
-        "left is better; the right end is the fraction solved within the budget.")
 
 ONE_RUN = ("An optimizer whose seeds are one run on an env (each of its runs recorded seed-free "
            "over all its episodes: it never drew from its random generator, so every seed gives the "

@@ -177,30 +177,44 @@ def _failures(ctx) -> str:
     return "\n".join(p)
 
 
-def _across(ctx) -> str:
-    p = ['<h2 id="across">Across envs</h2>']
-    p.append(figure(ctx["ranks_png"], "average ranks", captions.RANKS))
+def _figure_of(f) -> str:
+    """A drawn chart (charts.Figure) as a <figure>."""
+    return figure(f.png, f.alt, f.caption)
+
+
+def _ranks_table(ctx) -> str:
     h, rows = rank_md_rows(ctx["mean_ranks"])
-    p.append(f"<p>Mean rank at each episode count ({link('ranks.csv')}; per env: "
-             f"{link('ranks_by_env.csv')}):</p>" + table(h, rows, numeric=set(range(1, len(h)))))
-    p.append(figure(ctx["ecdf_png"], "data profile", captions.ECDF))
+    return (f"<p>Mean rank at each episode count ({link('ranks.csv')}; per env: "
+            f"{link('ranks_by_env.csv')}):</p>" + table(h, rows, numeric=set(range(1, len(h)))))
+
+
+def _targets_table(ctx) -> str:
     t = ctx["targets"]
     trow = [[r["env"], str(r["budget"]), fmt(r["f_star"], 8), fmt(r["f0"], 6)] +
             [fmt(r[f"target_1e-{k}"], 8) for k in (1, 2, 3, 4, 5)] for _, r in t.iterrows()]
-    p.append(f"<p>Targets per env ({link('ecdf.csv')} holds the curves, "
-             f"{link('ecdf_targets.csv')} these targets):</p>" +
-             table(["env", "budget", "f*", "f0", "k=1", "k=2", "k=3", "k=4", "k=5"], trow,
-                   numeric=set(range(1, 9))))
+    return (f"<p>Targets per env ({link('ecdf.csv')} holds the curves, "
+            f"{link('ecdf_targets.csv')} these targets):</p>" +
+            table(["env", "budget", "f*", "f0", "k=1", "k=2", "k=3", "k=4", "k=5"], trow,
+                  numeric=set(range(1, 9))))
+
+
+# the table under an "Across envs" chart, by the chart's name (a chart without one stands alone)
+TABLE_UNDER = {"ranks": _ranks_table, "ecdf": _targets_table}
+
+
+def _across(ctx) -> str:
+    p = ['<h2 id="across">Across envs</h2>']
+    for f in ctx["across_figures"]:
+        p.append(_figure_of(f))
+        if f.name in TABLE_UNDER:
+            p.append(TABLE_UNDER[f.name](ctx))
     return "\n".join(p)
 
 
 def _panel(ctx, item) -> str:
     pn, t = item["panel"], item["table"]
     p = [f'<h3 id="env-{escape(pn.slug)}">{escape(pn.env)} (budget {pn.budget})</h3>']
-    p.append(figure(item["curves_png"], f"curves {pn.env}",
-                    captions.CURVES.format(scale=item["scale_text"])))
-    p.append(figure(item["final_png"], f"final {pn.env}",
-                    captions.FINALS.format(scale=item["scale_text"])))
+    p += [_figure_of(f) for f in item["figures"]]
     p.append(renders.figure(ctx, pn.env))
     h, rows = final_md_rows(t)
     cls = ["best" if r["is_best"] else "tie" if mark(r) == "≈ best" else

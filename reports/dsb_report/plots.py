@@ -1,10 +1,13 @@
-"""The report's figures. Each function draws one PNG and returns nothing."""
+"""The report's charts: a function that draws each (one PNG) and, last, CHARTS, the declaration of
+each chart (its file, section, alt text and caption: charts.py), which build.py draws and
+index.html places. Adding a chart is its function and its declaration here."""
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
 from . import stats, with_archive
+from .charts import ACROSS, PER_ENV, Chart
 from .style import plt, save
 
 WIDE = (7.6, 4.4)
@@ -181,3 +184,39 @@ def ecdf(table: pd.DataFrame, pal: dict, n_envs: int, path: str):
     ax.set_title(f"Data profile over {n_envs} envs: targets f* + (f0 − f*)·10^−k, k = 1..5")
     _legend(ax)
     save(fig, path)
+
+
+# Every chart of the report, in the order index.html shows them within their section.
+CHARTS = (
+    Chart(name="curves", section=PER_ENV, png="curves_{slug}.png",
+          draw=lambda v, path: curves(v.panel, v.pal, v.ys, path, v.marks), alt="curves {env}",
+          caption=("Each line is the median over seeds of the best loss found so far after that many "
+                   "episodes; the shaded band spans the 25th to 75th percentile over seeds. Lower is "
+                   "better. The legend gives n, the number of completed seeds. {scale}")),
+    Chart(name="final", section=PER_ENV, png="final_{slug}.png",
+          draw=lambda v, path: finals(v.panel, v.table, v.pal, v.ys, path), alt="final {env}",
+          caption=("Bars: mean over seeds of the final best loss at the budget; whiskers: 95% "
+                   "confidence interval of the mean (Student t with n−1 degrees of freedom, no "
+                   "bootstrap); dots: the individual seeds. '(best)' marks the optimizer with the "
+                   "lowest median final loss; '≈ best' marks those that a one-sided Mann-Whitney U "
+                   "test (worse than it?), Holm-corrected over this env's comparisons, cannot tell "
+                   "apart at α = 0.05; '(too few seeds)' where the seeds are too few for any test to "
+                   "tell them apart (even perfectly separated samples would not reach α). The number "
+                   "on each bar is its mean (the mean regret on a regret axis). {scale}")),
+    Chart(name="ranks", section=ACROSS, png="ranks.png",
+          draw=lambda v, path: ranks(v.mean_ranks, v.pal, v.n_envs, path), alt="average ranks",
+          caption=("For each env and episode count, the optimizers are ranked by the median over "
+                   "seeds of their best loss so far (1 = best; ties share the average rank). Each "
+                   "line is the mean rank over the envs the optimizer ran on. Gradient optimizers do "
+                   "not run on non-differentiable envs, so they may be ranked over fewer envs and "
+                   "among fewer competitors (see the env count in the legend).")),
+    Chart(name="ecdf", section=ACROSS, png="ecdf.png",
+          draw=lambda v, path: ecdf(v.ecdf, v.pal, v.n_envs, path), alt="data profile",
+          caption=("COCO-style data profile. For each env, f* is the best loss any optimizer found "
+                   "and f0 the median loss of the first episode over all its runs; the targets are "
+                   "f* + (f0 − f*)·10^−k for k = 1, 2, 3, 4, 5 (relative targets). An (env, seed, "
+                   "target) triple is solved after e episodes when the best loss so far is ≤ the "
+                   "target. Each line is the fraction of the optimizer's triples solved after e "
+                   "episodes (over the envs it ran on): higher and further left is better; the right "
+                   "end is the fraction solved within the budget.")),
+)

@@ -1,7 +1,7 @@
 """summary.md: the report's tables in Markdown (overview, per-env finals, ranks, problems)."""
 from __future__ import annotations
 
-from . import captions, metric_counts
+from . import captions, charts, metric_counts, plots
 from .claim_runs import CLAIMS_SEEDS
 from . import gradient_quality as gq
 from .html import settle_text
@@ -42,7 +42,7 @@ def render(ctx) -> str:
                        for o in opts] for r in fl]), ""]
     out += [f"> {n}" for n in ctx["notes"]] + ([""] if ctx["notes"] else [])
     h, rows = rank_md_rows(ctx["mean_ranks"])
-    out += ["## Average ranks", "", captions.RANKS, "", md_table(h, rows), ""]
+    out += ["## Average ranks", "", charts.named(plots.CHARTS, "ranks").caption, "", md_table(h, rows), ""]
     out += ["## Final best loss per env", "",
             "Over seeds at the budget; 95% CI = Student t; p (Holm) = one-sided Mann-Whitney U "
             "(worse than the env's best?), Holm-corrected over the env. " + ctx["minp_text"], ""]
