@@ -6,43 +6,33 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "common/error.hpp"
+#include "common/config_fields.hpp"
+#include "common/field_check.hpp"
 #include "optimizers/bo/sobol.hpp"
-#include "optimizers/core/diagnostics.hpp"
 #include "optimizers/cmaes.hpp"
+#include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
 
 void BoLeapConfig::validate() const {
-  if (population < 1) throw ConfigError("boleap", "population", "must be >= 1 (1: the ablation without samples)");
-  if (!(sigma0 > 0.0 && std::isfinite(sigma0))) throw ConfigError("boleap", "sigma0", "must be finite and > 0");
-  if (max_descent_steps < 1) throw ConfigError("boleap", "max_descent_steps", "must be >= 1");
-  if (patience < 1) throw ConfigError("boleap", "patience", "must be >= 1");
-  if (episodes_per_leap < 1) throw ConfigError("boleap", "episodes_per_leap", "must be >= 1");
-  if (leap_iterations < 0) throw ConfigError("boleap", "leap_iterations", "must be >= 0 (0: the leap counts episodes)");
-  if (!(step_size > 0.0 && std::isfinite(step_size)))
-    throw ConfigError("boleap", "step_size", "must be finite and > 0");
-  if (elite < 0 || elite > population)
-    throw ConfigError("boleap", "elite",
-                      "must be in [0, population] (0 = population / 2), got " + std::to_string(elite));
+  const FieldCheck check("boleap");
+  check.require(population >= 1, "population", "must be >= 1 (1: the ablation without samples)");
+  check.require(sigma0 > 0.0 && std::isfinite(sigma0), "sigma0", "must be finite and > 0");
+  check.require(max_descent_steps >= 1, "max_descent_steps", "must be >= 1");
+  check.require(patience >= 1, "patience", "must be >= 1");
+  check.require(episodes_per_leap >= 1, "episodes_per_leap", "must be >= 1");
+  check.require(leap_iterations >= 0, "leap_iterations", "must be >= 0 (0: the leap counts episodes)");
+  check.require(step_size > 0.0 && std::isfinite(step_size), "step_size", "must be finite and > 0");
+  check.require(elite >= 0 && elite <= population, "elite",
+                "must be in [0, population] (0 = population / 2), got " + std::to_string(elite));
   adam.validate("boleap");
   bo.validate();
 }
 
 nlohmann::json BoLeapConfig::to_json() const {
-  return {{"population", population},
-          {"sigma0", sigma0},
-          {"max_descent_steps", max_descent_steps},
-          {"patience", patience},
-          {"episodes_per_leap", episodes_per_leap},
-          {"leap_iterations", leap_iterations},
-          {"elite", elite_count()},
-          {"descent_step", plain_steps ? "plain clipped gradient" : "adam"},
-          {"step_size", step_size},
-          {"adam", adam.to_json()},
-          {"adam_per_leap", adam_per_leap},
-          {"stop_after_non_improving_steps_over", patience},
-          {"bo", bo.to_json()}};
+  nlohmann::json j = fields_json(*this);
+  j["stop_after_non_improving_steps_over"] = patience;
+  return j;
 }
 
 BoLeap::BoLeap(const BoLeapConfig& cfg) : cfg_(cfg) { cfg_.validate(); }

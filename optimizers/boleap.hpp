@@ -61,6 +61,23 @@ struct BoLeapConfig {
   int elite_count() const { return elite > 0 ? elite : std::max(1, population / 2); }
   void validate() const;
   nlohmann::json to_json() const;
+  // the stored fields, each named once (common/config_fields.hpp); elite as resolved,
+  // plain_steps as the descent step's name
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("population", population);
+    visit("sigma0", sigma0);
+    visit("max_descent_steps", max_descent_steps);
+    visit("patience", patience);
+    visit("episodes_per_leap", episodes_per_leap);
+    visit("leap_iterations", leap_iterations);
+    visit("elite", elite_count());
+    visit("descent_step", plain_steps ? "plain clipped gradient" : "adam");
+    visit("step_size", step_size);
+    visit("adam", adam);
+    visit("adam_per_leap", adam_per_leap);
+    visit("bo", bo);
+  }
 };
 
 // What one run did, for tests and diagnostics.

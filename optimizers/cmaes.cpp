@@ -9,8 +9,9 @@
 #include <span>
 #include <stdexcept>
 
+#include "common/config_fields.hpp"
 #include "common/det_math.hpp"
-#include "common/error.hpp"
+#include "common/field_check.hpp"
 #include "common/number_text.hpp"
 #include "common/unit_box.hpp"
 #include "optimizers/core/diagnostics.hpp"
@@ -23,40 +24,25 @@ constexpr double kEps = 1e-8;            // library _EPS: eigenvalue floor, nega
 constexpr double kSigmaMax = 1e32;       // library _SIGMA_MAX
 constexpr int kMaxPopulation = 1 << 28;  // IPOP growth stops here (int overflow guard only)
 
-[[noreturn]] void bad(const std::string& field, const std::string& why) { throw ConfigError("cmaes", field, why); }
-
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
 // config
 
 void CmaesConfig::validate() const {
-  if (!(sigma0 > 0.0) || !std::isfinite(sigma0))
-    bad("sigma0", "must be a finite number > 0 (got " + number_text(sigma0) + ")");
-  if (population != 0 && population < 2)
-    bad("population", "must be 0 (default 4 + floor(3 ln n)) or >= 2 (got " + std::to_string(population) + ")");
-  if (max_resampling < 0) bad("max_resampling", "must be >= 0 (got " + std::to_string(max_resampling) + ")");
-  if (!(ipop_factor >= 1.0) || !std::isfinite(ipop_factor))
-    bad("ipop_factor", "must be a finite number >= 1 (got " + number_text(ipop_factor) + ")");
-  if (!(tolfun >= 0.0) || !std::isfinite(tolfun))
-    bad("tolfun", "must be a finite number >= 0 (got " + number_text(tolfun) + ")");
-  if (!(tolx_factor >= 0.0) || !std::isfinite(tolx_factor))
-    bad("tolx_factor", "must be a finite number >= 0 (got " + number_text(tolx_factor) + ")");
-  if (!(tolxup > 0.0)) bad("tolxup", "must be > 0 (got " + number_text(tolxup) + ")");
-  if (!(condition_max > 1.0)) bad("condition_max", "must be > 1 (got " + number_text(condition_max) + ")");
+  const FieldCheck check("cmaes");
+  check.number_above("sigma0", sigma0, 0.0);
+  check.require(population == 0 || population >= 2, "population",
+                "must be 0 (default 4 + floor(3 ln n)) or >= 2 (got " + std::to_string(population) + ")");
+  check.require(max_resampling >= 0, "max_resampling", "must be >= 0 (got " + std::to_string(max_resampling) + ")");
+  check.number_at_least("ipop_factor", ipop_factor, 1.0);
+  check.number_at_least("tolfun", tolfun, 0.0);
+  check.number_at_least("tolx_factor", tolx_factor, 0.0);
+  check.require(tolxup > 0.0, "tolxup", "must be > 0 (got " + number_text(tolxup) + ")");
+  check.require(condition_max > 1.0, "condition_max", "must be > 1 (got " + number_text(condition_max) + ")");
 }
 
-nlohmann::json CmaesConfig::to_json() const {
-  return nlohmann::json{{"sigma0", sigma0},
-                        {"population", population},
-                        {"max_resampling", max_resampling},
-                        {"ipop", ipop},
-                        {"ipop_factor", ipop_factor},
-                        {"tolfun", tolfun},
-                        {"tolx_factor", tolx_factor},
-                        {"tolxup", tolxup},
-                        {"condition_max", condition_max}};
-}
+nlohmann::json CmaesConfig::to_json() const { return fields_json(*this); }
 
 const char* to_string(CmaStop s) {
   switch (s) {

@@ -59,6 +59,19 @@ struct CmaesConfig {
   // throws ConfigError naming the field
   void validate() const;
   nlohmann::json to_json() const;
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("sigma0", sigma0);
+    visit("population", population);
+    visit("max_resampling", max_resampling);
+    visit("ipop", ipop);
+    visit("ipop_factor", ipop_factor);
+    visit("tolfun", tolfun);
+    visit("tolx_factor", tolx_factor);
+    visit("tolxup", tolxup);
+    visit("condition_max", condition_max);
+  }
 };
 
 // Strategy constants for dimension n and population lambda, exactly by the library's formulas.

@@ -4,23 +4,22 @@
 #include <limits>
 #include <vector>
 
-#include "common/error.hpp"
+#include "common/config_fields.hpp"
+#include "common/field_check.hpp"
 #include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
 
 void DescentConfig::validate(const std::string& owner) const {
   adam.validate(owner);
-  if (max_steps < 0) throw ConfigError(owner, "max_steps", "must be >= 0");
-  if (patience < 0) throw ConfigError(owner, "patience", "must be >= 0");
-  if (!(min_improvement >= 0.0)) throw ConfigError(owner, "min_improvement", "must be >= 0");
-  if (!(start_scale > 0.0 && start_scale <= 1.0)) throw ConfigError(owner, "start_scale", "must be in (0, 1]");
+  const FieldCheck check(owner);
+  check.require(max_steps >= 0, "max_steps", "must be >= 0");
+  check.require(patience >= 0, "patience", "must be >= 0");
+  check.require(min_improvement >= 0.0, "min_improvement", "must be >= 0");
+  check.require(start_scale > 0.0 && start_scale <= 1.0, "start_scale", "must be in (0, 1]");
 }
 
-nlohmann::json DescentConfig::to_json() const {
-  return {{"adam", adam.to_json()}, {"random_starts", random_starts},     {"max_steps", max_steps},
-          {"patience", patience},   {"min_improvement", min_improvement}, {"start_scale", start_scale}};
-}
+nlohmann::json DescentConfig::to_json() const { return fields_json(*this); }
 
 DescentConfig gd_defaults() { return DescentConfig{}; }
 

@@ -24,6 +24,16 @@ struct DescentConfig {
   double start_scale = 1.0;      // random starts uniform in [-start_scale, start_scale]^d (1 = the box)
   void validate(const std::string& owner) const;
   nlohmann::json to_json() const;
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("adam", adam);
+    visit("random_starts", random_starts);
+    visit("max_steps", max_steps);
+    visit("patience", patience);
+    visit("min_improvement", min_improvement);
+    visit("start_scale", start_scale);
+  }
 };
 
 DescentConfig gd_defaults();             // centre start, whole budget

@@ -11,7 +11,9 @@
 
 #include <nlopt.hpp>
 
+#include "common/config_fields.hpp"
 #include "common/error.hpp"
+#include "common/field_check.hpp"
 #include "common/number_text.hpp"
 #include "optimizers/core/diagnostics.hpp"
 
@@ -115,30 +117,20 @@ std::string nlopt_optimizer_name(const std::string& algorithm) { return algo_or_
 
 void NloptConfig::validate() const {
   const AlgoInfo& a = algo_or_throw(algorithm);
-  const std::string owner = a.name;
-  if (!(ftol_rel >= 0.0) || !std::isfinite(ftol_rel))
-    throw ConfigError(owner, "ftol_rel", "must be a finite number >= 0 (got " + number_text(ftol_rel) + ")");
-  if (!(xtol_rel >= 0.0) || !std::isfinite(xtol_rel))
-    throw ConfigError(owner, "xtol_rel", "must be a finite number >= 0 (got " + number_text(xtol_rel) + ")");
-  if (!(initial_step >= 0.0 && initial_step <= 1.0))
-    throw ConfigError(owner, "initial_step",
-                      "must be in [0, 1] (0 = NLopt default; got " + number_text(initial_step) + ")");
-  if (initial_step != 0.0 && a.id != nlopt::LN_BOBYQA)
-    throw ConfigError(owner, "initial_step",
-                      "is used only by LN_BOBYQA and must be 0 here (got " + number_text(initial_step) + ")");
-  if (population < 0)
-    throw ConfigError(owner, "population",
-                      "must be 0 (NLopt default 10 (n + 1)) or >= n + 1 (got " + std::to_string(population) + ")");
-  if (population != 0 && a.id != nlopt::GN_CRS2_LM)
-    throw ConfigError(owner, "population",
-                      "is used only by GN_CRS2_LM and must be 0 here (got " + std::to_string(population) + ")");
+  const FieldCheck check(a.name);
+  check.number_at_least("ftol_rel", ftol_rel, 0.0);
+  check.number_at_least("xtol_rel", xtol_rel, 0.0);
+  check.require(initial_step >= 0.0 && initial_step <= 1.0, "initial_step",
+                "must be in [0, 1] (0 = NLopt default; got " + number_text(initial_step) + ")");
+  check.require(initial_step == 0.0 || a.id == nlopt::LN_BOBYQA, "initial_step",
+                "is used only by LN_BOBYQA and must be 0 here (got " + number_text(initial_step) + ")");
+  check.require(population >= 0, "population",
+                "must be 0 (NLopt default 10 (n + 1)) or >= n + 1 (got " + std::to_string(population) + ")");
+  check.require(population == 0 || a.id == nlopt::GN_CRS2_LM, "population",
+                "is used only by GN_CRS2_LM and must be 0 here (got " + std::to_string(population) + ")");
 }
 
-nlohmann::json NloptConfig::to_json() const {
-  return nlohmann::json{{"algorithm", algorithm},   {"ftol_rel", ftol_rel},
-                        {"xtol_rel", xtol_rel},     {"initial_step", initial_step},
-                        {"population", population}, {"restart_from_random", restart_from_random}};
-}
+nlohmann::json NloptConfig::to_json() const { return fields_json(*this); }
 
 NloptConfig nlopt_lbfgs_defaults() {
   NloptConfig c;

@@ -87,6 +87,16 @@ struct NloptConfig {
   // throws ConfigError naming the field
   void validate() const;
   nlohmann::json to_json() const;
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("algorithm", algorithm);
+    visit("ftol_rel", ftol_rel);
+    visit("xtol_rel", xtol_rel);
+    visit("initial_step", initial_step);
+    visit("population", population);
+    visit("restart_from_random", restart_from_random);
+  }
 };
 
 // The defaults of the four registered adapters (chosen here): tolerances 1e-10, BOBYQA initial

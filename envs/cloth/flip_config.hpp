@@ -82,7 +82,36 @@ struct FlipConfig {
   int steps() const;          // 5 segment_steps + round(settle_time / dt)
   // throws ConfigError("flip", field, why)
   void validate() const;
-  nlohmann::json to_json() const;
+  nlohmann::json to_json() const;  // fields() plus the pan's profile, the step counts and the integrator
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("cols", cols);
+    visit("rows", rows);
+    visit("side", side);
+    visit("total_mass", total_mass);
+    visit("start_gap", start_gap);
+    visit("structural_stiffness", structural_stiffness);
+    visit("shear_stiffness", shear_stiffness);
+    visit("bending_stiffness", bending_stiffness);
+    visit("structural_damping", structural_damping);
+    visit("shear_damping", shear_damping);
+    visit("bending_damping", bending_damping);
+    visit("damping", damping);
+    visit("gravity", gravity);
+    visit("tangential_keep", tangential_keep);
+    visit("pan_radius", pan.radius);
+    visit("pan_flat_radius", pan.flat_radius);
+    visit("pan_rim_height", pan.rim_height);
+    visit("pan_thickness", pan.thickness);
+    visit("floor_height", floor_height);
+    visit("dt", dt);
+    visit("segment_time", segment_time);
+    visit("settle_time", settle_time);
+    visit("half_range", half_range);
+    visit("control_steps", control_steps);
+    visit("flip_example", flip_example);
+  }
 };
 
 }  // namespace dsb::cloth

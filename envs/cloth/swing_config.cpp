@@ -3,7 +3,8 @@
 #include <cmath>
 #include <string>
 
-#include "common/error.hpp"
+#include "common/config_fields.hpp"
+#include "common/field_check.hpp"
 
 namespace dsb::cloth {
 
@@ -11,83 +12,51 @@ int SwingConfig::steps() const { return static_cast<int>(std::lround(duration / 
 int SwingConfig::release_step() const { return static_cast<int>(std::lround(release_time / dt)); }
 
 void SwingConfig::validate() const {
-  auto fail = [](const std::string& field, const std::string& why) { throw ConfigError("swing", field, why); };
-  auto positive = [&](const std::string& field, double v) {
-    if (!(std::isfinite(v) && v > 0.0)) fail(field, "must be finite and > 0, got " + std::to_string(v));
-  };
-  auto nonnegative = [&](const std::string& field, double v) {
-    if (!(std::isfinite(v) && v >= 0.0)) fail(field, "must be finite and >= 0, got " + std::to_string(v));
-  };
+  const FieldCheck check("swing");
   // patches need at least one cell each way: 4 x 4 patches over (cols - 1) x (rows - 1) cells
-  if (cols < 5 || rows < 5 || cols > 201 || rows > 201) fail("cols/rows", "must be in [5, 201] (4 x 4 patches)");
-  positive("width", width);
-  positive("height", height);
-  positive("total_mass", total_mass);
-  if (!std::isfinite(start_height)) fail("start_height", "must be finite");
-  nonnegative("shear_ratio", shear_ratio);
-  nonnegative("bending_ratio", bending_ratio);
-  positive("k_low", k_low);
-  positive("k_high", k_high);
-  if (!(k_low <= k_high)) fail("k_high", "must be >= k_low");
-  nonnegative("structural_damping", structural_damping);
-  nonnegative("shear_damping", shear_damping);
-  nonnegative("bending_damping", bending_damping);
-  nonnegative("damping", damping);
-  nonnegative("gravity", gravity);
-  positive("dt", dt);
-  positive("duration", duration);
-  if (steps() < 1) fail("duration", "must be at least one step dt");
-  positive("swing_time", swing_time);
-  if (!std::isfinite(forward)) fail("forward", "must be finite");
-  if (!std::isfinite(lift)) fail("lift", "must be finite");
-  nonnegative("release_time", release_time);
-  if (!(release_step() <= steps())) fail("release_time", "must be <= duration");
-  if (!std::isfinite(floor_height)) fail("floor_height", "must be finite");
-  if (!(start_height > floor_height)) fail("start_height", "must be above floor_height");
-  if (!(tangential_keep >= 0.0 && tangential_keep <= 1.0)) fail("tangential_keep", "must be in [0, 1]");
+  check.require(cols >= 5 && rows >= 5 && cols <= 201 && rows <= 201, "cols/rows",
+                "must be in [5, 201] (4 x 4 patches)");
+  check.positive("width", width);
+  check.positive("height", height);
+  check.positive("total_mass", total_mass);
+  check.finite("start_height", start_height);
+  check.nonnegative("shear_ratio", shear_ratio);
+  check.nonnegative("bending_ratio", bending_ratio);
+  check.positive("k_low", k_low);
+  check.positive("k_high", k_high);
+  check.require(k_low <= k_high, "k_high", "must be >= k_low");
+  check.nonnegative("structural_damping", structural_damping);
+  check.nonnegative("shear_damping", shear_damping);
+  check.nonnegative("bending_damping", bending_damping);
+  check.nonnegative("damping", damping);
+  check.nonnegative("gravity", gravity);
+  check.positive("dt", dt);
+  check.positive("duration", duration);
+  check.require(steps() >= 1, "duration", "must be at least one step dt");
+  check.positive("swing_time", swing_time);
+  check.finite("forward", forward);
+  check.finite("lift", lift);
+  check.nonnegative("release_time", release_time);
+  check.require(release_step() <= steps(), "release_time", "must be <= duration");
+  check.finite("floor_height", floor_height);
+  check.require(start_height > floor_height, "start_height", "must be above floor_height");
+  check.require(tangential_keep >= 0.0 && tangential_keep <= 1.0, "tangential_keep", "must be in [0, 1]");
   for (int i = 0; i < 3; ++i) {
-    if (!(std::isfinite(v_low[i]) && std::isfinite(v_high[i]))) fail("v_low/v_high", "must be finite");
-    if (!(v_low[i] <= v_high[i])) fail("v_high", "must be >= v_low in every component");
+    check.require(std::isfinite(v_low[i]) && std::isfinite(v_high[i]), "v_low/v_high", "must be finite");
+    check.require(v_low[i] <= v_high[i], "v_high", "must be >= v_low in every component");
   }
-  if (stiffness_reference.size() != 16) fail("stiffness_reference", "must have 16 entries (4 x 4 patches)");
-  for (double x : stiffness_reference)
-    if (!(x >= -1.0 && x <= 1.0)) fail("stiffness_reference", "must lie in [-1, 1]");
-  for (double x : velocity_reference)
-    if (!(x >= -1.0 && x <= 1.0)) fail("velocity_reference", "must lie in [-1, 1]");
+  check.require(stiffness_reference.size() == 16, "stiffness_reference", "must have 16 entries (4 x 4 patches)");
+  check.in_unit_box("stiffness_reference", stiffness_reference);
+  check.in_unit_box("velocity_reference", velocity_reference);
 }
 
 nlohmann::json SwingConfig::to_json() const {
-  return {{"cols", cols},
-          {"rows", rows},
-          {"width", width},
-          {"height", height},
-          {"total_mass", total_mass},
-          {"start_height", start_height},
-          {"shear_ratio", shear_ratio},
-          {"bending_ratio", bending_ratio},
-          {"k_low", k_low},
-          {"k_high", k_high},
-          {"structural_damping", structural_damping},
-          {"shear_damping", shear_damping},
-          {"bending_damping", bending_damping},
-          {"damping", damping},
-          {"gravity", gravity},
-          {"dt", dt},
-          {"duration", duration},
-          {"steps", steps()},
-          {"swing_time", swing_time},
-          {"forward", forward},
-          {"lift", lift},
-          {"release_time", release_time},
-          {"release_step", release_step()},
-          {"floor_height", floor_height},
-          {"tangential_keep", tangential_keep},
-          {"v_low", v_low},
-          {"v_high", v_high},
-          {"stiffness_reference", stiffness_reference},
-          {"velocity_reference", velocity_reference},
-          {"swing", "p(t) = p0 + (0, lift sin(pi tau), forward (1 - cos(pi tau)) / 2), tau = min(t / swing_time, 1)"},
-          {"integrator", "symplectic Euler mass-spring (envs/cloth/cloth_dynamics.hpp), contact velocity projection"}};
+  nlohmann::json j = fields_json(*this);
+  j["steps"] = steps();
+  j["release_step"] = release_step();
+  j["swing"] = "p(t) = p0 + (0, lift sin(pi tau), forward (1 - cos(pi tau)) / 2), tau = min(t / swing_time, 1)";
+  j["integrator"] = "symplectic Euler mass-spring (envs/cloth/cloth_dynamics.hpp), contact velocity projection";
+  return j;
 }
 
 }  // namespace dsb::cloth

@@ -74,7 +74,38 @@ struct SwingConfig {
   int release_step() const;  // round(release_time / dt)
   // throws ConfigError("swing", field, why)
   void validate() const;
-  nlohmann::json to_json() const;
+  nlohmann::json to_json() const;  // fields() plus the step counts, the swing and the integrator
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("cols", cols);
+    visit("rows", rows);
+    visit("width", width);
+    visit("height", height);
+    visit("total_mass", total_mass);
+    visit("start_height", start_height);
+    visit("shear_ratio", shear_ratio);
+    visit("bending_ratio", bending_ratio);
+    visit("k_low", k_low);
+    visit("k_high", k_high);
+    visit("structural_damping", structural_damping);
+    visit("shear_damping", shear_damping);
+    visit("bending_damping", bending_damping);
+    visit("damping", damping);
+    visit("gravity", gravity);
+    visit("dt", dt);
+    visit("duration", duration);
+    visit("swing_time", swing_time);
+    visit("forward", forward);
+    visit("lift", lift);
+    visit("release_time", release_time);
+    visit("floor_height", floor_height);
+    visit("tangential_keep", tangential_keep);
+    visit("v_low", v_low);
+    visit("v_high", v_high);
+    visit("stiffness_reference", stiffness_reference);
+    visit("velocity_reference", velocity_reference);
+  }
 };
 
 }  // namespace dsb::cloth

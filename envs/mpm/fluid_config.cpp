@@ -3,7 +3,8 @@
 #include <cmath>
 #include <string>
 
-#include "common/error.hpp"
+#include "common/config_fields.hpp"
+#include "common/field_check.hpp"
 
 namespace dsb::mpm {
 
@@ -40,74 +41,46 @@ Material FluidConfig::default_cube() {
 }
 
 void FluidConfig::validate() const {
-  auto fail = [](const std::string& field, const std::string& why) { throw ConfigError("fluid", field, why); };
-  auto positive = [&](const std::string& field, double v) {
-    if (!(std::isfinite(v) && v > 0.0)) fail(field, "must be finite and > 0, got " + std::to_string(v));
-  };
+  const FieldCheck check("fluid");
   mpm.validate("fluid");
-  if (env_steps < 1) fail("env_steps", "must be >= 1, got " + std::to_string(env_steps));
-  if (segments < 1 || env_steps % segments != 0)
-    fail("segments", "must divide env_steps (" + std::to_string(env_steps) + "), got " + std::to_string(segments));
+  check.at_least("env_steps", env_steps, 1);
+  check.require(segments >= 1 && env_steps % segments == 0, "segments",
+                "must divide env_steps (" + std::to_string(env_steps) + "), got " + std::to_string(segments));
   syrup.validate("fluid", "syrup");
   cube.validate("fluid", "cube");
-  if (syrup.kind != MaterialKind::fluid) fail("syrup.kind", "must be fluid");
-  if (cube.kind == MaterialKind::fluid) fail("cube.kind", "must be elastic or plastic");
-  positive("syrup_depth", syrup_depth);
-  if (syrup_particles_per_cell < 1) fail("syrup_particles_per_cell", "must be >= 1");
-  positive("cube_size", cube_size);
-  if (cube_particles_per_axis_per_cell < 1) fail("cube_particles_per_axis_per_cell", "must be >= 1");
-  positive("bowl_radius", bowl_radius);
-  positive("bowl_thickness", bowl_thickness);
-  positive("handle_radius", handle_radius);
-  positive("handle_half_length", handle_half_length);
-  positive("max_speed", max_speed);
-  if (!(std::isfinite(friction) && friction >= 0.0)) fail("friction", "must be finite and >= 0");
-  if (!(std::isfinite(softness) && softness >= 0.0)) fail("softness", "must be finite and >= 0");
+  check.require(syrup.kind == MaterialKind::fluid, "syrup.kind", "must be fluid");
+  check.require(cube.kind != MaterialKind::fluid, "cube.kind", "must be elastic or plastic");
+  check.positive("syrup_depth", syrup_depth);
+  check.require(syrup_particles_per_cell >= 1, "syrup_particles_per_cell", "must be >= 1");
+  check.positive("cube_size", cube_size);
+  check.require(cube_particles_per_axis_per_cell >= 1, "cube_particles_per_axis_per_cell", "must be >= 1");
+  check.positive("bowl_radius", bowl_radius);
+  check.positive("bowl_thickness", bowl_thickness);
+  check.positive("handle_radius", handle_radius);
+  check.positive("handle_half_length", handle_half_length);
+  check.positive("max_speed", max_speed);
+  check.require(std::isfinite(friction) && friction >= 0.0, "friction", "must be finite and >= 0");
+  check.require(std::isfinite(softness) && softness >= 0.0, "softness", "must be finite and >= 0");
   for (int a = 0; a < 3; ++a)
-    if (!(ladle_lower[a] <= ladle_start[a] && ladle_start[a] <= ladle_upper[a]))
-      fail("ladle_start", "must lie inside [ladle_lower, ladle_upper]");
+    check.require(ladle_lower[a] <= ladle_start[a] && ladle_start[a] <= ladle_upper[a], "ladle_start",
+                  "must lie inside [ladle_lower, ladle_upper]");
   const double lo = floor_y(), hi_x = (mpm.grid[0] - mpm.bound) * mpm.dx, hi_z = (mpm.grid[2] - mpm.bound) * mpm.dx;
-  if (!(cube_xz[0] - cube_size / 2 > lo && cube_xz[0] + cube_size / 2 < hi_x && cube_xz[1] - cube_size / 2 > lo &&
-        cube_xz[1] + cube_size / 2 < hi_z))
-    fail("cube_xz", "puts the cube outside the tank");
-  if (!(syrup_depth + floor_y() < (mpm.grid[1] - mpm.bound) * mpm.dx)) fail("syrup_depth", "exceeds the domain");
+  check.require(cube_xz[0] - cube_size / 2 > lo && cube_xz[0] + cube_size / 2 < hi_x &&
+                    cube_xz[1] - cube_size / 2 > lo && cube_xz[1] + cube_size / 2 < hi_z,
+                "cube_xz", "puts the cube outside the tank");
+  check.require(syrup_depth + floor_y() < (mpm.grid[1] - mpm.bound) * mpm.dx, "syrup_depth", "exceeds the domain");
 }
 
 nlohmann::json FluidConfig::to_json() const {
-  return {{"mpm", mpm.to_json()},
-          {"env_steps", env_steps},
-          {"segments", segments},
-          {"syrup", syrup.to_json()},
-          {"syrup_depth", syrup_depth},
-          {"syrup_particles_per_cell", syrup_particles_per_cell},
-          {"cube", cube.to_json()},
-          {"cube_size", cube_size},
-          {"cube_xz", cube_xz},
-          {"cube_particles_per_axis_per_cell", cube_particles_per_axis_per_cell},
-          {"bowl_radius", bowl_radius},
-          {"bowl_thickness", bowl_thickness},
-          {"bowl_rim_height", bowl_rim_height},
-          {"bowl_tilt", bowl_tilt},
-          {"handle_radius", handle_radius},
-          {"handle_half_length", handle_half_length},
-          {"ladle_start", ladle_start},
-          {"ladle_lower", ladle_lower},
-          {"ladle_upper", ladle_upper},
-          {"max_speed", max_speed},
-          {"friction", friction},
-          {"softness", softness},
-          {"rim_height", rim_height},
-          {"tank_axis_xz", tank_axis_xz},
-          {"ladle_weight", ladle_weight},
-          {"axis_weight", axis_weight},
-          {"seed", seed},
-          {"units", "m, s, kg, Pa; heights from the tank floor y = bound dx"},
-          {"params",
-           "5 segments x (forward/back speed along x, up/down speed along y), x = +-1 -> +-max_speed, "
-           "held for env_steps / segments env steps"},
-          {"loss",
-           "max(0, rim_height - y_cube) + ladle_weight |xz_cube - xz_bowl| + axis_weight |xz_cube - "
-           "tank_axis_xz|, cube = mean of its particles, at the last env step"}};
+  nlohmann::json j = fields_json(*this);
+  j["units"] = "m, s, kg, Pa; heights from the tank floor y = bound dx";
+  j["params"] =
+      "5 segments x (forward/back speed along x, up/down speed along y), x = +-1 -> +-max_speed, "
+      "held for env_steps / segments env steps";
+  j["loss"] =
+      "max(0, rim_height - y_cube) + ladle_weight |xz_cube - xz_bowl| + axis_weight |xz_cube - "
+      "tank_axis_xz|, cube = mean of its particles, at the last env step";
+  return j;
 }
 
 }  // namespace dsb::mpm

@@ -39,7 +39,20 @@ struct MpmConfig {
   double clamp_high(int axis) const { return (grid[axis] - bound) * dx; }
 
   void validate(const char* owner) const;  // throws ConfigError naming the field
-  nlohmann::json to_json() const;
+  nlohmann::json to_json() const;          // fields() plus the scheme
+  // the stored fields, each named once (common/config_fields.hpp); gravity as [x, y, z]
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("grid", grid);
+    visit("dx", dx);
+    visit("dt", dt);
+    visit("substeps", substeps);
+    visit("gravity", std::array<double, 3>{gravity.x(), gravity.y(), gravity.z()});
+    visit("bound", bound);
+    visit("floor_friction", floor_friction);
+    visit("grid_mass_epsilon", grid_mass_epsilon);
+    visit("pad", pad);
+  }
 };
 
 }  // namespace dsb::mpm

@@ -5,7 +5,9 @@
 #include <limits>
 #include <string>
 
+#include "common/config_fields.hpp"
 #include "common/error.hpp"
+#include "common/field_check.hpp"
 #include "common/regular_file.hpp"
 #include "common/rng.hpp"
 #include "envs/core/data_dir.hpp"
@@ -35,27 +37,27 @@ PlbConfig plb_config(const std::string& name) {
 }
 
 void PlbConfig::validate() const {
-  auto fail = [](const std::string& field, const std::string& why) { throw ConfigError("plb", field, why); };
-  if (!find_plb_task(task)) fail("task", "unknown task '" + task + "'");
+  const FieldCheck check("plb");
+  check.require(find_plb_task(task) != nullptr, "task", "unknown task '" + task + "'");
   mpm.validate("plb");
-  if (env_steps < 1) fail("env_steps", "must be >= 1, got " + std::to_string(env_steps));
-  if (segments < 1 || env_steps % segments != 0)
-    fail("segments", "must divide env_steps (" + std::to_string(env_steps) + "), got " + std::to_string(segments));
-  if (!(std::isfinite(softness) && softness >= 0.0)) fail("softness", "must be finite and >= 0");
-  if (!(particle_volume > 0.0)) fail("particle_volume", "must be > 0");
-  if (!(density > 0.0)) fail("density", "must be > 0");
+  check.at_least("env_steps", env_steps, 1);
+  check.require(segments >= 1 && env_steps % segments == 0, "segments",
+                "must divide env_steps (" + std::to_string(env_steps) + "), got " + std::to_string(segments));
+  check.require(std::isfinite(softness) && softness >= 0.0, "softness", "must be finite and >= 0");
+  check.require(particle_volume > 0.0, "particle_volume", "must be > 0");
+  check.require(density > 0.0, "density", "must be > 0");
   for (auto [f, v] :
        {std::pair{"sdf_weight", sdf_weight}, {"density_weight", density_weight}, {"contact_weight", contact_weight}})
-    if (!(std::isfinite(v) && v >= 0.0)) fail(f, "must be finite and >= 0");
-  if (observed_particles < 1) fail("observed_particles", "must be >= 1");
+    check.require(std::isfinite(v) && v >= 0.0, f, "must be finite and >= 0");
+  check.require(observed_particles >= 1, "observed_particles", "must be >= 1");
   // a target file's values are bounded by kMaxTargetMass so that the density term, summed over the
   // steps and nodes, stays far below the largest double (plb_target_file.hpp derives it)
   const double nodes = static_cast<double>(mpm.grid[0]) * mpm.grid[1] * mpm.grid[2];
-  if (static_cast<double>(env_steps) * density_weight * nodes * kMaxTargetMass >
-      0.1 * std::numeric_limits<double>::max())
-    fail("density_weight",
-         "with " + std::to_string(env_steps) + " env steps and " + std::to_string(mpm.grid[0]) +
-             "^3 nodes, a target of kMaxTargetMass per node could overflow the loss");
+  check.require(!(static_cast<double>(env_steps) * density_weight * nodes * kMaxTargetMass >
+                  0.1 * std::numeric_limits<double>::max()),
+                "density_weight",
+                "with " + std::to_string(env_steps) + " env steps and " + std::to_string(mpm.grid[0]) +
+                    "^3 nodes, a target of kMaxTargetMass per node could overflow the loss");
 }
 
 namespace {
@@ -107,33 +109,20 @@ nlohmann::json PlbConfig::to_json() const {
   for (const auto& p : t.primitives) prims.push_back(p.to_json());
   nlohmann::json reference = nlohmann::json::array();
   for (const auto& ph : t.reference) reference.push_back({{"steps", ph.steps}, {"actions", ph.actions}});
-  return {{"task", task},
-          {"mpm", mpm.to_json()},
-          {"env_steps", env_steps},
-          {"segments", segments},
-          {"softness", softness},
-          {"particle_volume", particle_volume},
-          {"density", density},
-          {"material",
-           {{"kind", "plastic"},
-            {"youngs_modulus", t.youngs_modulus},
-            {"poisson_ratio", t.poisson_ratio},
-            {"yield_stress", t.yield_stress}}},
-          {"shapes", shapes},
-          {"primitives", prims},
-          {"loss",
-           {{"sdf_weight", sdf_weight},
-            {"density_weight", density_weight},
-            {"contact_weight", contact_weight},
-            {"target_threshold", target_threshold},
-            {"form",
-             "sum over env steps of sdf_weight sum_I d_I m_I + density_weight sum_I |m_I - t_I| + "
-             "contact_weight sum_k (min_p max(sdf_k(x_p), 0))^2"}}},
-          {"target", target_json(*this, reference)},
-          {"metric", "soft IoU of the final grid mass with the target"},
-          {"params", "5 segments x the manipulators' commands of one env step, each held for env_steps / 5 steps"},
-          {"seed", seed},
-          {"observed_particles", observed_particles}};
+  nlohmann::json j = fields_json(*this);
+  j["material"] = {{"kind", "plastic"},
+                   {"youngs_modulus", t.youngs_modulus},
+                   {"poisson_ratio", t.poisson_ratio},
+                   {"yield_stress", t.yield_stress}};
+  j["shapes"] = shapes;
+  j["primitives"] = prims;
+  j["loss"]["form"] =
+      "sum over env steps of sdf_weight sum_I d_I m_I + density_weight sum_I |m_I - t_I| + "
+      "contact_weight sum_k (min_p max(sdf_k(x_p), 0))^2";
+  j["target"] = target_json(*this, reference);
+  j["metric"] = "soft IoU of the final grid mass with the target";
+  j["params"] = "5 segments x the manipulators' commands of one env step, each held for env_steps / 5 steps";
+  return j;
 }
 
 }  // namespace dsb::mpm

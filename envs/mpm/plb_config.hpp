@@ -36,7 +36,24 @@ struct PlbConfig {
   static MpmConfig default_mpm();
   int steps_per_segment() const { return env_steps / segments; }
   void validate() const;           // ConfigError naming the field
-  nlohmann::json to_json() const;  // includes the task's shapes, primitives and overrides
+  nlohmann::json to_json() const;  // fields() plus the task's shapes, primitives, material and target
+  // the stored fields, each named once (common/config_fields.hpp); the loss weights under "loss"
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("task", task);
+    visit("mpm", mpm);
+    visit("env_steps", env_steps);
+    visit("segments", segments);
+    visit("softness", softness);
+    visit("particle_volume", particle_volume);
+    visit("density", density);
+    visit("loss.sdf_weight", sdf_weight);
+    visit("loss.density_weight", density_weight);
+    visit("loss.contact_weight", contact_weight);
+    visit("loss.target_threshold", target_threshold);
+    visit("seed", seed);
+    visit("observed_particles", observed_particles);
+  }
 };
 
 // The config of task `name` with the paper's raised contact weight (plb_config.cpp says why).

@@ -24,7 +24,22 @@ struct BounceConfig {
   std::array<double, 3> target = {-1.0, 0.5, 1.0};      // m (chosen here)
   ContactConfig contact;                                // ke 1e4, kd 10, mu 0.25
   void validate() const;
-  nlohmann::json to_json() const;
+  nlohmann::json to_json() const;  // fields() plus steps and the model's description
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("radius", radius);
+    visit("mass", mass);
+    visit("start", start);
+    visit("v_low", v_low);
+    visit("v_high", v_high);
+    visit("wall_x", wall_x);
+    visit("gravity", gravity);
+    visit("dt", dt);
+    visit("duration", duration);
+    visit("target", target);
+    visit("contact", contact);
+  }
 };
 
 }  // namespace dsb

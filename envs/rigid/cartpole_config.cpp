@@ -3,7 +3,8 @@
 #include <cmath>
 #include <string>
 
-#include "common/error.hpp"
+#include "common/config_fields.hpp"
+#include "common/field_check.hpp"
 
 namespace dsb {
 
@@ -20,44 +21,31 @@ CartpoleConfig CartpoleConfig::one_link() {
 CartpoleConfig CartpoleConfig::three_links() { return CartpoleConfig{}; }
 
 void CartpoleConfig::validate() const {
-  auto fail = [](const std::string& field, const std::string& why) { throw ConfigError("cartpole", field, why); };
-  auto positive = [&](const std::string& field, double v) {
-    if (!(std::isfinite(v) && v > 0.0)) fail(field, "must be finite and > 0, got " + std::to_string(v));
-  };
-  if (links < 1 || links > 8) fail("links", "must be in 1..8, got " + std::to_string(links));
-  if (static_cast<int>(link_masses.size()) != links)
-    fail("link_masses", "must have " + std::to_string(links) + " entries, got " + std::to_string(link_masses.size()));
-  for (double m : link_masses) positive("link_masses", m);
-  positive("link_length", link_length);
-  positive("cart_mass", cart_mass);
-  if (!(std::isfinite(gravity) && gravity >= 0.0)) fail("gravity", "must be finite and >= 0");
-  positive("dt", dt);
-  if (steps < 1) fail("steps", "must be >= 1, got " + std::to_string(steps));
-  positive("max_cart_speed", max_cart_speed);
-  positive("max_torque", max_torque);
-  if (!std::isfinite(target[0]) || !std::isfinite(target[1])) fail("target", "must be finite");
-  if (!start_joint_angles.empty() && static_cast<int>(start_joint_angles.size()) != links)
-    fail("start_joint_angles", "must be empty or have " + std::to_string(links) + " entries");
-  if (!start_joint_velocities.empty() && static_cast<int>(start_joint_velocities.size()) != links)
-    fail("start_joint_velocities", "must be empty or have " + std::to_string(links) + " entries");
+  const FieldCheck check("cartpole");
+  check.require(links >= 1 && links <= 8, "links", "must be in 1..8, got " + std::to_string(links));
+  check.require(static_cast<int>(link_masses.size()) == links, "link_masses",
+                "must have " + std::to_string(links) + " entries, got " + std::to_string(link_masses.size()));
+  for (double m : link_masses) check.positive("link_masses", m);
+  check.positive("link_length", link_length);
+  check.positive("cart_mass", cart_mass);
+  check.require(std::isfinite(gravity) && gravity >= 0.0, "gravity", "must be finite and >= 0");
+  check.positive("dt", dt);
+  check.at_least("steps", steps, 1);
+  check.positive("max_cart_speed", max_cart_speed);
+  check.positive("max_torque", max_torque);
+  check.finite("target", target);
+  check.require(start_joint_angles.empty() || static_cast<int>(start_joint_angles.size()) == links,
+                "start_joint_angles", "must be empty or have " + std::to_string(links) + " entries");
+  check.require(start_joint_velocities.empty() || static_cast<int>(start_joint_velocities.size()) == links,
+                "start_joint_velocities", "must be empty or have " + std::to_string(links) + " entries");
 }
 
 nlohmann::json CartpoleConfig::to_json() const {
-  return {{"links", links},
-          {"link_masses", link_masses},
-          {"link_length", link_length},
-          {"cart_mass", cart_mass},
-          {"gravity", gravity},
-          {"dt", dt},
-          {"steps", steps},
-          {"max_cart_speed", max_cart_speed},
-          {"max_torque", max_torque},
-          {"target", target},
-          {"start_joint_angles", start_joint_angles},
-          {"start_joint_velocities", start_joint_velocities},
-          {"integrator", "semi-implicit Euler"},
-          {"params", "per step: cart speed, then one torque per joint (step-major)"},
-          {"loss", "L2 distance of the final tip to target"}};
+  nlohmann::json j = fields_json(*this);
+  j["integrator"] = "semi-implicit Euler";
+  j["params"] = "per step: cart speed, then one torque per joint (step-major)";
+  j["loss"] = "L2 distance of the final tip to target";
+  return j;
 }
 
 }  // namespace dsb

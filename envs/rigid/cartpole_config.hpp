@@ -26,7 +26,23 @@ struct CartpoleConfig {
   static CartpoleConfig one_link();     // cartpole1: 1 link of 1 kg
   static CartpoleConfig three_links();  // cartpole3: 1.0, 0.5, 0.25 kg
   void validate() const;                // throws ConfigError naming the field
-  nlohmann::json to_json() const;
+  nlohmann::json to_json() const;       // fields() plus the model's description
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("links", links);
+    visit("link_masses", link_masses);
+    visit("link_length", link_length);
+    visit("cart_mass", cart_mass);
+    visit("gravity", gravity);
+    visit("dt", dt);
+    visit("steps", steps);
+    visit("max_cart_speed", max_cart_speed);
+    visit("max_torque", max_torque);
+    visit("target", target);
+    visit("start_joint_angles", start_joint_angles);
+    visit("start_joint_velocities", start_joint_velocities);
+  }
 };
 
 }  // namespace dsb

@@ -25,7 +25,15 @@ struct ContactConfig {
   double friction_smoothing = 0.5;         // m/s, velocity scale of the smooth Coulomb law (chosen
                                            // here, was 1e-2: unstable stick, see above)
   void validate(const char* owner) const;  // throws ConfigError naming the field
-  nlohmann::json to_json() const;
+  nlohmann::json to_json() const;          // fields() plus the law
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("ke", ke);
+    visit("kd", kd);
+    visit("mu", mu);
+    visit("friction_smoothing", friction_smoothing);
+  }
 };
 
 }  // namespace dsb

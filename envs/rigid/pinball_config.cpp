@@ -3,7 +3,8 @@
 #include <cmath>
 #include <string>
 
-#include "common/error.hpp"
+#include "common/config_fields.hpp"
+#include "common/field_check.hpp"
 
 namespace dsb {
 
@@ -30,40 +31,30 @@ std::array<double, 2> PinballConfig::paddle_centre(int row, int col) const {
 }
 
 void PinballConfig::validate() const {
-  auto fail = [](const std::string& field, const std::string& why) { throw ConfigError("pinball", field, why); };
-  auto positive = [&](const std::string& field, double v) {
-    if (!(std::isfinite(v) && v > 0.0)) fail(field, "must be finite and > 0, got " + std::to_string(v));
-  };
-  auto finite = [&](const std::string& field, double v) {
-    if (!std::isfinite(v)) fail(field, "must be finite");
-  };
-  if (rows < 1) fail("rows", "must be >= 1, got " + std::to_string(rows));
-  if (cols < 1) fail("cols", "must be >= 1, got " + std::to_string(cols));
-  if (rows * cols > max_paddles)
-    fail("rows", "rows * cols must be <= " + std::to_string(max_paddles) + ", got " + std::to_string(rows * cols));
-  positive("width", width);
-  positive("height", height);
-  positive("ball_radius", ball_radius);
-  positive("ball_mass", ball_mass);
-  if (!(2.0 * ball_radius < width)) fail("ball_radius", "must be < width / 2");
-  finite("start", start[0]);
-  finite("start", start[1]);
-  if (!(start[0] >= ball_radius && start[0] <= width - ball_radius && start[1] >= ball_radius))
-    fail("start", "must leave the ball inside the board, clear of the walls and the floor");
-  positive("paddle_thickness", paddle_thickness);
-  if (!(std::isfinite(paddle_length) && paddle_length > paddle_thickness))
-    fail("paddle_length", "must be finite and > paddle_thickness");
-  finite("first_row_y", first_row_y);
-  finite("last_row_y", last_row_y);
-  finite("first_col_x", first_col_x);
-  finite("last_col_x", last_col_x);
-  positive("max_angle", max_angle);
-  if (!(std::isfinite(gravity) && gravity >= 0.0)) fail("gravity", "must be finite and >= 0");
-  positive("dt", dt);
-  positive("duration", duration);
-  if (!(std::lround(duration / dt) >= 1)) fail("duration", "must be at least one step dt");
-  finite("target", target[0]);
-  finite("target", target[1]);
+  const FieldCheck check("pinball");
+  check.at_least("rows", rows, 1);
+  check.at_least("cols", cols, 1);
+  check.require(rows * cols <= max_paddles, "rows",
+                "rows * cols must be <= " + std::to_string(max_paddles) + ", got " + std::to_string(rows * cols));
+  check.positive("width", width);
+  check.positive("height", height);
+  check.positive("ball_radius", ball_radius);
+  check.positive("ball_mass", ball_mass);
+  check.require(2.0 * ball_radius < width, "ball_radius", "must be < width / 2");
+  check.finite("start", start);
+  check.require(start[0] >= ball_radius && start[0] <= width - ball_radius && start[1] >= ball_radius, "start",
+                "must leave the ball inside the board, clear of the walls and the floor");
+  check.positive("paddle_thickness", paddle_thickness);
+  check.require(std::isfinite(paddle_length) && paddle_length > paddle_thickness, "paddle_length",
+                "must be finite and > paddle_thickness");
+  check.finite("first_row_y", first_row_y);
+  check.finite("last_row_y", last_row_y);
+  check.finite("first_col_x", first_col_x);
+  check.finite("last_col_x", last_col_x);
+  check.positive("max_angle", max_angle);
+  check.require(std::isfinite(gravity) && gravity >= 0.0, "gravity", "must be finite and >= 0");
+  check.time_steps("duration", duration, dt);
+  check.finite("target", target);
   contact.validate("pinball");
 }
 
@@ -71,35 +62,18 @@ nlohmann::json PinballConfig::to_json() const {
   nlohmann::json centres = nlohmann::json::array();
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c) centres.push_back(paddle_centre(r, c));
-  return {{"rows", rows},
-          {"cols", cols},
-          {"width", width},
-          {"height", height},
-          {"ball_radius", ball_radius},
-          {"ball_mass", ball_mass},
-          {"start", start},
-          {"paddle_length", paddle_length},
-          {"paddle_thickness", paddle_thickness},
-          {"first_row_y", first_row_y},
-          {"last_row_y", last_row_y},
-          {"first_col_x", first_col_x},
-          {"last_col_x", last_col_x},
-          {"paddle_centres", centres},
-          {"max_angle", max_angle},
-          {"gravity", gravity},
-          {"dt", dt},
-          {"duration", duration},
-          {"steps", std::lround(duration / dt)},
-          {"target", target},
-          {"contact", contact.to_json()},
-          {"surfaces",
-           "walls x = 0 (normal +x) and x = width (normal -x), floor y = 0 (normal +y), no "
-           "ceiling; paddles are capsules: segment of length paddle_length - paddle_thickness "
-           "through the centre at the angle (0 = horizontal, counter-clockwise positive), radius "
-           "paddle_thickness / 2"},
-          {"integrator", "semi-implicit Euler: v += dt (g + f / m); x += dt v"},
-          {"params", "paddle angles row-major, angle = max_angle x"},
-          {"loss", "L2 distance of the final ball centre to target"}};
+  nlohmann::json j = fields_json(*this);
+  j["paddle_centres"] = centres;
+  j["steps"] = std::lround(duration / dt);
+  j["surfaces"] =
+      "walls x = 0 (normal +x) and x = width (normal -x), floor y = 0 (normal +y), no "
+      "ceiling; paddles are capsules: segment of length paddle_length - paddle_thickness "
+      "through the centre at the angle (0 = horizontal, counter-clockwise positive), radius "
+      "paddle_thickness / 2";
+  j["integrator"] = "semi-implicit Euler: v += dt (g + f / m); x += dt v";
+  j["params"] = "paddle angles row-major, angle = max_angle x";
+  j["loss"] = "L2 distance of the final ball centre to target";
+  return j;
 }
 
 }  // namespace dsb

@@ -41,7 +41,30 @@ struct PinballConfig {
   static PinballConfig grid(int rows, int cols);                // `pinball-RxC`'s config
   std::array<double, 2> paddle_centre(int row, int col) const;  // m, (x, y)
   void validate() const;
-  nlohmann::json to_json() const;
+  nlohmann::json to_json() const;  // fields() plus the paddle centres, steps and the model's description
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("rows", rows);
+    visit("cols", cols);
+    visit("width", width);
+    visit("height", height);
+    visit("ball_radius", ball_radius);
+    visit("ball_mass", ball_mass);
+    visit("start", start);
+    visit("paddle_length", paddle_length);
+    visit("paddle_thickness", paddle_thickness);
+    visit("first_row_y", first_row_y);
+    visit("last_row_y", last_row_y);
+    visit("first_col_x", first_col_x);
+    visit("last_col_x", last_col_x);
+    visit("max_angle", max_angle);
+    visit("gravity", gravity);
+    visit("dt", dt);
+    visit("duration", duration);
+    visit("target", target);
+    visit("contact", contact);
+  }
 };
 
 }  // namespace dsb

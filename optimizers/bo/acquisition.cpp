@@ -9,22 +9,22 @@
 
 #include <nlopt.hpp>
 
-#include "common/error.hpp"
+#include "common/config_fields.hpp"
+#include "common/field_check.hpp"
 #include "optimizers/bo/sobol.hpp"
 #include "optimizers/core/work_memo.hpp"
 
 namespace dsb {
 
 void LcbConfig::validate(const std::string& owner) const {
-  if (!(beta >= 0.0 && std::isfinite(beta))) throw ConfigError(owner, "beta", "must be finite and >= 0");
-  if (raw_samples < 1) throw ConfigError(owner, "raw_samples", "must be >= 1");
-  if (restarts < 1 || restarts > raw_samples) throw ConfigError(owner, "restarts", "must be in 1..raw_samples");
-  if (max_evaluations < 1) throw ConfigError(owner, "max_evaluations", "must be >= 1");
+  const FieldCheck check(owner);
+  check.require(beta >= 0.0 && std::isfinite(beta), "beta", "must be finite and >= 0");
+  check.require(raw_samples >= 1, "raw_samples", "must be >= 1");
+  check.require(restarts >= 1 && restarts <= raw_samples, "restarts", "must be in 1..raw_samples");
+  check.require(max_evaluations >= 1, "max_evaluations", "must be >= 1");
 }
 
-nlohmann::json LcbConfig::to_json() const {
-  return {{"beta", beta}, {"raw_samples", raw_samples}, {"restarts", restarts}, {"max_evaluations", max_evaluations}};
-}
+nlohmann::json LcbConfig::to_json() const { return fields_json(*this); }
 
 double lcb(const GaussianProcess& gp, double beta, const Eigen::VectorXd& u, Eigen::VectorXd* grad) {
   double mean = 0.0, var = 0.0;

@@ -18,6 +18,14 @@ struct LcbConfig {
   int max_evaluations = 60;  // L-BFGS evaluations per restart (chosen here)
   void validate(const std::string& owner) const;
   nlohmann::json to_json() const;
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("beta", beta);
+    visit("raw_samples", raw_samples);
+    visit("restarts", restarts);
+    visit("max_evaluations", max_evaluations);
+  }
 };
 
 // LCB value at u (unit box) and, when grad is non-null, its gradient (d)

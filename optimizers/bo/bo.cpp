@@ -4,27 +4,26 @@
 #include <cmath>
 #include <limits>
 
-#include "common/error.hpp"
+#include "common/config_fields.hpp"
+#include "common/field_check.hpp"
 #include "optimizers/bo/sobol.hpp"
 #include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
 
 void BoConfig::validate() const {
-  if (initial_points < 0) throw ConfigError("bo", "initial_points", "must be >= 0");
-  if (refit_every_until < 1) throw ConfigError("bo", "refit_every_until", "must be >= 1");
-  if (!(refit_growth > 0.0)) throw ConfigError("bo", "refit_growth", "must be > 0");
+  const FieldCheck check("bo");
+  check.require(initial_points >= 0, "initial_points", "must be >= 0");
+  check.require(refit_every_until >= 1, "refit_every_until", "must be >= 1");
+  check.require(refit_growth > 0.0, "refit_growth", "must be > 0");
   lcb.validate("bo");
   gp.validate();
 }
 
 nlohmann::json BoConfig::to_json() const {
-  return {{"initial_points", initial_points},
-          {"initial_design", "scrambled Sobol"},
-          {"refit_every_until", refit_every_until},
-          {"refit_growth", refit_growth},
-          {"lcb", lcb.to_json()},
-          {"gp", gp.to_json()}};
+  nlohmann::json j = fields_json(*this);
+  j["initial_design"] = "scrambled Sobol";
+  return j;
 }
 
 int BoConfig::initial_points_for(int dim) const {

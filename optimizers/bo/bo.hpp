@@ -23,6 +23,15 @@ struct BoConfig {
   GpConfig gp;
   void validate() const;
   nlohmann::json to_json() const;
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("initial_points", initial_points);
+    visit("refit_every_until", refit_every_until);
+    visit("refit_growth", refit_growth);
+    visit("lcb", lcb);
+    visit("gp", gp);
+  }
   int initial_points_for(int dim) const;
 };
 

@@ -25,8 +25,9 @@
 
 #include <nlopt.hpp>
 
+#include "common/config_fields.hpp"
 #include "common/det_math.hpp"
-#include "common/error.hpp"
+#include "common/field_check.hpp"
 #include "common/number_text.hpp"
 #include "optimizers/bo/gp_pairs.hpp"
 #include "optimizers/core/work_memo.hpp"
@@ -47,8 +48,6 @@ constexpr double kLogLengthscaleMin = -6.907755278982137, kLogLengthscaleMax = 6
 constexpr double kLogOutputscaleMin = -9.210340371976182, kLogOutputscaleMax = 9.210340371976182;
 constexpr double kLogNoiseExcessMin = -27.631021115928547, kLogNoiseExcessMax = 6.907755278982137;
 constexpr double kMeanBound = 100.0;
-
-[[noreturn]] void bad(const std::string& field, const std::string& why) { throw ConfigError("gp", field, why); }
 
 // Matern-5/2 from r^2: value, and gneg = -(dk/dr) / r = 5/3 s (1 + sqrt5 r) exp(-sqrt5 r)
 inline double matern_r2(double s, double r2, double* gneg) {
@@ -240,37 +239,24 @@ double neg_objective(const std::vector<double>& x, std::vector<double>& grad, vo
 // config
 
 void GpConfig::validate() const {
-  const auto positive = [](const char* field, double v) {
-    if (!(v > 0.0) || !std::isfinite(v)) bad(field, "must be a finite number > 0 (got " + number_text(v) + ")");
-  };
-  positive("lengthscale_prior_concentration", lengthscale_prior_concentration);
-  positive("lengthscale_prior_rate", lengthscale_prior_rate);
-  positive("outputscale_prior_concentration", outputscale_prior_concentration);
-  positive("outputscale_prior_rate", outputscale_prior_rate);
-  positive("noise_prior_concentration", noise_prior_concentration);
-  positive("noise_prior_rate", noise_prior_rate);
-  if (!(noise_floor >= 0.0) || !std::isfinite(noise_floor))
-    bad("noise_floor", "must be a finite number >= 0 (got " + number_text(noise_floor) + ")");
-  if (fit_attempts < 1) bad("fit_attempts", "must be >= 1 (got " + std::to_string(fit_attempts) + ")");
-  if (fit_max_evaluations < 1)
-    bad("fit_max_evaluations", "must be >= 1 (got " + std::to_string(fit_max_evaluations) + ")");
-  if (!(min_variance >= 0.0) || !std::isfinite(min_variance))
-    bad("min_variance", "must be a finite number >= 0 (got " + number_text(min_variance) + ")");
+  const FieldCheck check("gp");
+  check.number_above("lengthscale_prior_concentration", lengthscale_prior_concentration, 0.0);
+  check.number_above("lengthscale_prior_rate", lengthscale_prior_rate, 0.0);
+  check.number_above("outputscale_prior_concentration", outputscale_prior_concentration, 0.0);
+  check.number_above("outputscale_prior_rate", outputscale_prior_rate, 0.0);
+  check.number_above("noise_prior_concentration", noise_prior_concentration, 0.0);
+  check.number_above("noise_prior_rate", noise_prior_rate, 0.0);
+  check.number_at_least("noise_floor", noise_floor, 0.0);
+  check.require(fit_attempts >= 1, "fit_attempts", "must be >= 1 (got " + std::to_string(fit_attempts) + ")");
+  check.require(fit_max_evaluations >= 1, "fit_max_evaluations",
+                "must be >= 1 (got " + std::to_string(fit_max_evaluations) + ")");
+  check.number_at_least("min_variance", min_variance, 0.0);
 }
 
 nlohmann::json GpConfig::to_json() const {
-  return {{"kernel", "matern52_ard"},
-          {"lengthscale_prior_concentration", lengthscale_prior_concentration},
-          {"lengthscale_prior_rate", lengthscale_prior_rate},
-          {"outputscale_prior_concentration", outputscale_prior_concentration},
-          {"outputscale_prior_rate", outputscale_prior_rate},
-          {"noise_prior_concentration", noise_prior_concentration},
-          {"noise_prior_rate", noise_prior_rate},
-          {"noise_floor", noise_floor},
-          {"constant_mean", constant_mean},
-          {"fit_attempts", fit_attempts},
-          {"fit_max_evaluations", fit_max_evaluations},
-          {"min_variance", min_variance}};
+  nlohmann::json j = fields_json(*this);
+  j["kernel"] = "matern52_ard";
+  return j;
 }
 
 // ---------------------------------------------------------------------------------------------

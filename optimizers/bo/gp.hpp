@@ -26,6 +26,21 @@ struct GpConfig {
   double min_variance = 1e-10;    // predictive variance floor (standardized units)
   void validate() const;          // throws ConfigError naming the field
   nlohmann::json to_json() const;
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("lengthscale_prior_concentration", lengthscale_prior_concentration);
+    visit("lengthscale_prior_rate", lengthscale_prior_rate);
+    visit("outputscale_prior_concentration", outputscale_prior_concentration);
+    visit("outputscale_prior_rate", outputscale_prior_rate);
+    visit("noise_prior_concentration", noise_prior_concentration);
+    visit("noise_prior_rate", noise_prior_rate);
+    visit("noise_floor", noise_floor);
+    visit("constant_mean", constant_mean);
+    visit("fit_attempts", fit_attempts);
+    visit("fit_max_evaluations", fit_max_evaluations);
+    visit("min_variance", min_variance);
+  }
 };
 
 // What a hyperparameter fit starts from (GaussianProcess::begin_fit): per L-BFGS start, the

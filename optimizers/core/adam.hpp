@@ -18,6 +18,14 @@ struct AdamConfig {
   double eps = 1e-8;
   void validate(const std::string& owner) const;
   nlohmann::json to_json() const;
+  // the stored fields, each named once (common/config_fields.hpp)
+  template <class Visit>
+  void fields(Visit&& visit) const {
+    visit("lr", lr);
+    visit("beta1", beta1);
+    visit("beta2", beta2);
+    visit("eps", eps);
+  }
 };
 
 class Adam {

@@ -5,61 +5,45 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/config_fields.hpp"
 #include "common/det_math.hpp"
-#include "common/error.hpp"
+#include "common/field_check.hpp"
 #include "common/number_text.hpp"
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/network_adam.hpp"
 #include "optimizers/rl/rl_core.hpp"
 
 namespace dsb {
-namespace {
-
-void require(bool ok, const char* field, const std::string& why) {
-  if (!ok) throw ConfigError("ppo", field, why);
-}
-
-}  // namespace
 
 void PpoConfig::validate() const {
-  require(std::isfinite(learning_rate) && learning_rate > 0.0, "learning_rate",
-          "must be > 0, got " + number_text(learning_rate));
-  require(n_steps >= 1, "n_steps", "must be >= 1, got " + std::to_string(n_steps));
-  require(batch_size >= 1 && batch_size <= n_steps, "batch_size",
-          "must be in 1..n_steps, got " + std::to_string(batch_size));
-  require(n_epochs >= 1, "n_epochs", "must be >= 1, got " + std::to_string(n_epochs));
-  require(gamma >= 0.0 && gamma <= 1.0, "gamma", "must be in [0, 1], got " + number_text(gamma));
-  require(gae_lambda >= 0.0 && gae_lambda <= 1.0, "gae_lambda", "must be in [0, 1], got " + number_text(gae_lambda));
-  require(std::isfinite(clip_range) && clip_range > 0.0, "clip_range", "must be > 0, got " + number_text(clip_range));
-  require(std::isfinite(ent_coef) && ent_coef >= 0.0, "ent_coef", "must be >= 0, got " + number_text(ent_coef));
-  require(std::isfinite(vf_coef) && vf_coef >= 0.0, "vf_coef", "must be >= 0, got " + number_text(vf_coef));
-  require(std::isfinite(max_grad_norm) && max_grad_norm > 0.0, "max_grad_norm",
-          "must be > 0, got " + number_text(max_grad_norm));
-  require(std::isfinite(adam_eps) && adam_eps > 0.0, "adam_eps", "must be > 0, got " + number_text(adam_eps));
-  require(std::isfinite(log_std_init), "log_std_init", "must be finite, got " + number_text(log_std_init));
-  require(!hidden.empty() && std::all_of(hidden.begin(), hidden.end(), [](int h) { return h >= 1; }), "hidden",
-          "must be one or more layer widths >= 1");
+  const FieldCheck check("ppo");
+  check.require(std::isfinite(learning_rate) && learning_rate > 0.0, "learning_rate",
+                "must be > 0, got " + number_text(learning_rate));
+  check.require(n_steps >= 1, "n_steps", "must be >= 1, got " + std::to_string(n_steps));
+  check.require(batch_size >= 1 && batch_size <= n_steps, "batch_size",
+                "must be in 1..n_steps, got " + std::to_string(batch_size));
+  check.require(n_epochs >= 1, "n_epochs", "must be >= 1, got " + std::to_string(n_epochs));
+  check.require(gamma >= 0.0 && gamma <= 1.0, "gamma", "must be in [0, 1], got " + number_text(gamma));
+  check.require(gae_lambda >= 0.0 && gae_lambda <= 1.0, "gae_lambda",
+                "must be in [0, 1], got " + number_text(gae_lambda));
+  check.require(std::isfinite(clip_range) && clip_range > 0.0, "clip_range",
+                "must be > 0, got " + number_text(clip_range));
+  check.require(std::isfinite(ent_coef) && ent_coef >= 0.0, "ent_coef", "must be >= 0, got " + number_text(ent_coef));
+  check.require(std::isfinite(vf_coef) && vf_coef >= 0.0, "vf_coef", "must be >= 0, got " + number_text(vf_coef));
+  check.require(std::isfinite(max_grad_norm) && max_grad_norm > 0.0, "max_grad_norm",
+                "must be > 0, got " + number_text(max_grad_norm));
+  check.require(std::isfinite(adam_eps) && adam_eps > 0.0, "adam_eps", "must be > 0, got " + number_text(adam_eps));
+  check.require(std::isfinite(log_std_init), "log_std_init", "must be finite, got " + number_text(log_std_init));
+  check.require(!hidden.empty() && std::all_of(hidden.begin(), hidden.end(), [](int h) { return h >= 1; }), "hidden",
+                "must be one or more layer widths >= 1");
   failed_loss.validate("ppo");
 }
 
 nlohmann::json PpoConfig::to_json() const {
-  nlohmann::json j = {
-      {"learning_rate", learning_rate},
-      {"n_steps", n_steps},
-      {"batch_size", batch_size},
-      {"n_epochs", n_epochs},
-      {"gamma", gamma},
-      {"gae_lambda", gae_lambda},
-      {"clip_range", clip_range},
-      {"ent_coef", ent_coef},
-      {"vf_coef", vf_coef},
-      {"max_grad_norm", max_grad_norm},
-      {"adam_eps", adam_eps},
-      {"log_std_init", log_std_init},
-      {"hidden", hidden},
-      {"activation", "tanh"},
-      {"networks", "separate policy and value MLPs"},
-      {"reward", "sparse: -episode loss at the last decision; failed episode: -2 x largest finite loss so far"}};
+  nlohmann::json j = fields_json(*this);
+  j["activation"] = "tanh";
+  j["networks"] = "separate policy and value MLPs";
+  j["reward"] = "sparse: -episode loss at the last decision; failed episode: -2 x largest finite loss so far";
   // the failed-episode loss enters only when it is not the default, so the default config (and
   // every run key made with it) is the one it always was
   const FailedEpisodeLoss standard = PpoConfig{}.failed_loss;

@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "common/error.hpp"
+#include "common/field_check.hpp"
 #include "common/number_text.hpp"
 #include "common/rng.hpp"
 #include "optimizers/core/diagnostics.hpp"
@@ -26,13 +27,10 @@ std::vector<int> mlp_layer_sizes(int in, const std::vector<int>& hidden, int out
 }
 
 void FailedEpisodeLoss::validate(const std::string& owner) const {
-  if (!(factor >= 1.0) || !std::isfinite(factor))
-    throw ConfigError(owner, "failed_loss_factor", "must be a finite number >= 1 (got " + number_text(factor) + ")");
-  if (!(floor >= 0.0) || !std::isfinite(floor))
-    throw ConfigError(owner, "failed_loss_floor", "must be a finite number >= 0 (got " + number_text(floor) + ")");
-  if (!(before_any > 0.0) || !std::isfinite(before_any))
-    throw ConfigError(owner, "failed_loss_before_any",
-                      "must be a finite number > 0 (got " + number_text(before_any) + ")");
+  const FieldCheck check(owner);
+  check.number_at_least("failed_loss_factor", factor, 1.0);
+  check.number_at_least("failed_loss_floor", floor, 0.0);
+  check.number_above("failed_loss_before_any", before_any, 0.0);
 }
 
 EpisodeLosses::EpisodeLosses(FailedEpisodeLoss failed, std::int64_t block)

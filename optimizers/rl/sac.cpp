@@ -4,8 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/config_fields.hpp"
 #include "common/det_math.hpp"
-#include "common/error.hpp"
+#include "common/field_check.hpp"
 #include "common/number_text.hpp"
 #include "common/rng.hpp"
 #include "optimizers/core/diagnostics.hpp"
@@ -15,8 +16,6 @@
 
 namespace dsb {
 namespace {
-
-[[noreturn]] void bad(const std::string& field, const std::string& why) { throw ConfigError("sac", field, why); }
 
 class Sac : public Optimizer {
  public:
@@ -195,53 +194,36 @@ nlohmann::json Sac::diagnostics() const {
 }  // namespace
 
 void SacConfig::validate() const {
-  auto pos_finite = [](double v) { return v > 0.0 && std::isfinite(v); };
-  if (!pos_finite(learning_rate))
-    bad("learning_rate", "must be a finite number > 0 (got " + number_text(learning_rate) + ")");
-  if (!pos_finite(adam_eps)) bad("adam_eps", "must be a finite number > 0 (got " + number_text(adam_eps) + ")");
-  if (buffer_size < 1) bad("buffer_size", "must be >= 1 (got " + std::to_string(buffer_size) + ")");
-  if (learning_starts < 0) bad("learning_starts", "must be >= 0 (got " + std::to_string(learning_starts) + ")");
-  if (batch_size < 1) bad("batch_size", "must be >= 1 (got " + std::to_string(batch_size) + ")");
-  if (!(tau > 0.0 && tau <= 1.0)) bad("tau", "must lie in (0, 1] (got " + number_text(tau) + ")");
-  if (!(gamma >= 0.0 && gamma <= 1.0)) bad("gamma", "must lie in [0, 1] (got " + number_text(gamma) + ")");
-  if (train_freq < 1) bad("train_freq", "must be >= 1 (got " + std::to_string(train_freq) + ")");
-  if (gradient_steps < 1) bad("gradient_steps", "must be >= 1 (got " + std::to_string(gradient_steps) + ")");
-  if (target_update_interval < 1)
-    bad("target_update_interval", "must be >= 1 (got " + std::to_string(target_update_interval) + ")");
-  if (n_critics < 1) bad("n_critics", "must be >= 1 (got " + std::to_string(n_critics) + ")");
-  if (net_arch.empty()) bad("net_arch", "must list at least one hidden layer");
-  for (int h : net_arch)
-    if (h < 1) bad("net_arch", "layer sizes must be >= 1 (got " + std::to_string(h) + ")");
-  if (!pos_finite(ent_coef_init))
-    bad("ent_coef_init", "must be a finite number > 0 (got " + number_text(ent_coef_init) + ")");
+  const FieldCheck check("sac");
+  check.number_above("learning_rate", learning_rate, 0.0);
+  check.number_above("adam_eps", adam_eps, 0.0);
+  check.require(buffer_size >= 1, "buffer_size", "must be >= 1 (got " + std::to_string(buffer_size) + ")");
+  check.require(learning_starts >= 0, "learning_starts", "must be >= 0 (got " + std::to_string(learning_starts) + ")");
+  check.require(batch_size >= 1, "batch_size", "must be >= 1 (got " + std::to_string(batch_size) + ")");
+  check.require(tau > 0.0 && tau <= 1.0, "tau", "must lie in (0, 1] (got " + number_text(tau) + ")");
+  check.require(gamma >= 0.0 && gamma <= 1.0, "gamma", "must lie in [0, 1] (got " + number_text(gamma) + ")");
+  check.require(train_freq >= 1, "train_freq", "must be >= 1 (got " + std::to_string(train_freq) + ")");
+  check.require(gradient_steps >= 1, "gradient_steps", "must be >= 1 (got " + std::to_string(gradient_steps) + ")");
+  check.require(target_update_interval >= 1, "target_update_interval",
+                "must be >= 1 (got " + std::to_string(target_update_interval) + ")");
+  check.require(n_critics >= 1, "n_critics", "must be >= 1 (got " + std::to_string(n_critics) + ")");
+  check.require(!net_arch.empty(), "net_arch", "must list at least one hidden layer");
+  for (int h : net_arch) check.require(h >= 1, "net_arch", "layer sizes must be >= 1 (got " + std::to_string(h) + ")");
+  check.number_above("ent_coef_init", ent_coef_init, 0.0);
   // the floor is also the stand-in before any finite loss, so it must be > 0
-  if (!pos_finite(failed_loss_floor))
-    bad("failed_loss_floor", "must be a finite number > 0 (got " + number_text(failed_loss_floor) + ")");
+  check.number_above("failed_loss_floor", failed_loss_floor, 0.0);
   failed_loss().validate("sac");
 }
 
 nlohmann::json SacConfig::to_json() const {
-  return nlohmann::json{{"learning_rate", learning_rate},
-                        {"adam_eps", adam_eps},
-                        {"buffer_size", buffer_size},
-                        {"learning_starts", learning_starts},
-                        {"batch_size", batch_size},
-                        {"tau", tau},
-                        {"gamma", gamma},
-                        {"train_freq", train_freq},
-                        {"gradient_steps", gradient_steps},
-                        {"target_update_interval", target_update_interval},
-                        {"n_critics", n_critics},
-                        {"net_arch", net_arch},
-                        {"activation", "relu"},
-                        {"ent_coef", "auto"},
-                        {"ent_coef_init", ent_coef_init},
-                        {"target_entropy", "-action_dim"},
-                        {"log_std_clamp", {kSacLogStdMin, kSacLogStdMax}},
-                        {"reward", "sparse: -loss at the final decision"},
-                        {"episode_end", "terminal (done = 1, no bootstrap)"},
-                        {"failed_loss_factor", failed_loss_factor},
-                        {"failed_loss_floor", failed_loss_floor}};
+  nlohmann::json j = fields_json(*this);
+  j["activation"] = "relu";
+  j["ent_coef"] = "auto";
+  j["target_entropy"] = "-action_dim";
+  j["log_std_clamp"] = {kSacLogStdMin, kSacLogStdMax};
+  j["reward"] = "sparse: -loss at the final decision";
+  j["episode_end"] = "terminal (done = 1, no bootstrap)";
+  return j;
 }
 
 std::unique_ptr<Optimizer> make_sac(const SacConfig& cfg) { return std::make_unique<Sac>(cfg); }
