@@ -1,5 +1,5 @@
 // The SQLite store on real files: schema, WAL, run lifecycle, NaN as NULL, resume keys, run
-// diagnostics, the in-place migration of a version-1 file, refusal of a foreign or newer file
+// diagnostics, the in-place migration of files of versions 1-4, refusal of a foreign or newer file
 // without touching it.
 #include <bit>
 #include <cmath>
@@ -16,6 +16,7 @@
 
 #include "common/config_hash.hpp"
 #include "common/error.hpp"
+#include "harness/store/merge.hpp"
 #include "harness/store/store.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
@@ -255,6 +256,26 @@ void write_version1_file(const std::string& path) {
   )sql");
 }
 
+// A table's shape, as SQLite reports it: each column's name, type, NOT NULL, default and primary
+// key position, in order, then each index's uniqueness, origin and columns (index names left out:
+// an index made for a rebuilt table is named after the table it was built as).
+std::string table_shape(const std::string& path, const std::string& table) {
+  const std::string t = "'" + table + "'";
+  return exact_rows(path, "SELECT name, type, \"notnull\", dflt_value, pk FROM pragma_table_info(" + t + ")") +
+      exact_rows(path,
+                 "SELECT il.\"unique\", il.origin, ii.seqno, ii.name FROM pragma_index_list(" + t +
+                     ") il JOIN pragma_index_info(il.name) ii ORDER BY il.seq, ii.seqno");
+}
+
+// every table of a harness database, each with the shape of a new file's
+void expect_tables_of_a_new_file(const std::string& path, const std::string& fresh) {
+  { Store store(fresh, {}); }
+  for (const char* table : {"meta", "configs", "runs", "evals", "replay", "prefix"})
+    EXPECT_EQ(table_shape(path, table), table_shape(fresh, table)) << table;
+  EXPECT_EQ(exact_rows(path, "SELECT name FROM sqlite_master WHERE type='table' ORDER BY name"),
+            exact_rows(fresh, "SELECT name FROM sqlite_master WHERE type='table' ORDER BY name"));
+}
+
 TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
   write_version1_file(path_);
   const std::string runs_sql = std::string("SELECT ") + kRunsV1Columns + " FROM runs ORDER BY run_id";
@@ -287,13 +308,8 @@ TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
   EXPECT_EQ(query("SELECT name FROM pragma_table_info('evals') WHERE cid >= 7"), "metric;");
   EXPECT_EQ(query("SELECT count(*) FROM runs WHERE diagnostics IS NULL"), "3;");
   EXPECT_EQ(query("SELECT count(*) FROM evals WHERE metric IS NULL"), "5;");
-  // a migrated file has the columns of a new one, in the same order
-  const std::string fresh = (dir_ / "fresh.sqlite").string();
-  { Store store(fresh, {}); }
-  for (const char* table : {"meta", "configs", "runs", "evals", "replay", "prefix"}) {
-    const std::string cols = std::string("SELECT name, type, \"notnull\", pk FROM pragma_table_info('") + table + "')";
-    EXPECT_EQ(exact_rows(path_, cols), exact_rows(fresh, cols)) << table;
-  }
+  // a migrated file has the columns of a new one, in the same order, and the same keys
+  expect_tables_of_a_new_file(path_, (dir_ / "fresh.sqlite").string());
 
   // and it takes new runs with diagnostics; opening it again changes nothing
   {
@@ -305,6 +321,115 @@ TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
   }
   EXPECT_EQ(query("SELECT count(*) FROM runs WHERE diagnostics IS NOT NULL"), "1;");
   EXPECT_EQ(exact_rows(path_, evals_sql + " LIMIT 5"), evals_before);
+}
+
+// The steps that made versions 2, 3 and 4 of a file, frozen: harness/store/schema.cpp as of
+// commit 3044ed5 (a file of version 1 plus steps 1..v-1 is a file of version v).
+const char* kStepsFromVersion1[] = {
+    // 1 -> 2
+    "ALTER TABLE runs ADD COLUMN diagnostics TEXT;"
+    "ALTER TABLE evals ADD COLUMN metric REAL;",
+    // 2 -> 3
+    R"sql(CREATE TABLE runs_v3(
+  run_id INTEGER PRIMARY KEY,
+  env TEXT NOT NULL,
+  optimizer TEXT NOT NULL,
+  seed INTEGER NOT NULL,        -- seed index 0..seeds-1
+  budget INTEGER NOT NULL,      -- episodes
+  env_config_hash TEXT NOT NULL REFERENCES configs(hash),
+  opt_config_hash TEXT NOT NULL REFERENCES configs(hash),
+  rng_seed TEXT NOT NULL,       -- per-run 64-bit seed, hex
+  status TEXT NOT NULL CHECK(status IN ('done', 'failed', 'running')),
+  episodes INTEGER NOT NULL DEFAULT 0,
+  failed_episodes INTEGER NOT NULL DEFAULT 0,
+  best_loss REAL,               -- NULL when no episode succeeded
+  best_x TEXT,                  -- JSON array, normalized units
+  wall_s REAL,
+  error TEXT,
+  started_at TEXT,
+  finished_at TEXT,
+  harness_version TEXT NOT NULL DEFAULT '',  -- part of the run key (version 3)
+  git_sha TEXT,
+  host TEXT,
+  diagnostics TEXT,             -- JSON {"optimizer": {...}, "objective": {...}} (version 2)
+  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version));
+INSERT INTO runs_v3 SELECT run_id, env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed,
+  status, episodes, failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at,
+  COALESCE(harness_version, ''), git_sha, host, diagnostics FROM runs;
+DROP TABLE runs;
+ALTER TABLE runs_v3 RENAME TO runs;
+CREATE TABLE replay(
+  run_id INTEGER NOT NULL REFERENCES runs(run_id),
+  seq INTEGER NOT NULL,         -- 0-based call index within the run
+  kind INTEGER NOT NULL,
+  input_hash INTEGER NOT NULL,
+  payload BLOB NOT NULL,
+  PRIMARY KEY(run_id, seq)) WITHOUT ROWID;)sql",
+    // 3 -> 4
+    R"sql(ALTER TABLE runs ADD COLUMN seed_free_episodes INTEGER;
+ALTER TABLE runs ADD COLUMN seed_free_calls INTEGER;
+ALTER TABLE runs ADD COLUMN shared_episodes INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE runs ADD COLUMN shared_from_seed INTEGER;
+CREATE TABLE prefix(
+  run_id INTEGER NOT NULL REFERENCES runs(run_id),
+  seq INTEGER NOT NULL,
+  kind INTEGER NOT NULL,
+  input_hash INTEGER NOT NULL,
+  payload BLOB NOT NULL,
+  PRIMARY KEY(run_id, seq)) WITHOUT ROWID;)sql",
+};
+
+// the version-1 file, taken to `version` by the steps that made that version
+void write_version_file(const std::string& path, int version) {
+  write_version1_file(path);
+  Database db(path);
+  for (int step = 1; step < version; ++step) db.exec(kStepsFromVersion1[step - 1]);
+  db.exec("UPDATE meta SET value='" + std::to_string(version) + "' WHERE key='schema_version'");
+}
+
+TEST_F(StoreTest, EveryOlderVersionMigratesToTheTablesOfANewFileKeepingItsRows) {
+  const std::string runs_sql = std::string("SELECT ") + kRunsV1Columns + " FROM runs ORDER BY run_id";
+  const std::string evals_sql = std::string("SELECT ") + kEvalsV1Columns + " FROM evals ORDER BY run_id, episode";
+  for (int version = 2; version <= 4; ++version) {
+    SCOPED_TRACE("schema_version " + std::to_string(version));
+    const std::string file = path("v" + std::to_string(version) + ".sqlite");
+    write_version_file(file, version);
+    const std::string runs_before = exact_rows(file, runs_sql), evals_before = exact_rows(file, evals_sql);
+    { Store store(file, {"0.2.0", "def", "host"}); }
+    EXPECT_EQ(exact_rows(file, "SELECT value FROM meta WHERE key='schema_version'"), "t5|\n");
+    EXPECT_EQ(exact_rows(file, runs_sql), runs_before);
+    EXPECT_EQ(exact_rows(file, evals_sql), evals_before);
+    EXPECT_EQ(exact_rows(file, "SELECT count(*) FROM runs WHERE results_versions = '' AND shared_episodes = 0"),
+              "i3|\n");
+    expect_tables_of_a_new_file(file, path("fresh" + std::to_string(version) + ".sqlite"));
+  }
+}
+
+// merge reads a file of any version as it is (read-only): a column the file lacks as its default
+TEST_F(StoreTest, MergeCopiesTheRunsOfAFileOfEveryOlderVersion) {
+  const std::string runs_sql = std::string("SELECT ") + kRunsV1Columns + " FROM runs ORDER BY run_id";
+  const std::string evals_sql = std::string("SELECT ") + kEvalsV1Columns + " FROM evals ORDER BY run_id, episode";
+  for (int version = 1; version <= 4; ++version) {
+    SCOPED_TRACE("schema_version " + std::to_string(version));
+    const std::string input = path("in" + std::to_string(version) + ".sqlite");
+    write_version_file(input, version);
+    const std::string input_bytes = testing::read_file(input);
+    const std::string out = path("merged" + std::to_string(version) + ".sqlite");
+    {
+      Store store(out, {});
+      const MergeCounts n = merge_inputs(store, {input});
+      EXPECT_EQ(n.added, 3);
+    }
+    EXPECT_EQ(testing::read_file(input), input_bytes);
+    // the same rows, under the same run_ids (the output was empty), with the defaults of the rest
+    EXPECT_EQ(exact_rows(out, runs_sql), exact_rows(input, runs_sql));
+    EXPECT_EQ(exact_rows(out, evals_sql), exact_rows(input, evals_sql));
+    EXPECT_EQ(exact_rows(out,
+                         "SELECT count(*) FROM runs WHERE diagnostics IS NULL AND shared_episodes = 0 AND "
+                         "results_versions = ''"),
+              "i3|\n");
+    EXPECT_EQ(exact_rows(out, "SELECT count(*) FROM evals WHERE metric IS NULL"), "i5|\n");
+  }
 }
 
 TEST_F(StoreTest, AFailedMigrationStepRollsBackTheWholeChain) {

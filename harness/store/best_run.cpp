@@ -7,6 +7,7 @@
 #include "harness/core/results_versions.hpp"
 #include "harness/store/schema.hpp"
 #include "harness/store/sqlite_db.hpp"
+#include "harness/store/tables.hpp"
 
 namespace dsb {
 
@@ -16,8 +17,9 @@ BestRun best_run_of(const std::string& db_path, const std::string& env) {
     Database db(db_path, Database::Mode::read_only);
     const int schema = check_schema(db);
     // the best done run whose results versions are this binary's (a stale one is another code's)
+    const std::string versions = read_column(runs_table(), "results_versions", schema);
     Statement q(db.handle(),
-                std::string("SELECT optimizer, seed, best_loss, best_x, ") + (schema >= 5 ? "results_versions" : "''") +
+                "SELECT optimizer, seed, best_loss, best_x, " + versions +
                     " FROM runs WHERE env=? AND status='done' AND best_loss IS NOT NULL AND best_x IS NOT "
                     "NULL ORDER BY best_loss ASC, run_id ASC");
     q.bind(1, env);

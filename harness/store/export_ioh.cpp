@@ -51,6 +51,7 @@
 #include "envs/registry.hpp"
 #include "harness/store/schema.hpp"
 #include "harness/store/sqlite_db.hpp"
+#include "harness/store/tables.hpp"
 
 namespace dsb {
 namespace {
@@ -94,8 +95,9 @@ std::vector<IohRun> read_ioh_runs(Database& db, bool include_stale, std::int64_t
     Statement q(db.handle(),
                 std::string(R"sql(
       SELECT run_id, env, optimizer, seed, budget, env_config_hash, opt_config_hash, episodes, best_x,
-             COALESCE(harness_version, ''), )sql") +
-                    (schema >= 5 ? "results_versions" : "''") + R"sql(
+             )sql") +
+                    read_column(runs_table(), "harness_version", schema) + ", " +
+                    read_column(runs_table(), "results_versions", schema) + R"sql(
       FROM runs WHERE status = 'done'
       ORDER BY env, optimizer, budget, opt_config_hash, env_config_hash, seed, run_id)sql");
     while (q.step()) {

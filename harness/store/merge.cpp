@@ -12,28 +12,31 @@
 
 #include "common/error.hpp"
 #include "harness/core/run_status.hpp"
+#include "harness/store/run_key_sql.hpp"
 #include "harness/store/schema.hpp"
 #include "harness/store/sqlite_db.hpp"
+#include "harness/store/tables.hpp"
 
 namespace dsb {
 namespace {
 
-// every column of a run row but run_id, in schema order; `harness_version` is read as '' when
-// NULL (files before schema version 3), the sharing columns as what a run without sharing has
-// (files before version 4), the results versions as '' (files before version 5: made before
-// versions, stale for every binary that has them; kept apart from the runs of any version)
-std::string run_columns(int version) {
-  return std::string(
-             "env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, "
-             "failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
-             "COALESCE(harness_version, ''), git_sha, host, diagnostics, ") +
-      (version >= 4 ? "seed_free_episodes, seed_free_calls, shared_episodes, shared_from_seed"
-                    : "NULL, NULL, 0, NULL") +
-      (version >= 5 ? ", results_versions" : ", ''");
+// A run row is every column of runs but run_id, an eval row every column of evals but run_id, a
+// journal row every column of replay (or prefix) but run_id, in schema order (tables.hpp). A file
+// of an older version reads a column it lacks, or a run key column it leaves NULL, as its default
+// (read_column): harness_version '' (NULL in files before schema version 3), the sharing columns
+// what a run without sharing has (before 4), results_versions '' (before 5: made before versions,
+// stale for every binary that has them; kept apart from the runs of any version).
+const int kRunColumnCount = static_cast<int>(runs_table().columns.size()) - 1;
+const int kEvalColumnCount = static_cast<int>(evals_table().columns.size()) - 1;
+const int kJournalColumnCount = static_cast<int>(replay_table().columns.size()) - 1;
+
+// the position of a column in a run row or an eval row
+std::size_t run_at(const char* column) {
+  return static_cast<std::size_t>(column_index(runs_table(), column, "run_id"));
 }
-constexpr int kRunColumnCount = 25;
-const char* kEvalColumns = "episode, loss, best_loss, used_grad, wall_s, failed, metric";
-constexpr int kEvalColumnCount = 7;
+std::size_t eval_at(const char* column) {
+  return static_cast<std::size_t>(column_index(evals_table(), column, "run_id"));
+}
 
 // a SQLite value as read: NULL, integer, real, text or blob, compared and written back exactly
 struct Cell {
@@ -82,35 +85,49 @@ void bind_row(Statement& st, const Row& row, int first_index) {
 }
 
 struct RunRecord {
-  Row run;                   // run_columns()
-  std::vector<Row> evals;    // kEvalColumns, by episode
-  std::vector<Row> journal;  // seq, kind, input_hash, payload (running runs)
+  Row run;                   // a run row
+  std::vector<Row> evals;    // eval rows, by episode
+  std::vector<Row> journal;  // journal rows (running runs)
   std::vector<Row> prefix;   // the same, of a done run's kept seed-free episodes
-  RunStatus status() const { return stored_status(run[7].s).value_or(RunStatus::running); }
+  const Cell& at(const char* column) const { return run[run_at(column)]; }
+  RunStatus status() const { return stored_status(at("status").s).value_or(RunStatus::running); }
   std::int64_t committed() const { return static_cast<std::int64_t>(evals.size()); }
   RunKey key() const {
-    return {run[0].s, run[1].s,  static_cast<int>(run[2].i),        run[3].i, run[4].s,
-            run[5].s, run[16].s, stored_results_versions(run[24].s)};
+    return {at("env").s,
+            at("optimizer").s,
+            static_cast<int>(at("seed").i),
+            at("budget").i,
+            at("env_config_hash").s,
+            at("opt_config_hash").s,
+            at("harness_version").s,
+            stored_results_versions(at("results_versions").s)};
   }
 };
 
+// the columns of an eval row that are its result: all but its wall time
+bool same_eval(const Row& a, const Row& b) {
+  for (const char* c : {"episode", "loss", "best_loss", "used_grad", "failed", "metric"})
+    if (!(a[eval_at(c)] == b[eval_at(c)])) return false;
+  return true;
+}
+
 RunRecord read_run(Database& db, std::int64_t run_id, int version) {
   RunRecord r;
-  Statement q(db.handle(), "SELECT " + run_columns(version) + " FROM runs WHERE run_id=?");
+  Statement q(db.handle(), "SELECT " + read_columns(runs_table(), version, "run_id") + " FROM runs WHERE run_id=?");
   q.bind(1, run_id);
   if (q.step()) r.run = read_row(q, kRunColumnCount);
-  Statement e(db.handle(), std::string("SELECT ") + kEvalColumns + " FROM evals WHERE run_id=? ORDER BY episode");
+  Statement e(
+      db.handle(),
+      "SELECT " + read_columns(evals_table(), version, "run_id") + " FROM evals WHERE run_id=? ORDER BY episode");
   e.bind(1, run_id);
   while (e.step()) r.evals.push_back(read_row(e, kEvalColumnCount));
-  if (version >= 3) {
-    Statement j(db.handle(), "SELECT seq, kind, input_hash, payload FROM replay WHERE run_id=? ORDER BY seq");
+  for (const auto& [table, rows] : {std::pair{&replay_table(), &r.journal}, std::pair{&prefix_table(), &r.prefix}}) {
+    if (version < table->since) continue;
+    Statement j(
+        db.handle(),
+        "SELECT " + read_columns(*table, version, "run_id") + " FROM " + table->name + " WHERE run_id=? ORDER BY seq");
     j.bind(1, run_id);
-    while (j.step()) r.journal.push_back(read_row(j, 4));
-  }
-  if (version >= 4) {
-    Statement p(db.handle(), "SELECT seq, kind, input_hash, payload FROM prefix WHERE run_id=? ORDER BY seq");
-    p.bind(1, run_id);
-    while (p.step()) r.prefix.push_back(read_row(p, 4));
+    while (j.step()) rows->push_back(read_row(j, kJournalColumnCount));
   }
   return r;
 }
@@ -119,28 +136,18 @@ RunRecord read_run(Database& db, std::int64_t run_id, int version) {
 // best-so-far, gradient use, failure flag and metric (not its wall time), and the run's status,
 // episode counts, best loss and best point
 bool same_result(const RunRecord& a, const RunRecord& b) {
-  for (int c : {7, 8, 9, 10, 11})
-    if (!(a.run[static_cast<std::size_t>(c)] == b.run[static_cast<std::size_t>(c)])) return false;
+  for (const char* c : {"status", "episodes", "failed_episodes", "best_loss", "best_x"})
+    if (!(a.at(c) == b.at(c))) return false;
   if (a.evals.size() != b.evals.size()) return false;
   for (std::size_t k = 0; k < a.evals.size(); ++k)
-    for (int c : {0, 1, 2, 3, 5, 6})
-      if (!(a.evals[k][static_cast<std::size_t>(c)] == b.evals[k][static_cast<std::size_t>(c)])) return false;
+    if (!same_eval(a.evals[k], b.evals[k])) return false;
   return true;
 }
 
 // the id of the run with this key in `db`, if any
 std::optional<std::int64_t> find_run(Database& db, const RunKey& k) {
-  Statement q(db.handle(),
-              "SELECT run_id FROM runs WHERE env=? AND optimizer=? AND seed=? AND budget=? AND env_config_hash=? AND "
-              "opt_config_hash=? AND harness_version=? AND results_versions=?");
-  q.bind(1, k.env)
-      .bind(2, k.optimizer)
-      .bind(3, static_cast<std::int64_t>(k.seed))
-      .bind(4, k.budget)
-      .bind(5, k.env_config_hash)
-      .bind(6, k.opt_config_hash)
-      .bind(7, k.harness_version)
-      .bind(8, k.versions.text());
+  Statement q(db.handle(), "SELECT run_id FROM runs WHERE " + run_key_match());
+  bind_run_key(q, 1, k);
   if (!q.step()) return std::nullopt;
   return q.column_int(0);
 }
@@ -154,32 +161,25 @@ void delete_run(Database& db, std::int64_t run_id) {
 }
 
 void insert_run(Database& db, const RunRecord& r) {
+  const Table& runs = runs_table();
   Statement run(db.handle(),
-                std::string("INSERT INTO runs(") +
-                    "env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, "
-                    "episodes, failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, "
-                    "harness_version, git_sha, host, diagnostics, seed_free_episodes, seed_free_calls, "
-                    "shared_episodes, shared_from_seed, results_versions) VALUES (" +
-                    "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING run_id");
+                "INSERT INTO runs(" + column_names(runs, kSchemaVersion, "run_id") + ") VALUES (" +
+                    placeholders(kRunColumnCount) + ") RETURNING run_id");
   bind_row(run, r.run, 1);
   if (!run.step()) throw StoreError("merge: no run_id returned");
   const std::int64_t id = run.column_int(0);
   run.reset();
-  Statement ev(db.handle(),
-               std::string("INSERT INTO evals(run_id, ") + kEvalColumns + ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
-  for (const auto& e : r.evals) {
-    ev.bind(1, id);
-    bind_row(ev, e, 2);
-    ev.run();
-  }
-  for (const auto& [table, rows] : {std::pair{"replay", &r.journal}, std::pair{"prefix", &r.prefix}}) {
-    Statement j(
-        db.handle(),
-        std::string("INSERT INTO ") + table + "(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
-    for (const auto& e : *rows) {
-      j.bind(1, id);
-      bind_row(j, e, 2);
-      j.run();
+  // the rows of the run's other tables, each under the new run_id
+  for (const auto& [table, rows] : {std::pair{&evals_table(), &r.evals}, std::pair{&replay_table(), &r.journal},
+                                    std::pair{&prefix_table(), &r.prefix}}) {
+    const int n = static_cast<int>(table->columns.size());
+    Statement ins(db.handle(),
+                  "INSERT INTO " + std::string(table->name) + "(" + column_names(*table, kSchemaVersion) +
+                      ") VALUES (" + placeholders(n) + ")");
+    for (const auto& row : *rows) {
+      ins.bind(1, id);
+      bind_row(ins, row, 2);
+      ins.run();
     }
   }
 }
@@ -191,8 +191,7 @@ void insert_run(Database& db, const RunRecord& r) {
 bool consistent(const RunRecord& a, const RunRecord& b) {
   const std::size_t n = std::min(a.evals.size(), b.evals.size());
   for (std::size_t k = 0; k < n; ++k)
-    for (int c : {0, 1, 2, 3, 5, 6})
-      if (!(a.evals[k][static_cast<std::size_t>(c)] == b.evals[k][static_cast<std::size_t>(c)])) return false;
+    if (!same_eval(a.evals[k], b.evals[k])) return false;
   return true;
 }
 
@@ -274,9 +273,16 @@ MergeCounts merge_inputs(Store& store, const std::vector<std::string>& inputs) {
     reading(in, [&] {
       Database db(in, Database::Mode::read_only);
       const int version = check_schema(db);
-      Statement cfg(db.handle(), "SELECT hash, kind, json FROM configs");
-      Statement put(out.handle(), "INSERT OR IGNORE INTO configs(hash, kind, json) VALUES (?, ?, ?)");
-      while (cfg.step()) put.bind(1, cfg.column_text(0)).bind(2, cfg.column_text(1)).bind(3, cfg.column_text(2)).run();
+      const Table& configs = configs_table();
+      const std::string config_columns = column_names(configs, version);
+      const int n_config = static_cast<int>(configs.columns.size());
+      Statement cfg(db.handle(), "SELECT " + config_columns + " FROM configs");
+      Statement put(out.handle(),
+                    "INSERT OR IGNORE INTO configs(" + config_columns + ") VALUES (" + placeholders(n_config) + ")");
+      while (cfg.step()) {
+        bind_row(put, read_row(cfg, n_config), 1);
+        put.run();
+      }
 
       std::vector<std::int64_t> ids;
       Statement all(db.handle(), "SELECT run_id FROM runs ORDER BY run_id");

@@ -16,6 +16,7 @@
 #include "common/regular_file.hpp"
 #include "harness/store/schema.hpp"
 #include "harness/store/sqlite_db.hpp"
+#include "harness/store/tables.hpp"
 
 namespace dsb {
 
@@ -64,13 +65,13 @@ bool parse_int(const std::string& s, T& v) {
 
 ResultTable read_result_table(Database& db, bool include_stale) {
   const int version = check_schema(db);
-  const std::string versions = version >= 5 ? "r.results_versions" : "''";
+  const std::string versions = read_column(runs_table(), "results_versions", version);
   ResultTable table;
   std::map<std::tuple<std::string, std::string, std::string>, std::int64_t> stale_runs;  // (env, optimizer, reason)
   {
     // the stale done runs, counted once each
     Statement q(db.handle(),
-                std::string("SELECT env, optimizer, ") + (version >= 5 ? "results_versions" : "''") +
+                std::string("SELECT env, optimizer, ") + versions +
                     ", count(*) FROM runs r WHERE status = 'done' GROUP BY 1, 2, 3");
     while (q.step()) {
       const std::string why =

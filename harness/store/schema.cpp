@@ -6,174 +6,56 @@
 #include <set>
 #include <vector>
 
+#include "harness/store/tables.hpp"
+
 namespace dsb {
 
 namespace {
 
-// runs' columns of version 4, in the order a migration adds them
-const std::string kSharingColumns =
-    R"sql(  seed_free_episodes INTEGER,   -- episodes before the optimizer's first draw (NULL: unknown)
-  seed_free_calls INTEGER,      -- the journal entries that produced them
-  shared_episodes INTEGER NOT NULL DEFAULT 0,  -- episodes replayed from another seed's run
-  shared_from_seed INTEGER,     -- that run's seed
-)sql";
-
-// The runs table of a schema version under a name (the migration to version 3 builds it beside
-// the old one). Columns added by migrations come last, so a migrated file and a new one have the
-// same column order.
-std::string runs_table_sql(const std::string& name, int version) {
-  const std::string versions_column = version >= 5
-      ? "  results_versions TEXT NOT NULL DEFAULT '',  -- part of the run key (version 5): 'env E, optimizer O, run R'\n"
-      : "";
-  const std::string key = version >= 5 ? ", results_versions" : "";
-  return "CREATE TABLE " + name + R"sql((
-  run_id INTEGER PRIMARY KEY,
-  env TEXT NOT NULL,
-  optimizer TEXT NOT NULL,
-  seed INTEGER NOT NULL,        -- seed index 0..seeds-1
-  budget INTEGER NOT NULL,      -- episodes
-  env_config_hash TEXT NOT NULL REFERENCES configs(hash),
-  opt_config_hash TEXT NOT NULL REFERENCES configs(hash),
-  rng_seed TEXT NOT NULL,       -- per-run 64-bit seed, hex
-  status TEXT NOT NULL CHECK(status IN ('done', 'failed', 'running')),
-  episodes INTEGER NOT NULL DEFAULT 0,
-  failed_episodes INTEGER NOT NULL DEFAULT 0,
-  best_loss REAL,               -- NULL when no episode succeeded
-  best_x TEXT,                  -- JSON array, normalized units
-  wall_s REAL,
-  error TEXT,
-  started_at TEXT,
-  finished_at TEXT,
-  harness_version TEXT NOT NULL DEFAULT '',  -- part of the run key (version 3)
-  git_sha TEXT,
-  host TEXT,
-  diagnostics TEXT,             -- JSON {"optimizer": {...}, "objective": {...}} (version 2)
-)sql" +
-      (version >= 4 ? kSharingColumns : std::string()) + versions_column +
-      "  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version" + key + "));\n";
-}
-
-// The journal of a done run's seed-free episodes (version 4): what a run of another seed replays
-// instead of simulating them (harness/store/store.hpp). Rows as in `replay`.
-const char* kPrefixTable = R"sql(
-CREATE TABLE prefix(
-  run_id INTEGER NOT NULL REFERENCES runs(run_id),
-  seq INTEGER NOT NULL,
-  kind INTEGER NOT NULL,
-  input_hash INTEGER NOT NULL,
-  payload BLOB NOT NULL,
-  PRIMARY KEY(run_id, seq)) WITHOUT ROWID;
-)sql";
-
-// What a run that is not done yet needs to be resumed by replay (version 3): one row per
-// objective call (kind: harness/core/replay.hpp), the digest of the call's input and what the call
-// returned (payload: doubles, native byte order). A run's rows are deleted when it ends.
-const char* kReplayTable = R"sql(
-CREATE TABLE replay(
-  run_id INTEGER NOT NULL REFERENCES runs(run_id),
-  seq INTEGER NOT NULL,         -- 0-based call index within the run
-  kind INTEGER NOT NULL,
-  input_hash INTEGER NOT NULL,
-  payload BLOB NOT NULL,
-  PRIMARY KEY(run_id, seq)) WITHOUT ROWID;
-)sql";
-
-// the newest schema, for a new file
+// the newest schema, for a new file: every table as declared (harness/store/tables.hpp)
 std::string create_schema_sql() {
-  return R"sql(
-CREATE TABLE meta(
-  key TEXT PRIMARY KEY,
-  value TEXT NOT NULL);
-CREATE TABLE configs(
-  hash TEXT PRIMARY KEY,
-  kind TEXT NOT NULL,           -- 'env' or 'optimizer'
-  json TEXT NOT NULL);          -- resolved config, canonical JSON
-)sql" +
-      runs_table_sql("runs", kSchemaVersion) +
-      R"sql(
-CREATE TABLE evals(
-  run_id INTEGER NOT NULL REFERENCES runs(run_id),
-  episode INTEGER NOT NULL,     -- 0-based
-  loss REAL,                    -- NULL for a failed episode (simulation blew up)
-  best_loss REAL,               -- best finite loss so far
-  used_grad INTEGER NOT NULL,
-  wall_s REAL NOT NULL,
-  failed INTEGER NOT NULL DEFAULT 0,
-  metric REAL,                  -- optional second per-episode metric, NULL when none (version 2)
-  PRIMARY KEY(run_id, episode)) WITHOUT ROWID;
-)sql" +
-      kReplayTable + kPrefixTable;
+  std::string sql;
+  for (const Table* t : all_tables()) sql += create_table_sql(*t, kSchemaVersion, t->name);
+  return sql;
 }
 
-// One step of the chain: SQL that takes a database of version `from` to version from + 1.
-struct Migration {
-  int from;
+// One step of the chain: SQL that takes a database of version `from` to version from + 1, derived
+// from the declarations. A table whose UNIQUE key changes is rebuilt beside the old one (SQLite
+// cannot change a UNIQUE constraint; run_ids are kept, so evals still point at their runs, and
+// prepare_schema migrates with foreign keys off) with the columns of the new version, copying the
+// old ones; another table gets the version's new columns added at its end; then the tables the
+// version adds are created. So a migrated file has the same columns, in the same order, as a new one.
+std::string upgrade_sql(int from) {
+  const int to = from + 1;
   std::string sql;
-};
-
-std::vector<Migration> migrations() {
-  // 2 -> 3: the run key gains harness_version. SQLite cannot change a UNIQUE constraint, so the
-  // runs table is rebuilt beside the old one (run_ids kept, so evals still point at their runs;
-  // prepare_schema migrates with foreign keys off), then the replay table is added.
-  const std::string columns =
-      "run_id, env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, "
-      "failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, {version}, git_sha, host, "
-      "diagnostics";
-  auto with = [&](const std::string& version) {
-    std::string c = columns;
-    return c.replace(c.find("{version}"), 9, version);
-  };
-  const std::string v4_columns = ", seed_free_episodes, seed_free_calls, shared_episodes, shared_from_seed";
-  return {
-      {1,
-       "ALTER TABLE runs ADD COLUMN diagnostics TEXT;"
-       "ALTER TABLE evals ADD COLUMN metric REAL;"},
-      {2,
-       runs_table_sql("runs_v3", 3) + "INSERT INTO runs_v3(" + with("harness_version") + ") SELECT " +
-           with("COALESCE(harness_version, '')") +
-           " FROM runs;"
-           "DROP TABLE runs;"
-           "ALTER TABLE runs_v3 RENAME TO runs;" +
-           kReplayTable},
-      {3,
-       "ALTER TABLE runs ADD COLUMN seed_free_episodes INTEGER;"
-       "ALTER TABLE runs ADD COLUMN seed_free_calls INTEGER;"
-       "ALTER TABLE runs ADD COLUMN shared_episodes INTEGER NOT NULL DEFAULT 0;"
-       "ALTER TABLE runs ADD COLUMN shared_from_seed INTEGER;" +
-           std::string(kPrefixTable)},
-      // 4 -> 5: the run key gains results_versions ('' in every old row: made before versions, so
-      // stale for every binary that has them); the table is rebuilt as for 3, run_ids kept
-      {4,
-       runs_table_sql("runs_v5", 5) + "INSERT INTO runs_v5(" + with("harness_version") + v4_columns + ") SELECT " +
-           with("harness_version") + v4_columns +
-           " FROM runs;"
-           "DROP TABLE runs;"
-           "ALTER TABLE runs_v5 RENAME TO runs;"},
-  };
+  for (const Table* t : all_tables()) {
+    if (t->since > from) continue;
+    if (unique_key(*t, from) != unique_key(*t, to)) {
+      const std::string rebuilt = std::string(t->name) + "_v" + std::to_string(to);
+      std::string reads;
+      for (const Column* c : columns_at(*t, from))
+        reads += (reads.empty() ? "" : ", ") + read_column(*t, c->name, from);
+      sql += create_table_sql(*t, to, rebuilt) + "INSERT INTO " + rebuilt + "(" + column_names(*t, from) + ") SELECT " +
+          reads + " FROM " + t->name + ";DROP TABLE " + t->name + ";ALTER TABLE " + rebuilt + " RENAME TO " + t->name +
+          ";";
+      continue;
+    }
+    for (const Column& c : t->columns)
+      if (c.since == to)
+        sql += "ALTER TABLE " + std::string(t->name) + " ADD COLUMN " + c.name + " " + c.type +
+            (c.default_sql ? " DEFAULT " + std::string(c.default_sql) : "") + ";";
+  }
+  for (const Table* t : all_tables())
+    if (t->since == to) sql += create_table_sql(*t, to, t->name);
+  return sql;
 }
 
 // The columns every table must have at a version (a file may have more).
 std::map<std::string, std::vector<std::string>> required_columns(int version) {
-  std::map<std::string, std::vector<std::string>> cols = {
-      {"meta", {"key", "value"}},
-      {"configs", {"hash", "kind", "json"}},
-      {"runs", {"run_id",          "env",      "optimizer", "seed",       "budget",          "env_config_hash",
-                "opt_config_hash", "rng_seed", "status",    "episodes",   "failed_episodes", "best_loss",
-                "best_x",          "wall_s",   "error",     "started_at", "finished_at",     "harness_version",
-                "git_sha",         "host"}},
-      {"evals", {"run_id", "episode", "loss", "best_loss", "used_grad", "wall_s", "failed"}},
-  };
-  if (version >= 2) {
-    cols["runs"].push_back("diagnostics");
-    cols["evals"].push_back("metric");
-  }
-  if (version >= 3) cols["replay"] = {"run_id", "seq", "kind", "input_hash", "payload"};
-  if (version >= 4) {
-    for (const char* c : {"seed_free_episodes", "seed_free_calls", "shared_episodes", "shared_from_seed"})
-      cols["runs"].push_back(c);
-    cols["prefix"] = {"run_id", "seq", "kind", "input_hash", "payload"};
-  }
-  if (version >= 5) cols["runs"].push_back("results_versions");
+  std::map<std::string, std::vector<std::string>> cols;
+  for (const Table* t : all_tables())
+    if (t->since <= version)
+      for (const Column* c : columns_at(*t, version)) cols[t->name].push_back(c->name);
   return cols;
 }
 
@@ -185,7 +67,7 @@ std::set<std::string> table_names(Database& db) {
   return names;
 }
 
-std::set<std::string> column_names(Database& db, const std::string& table) {
+std::set<std::string> columns_in_file(Database& db, const std::string& table) {
   Statement q(db.handle(), "SELECT name FROM pragma_table_info(?)");
   q.bind(1, table);
   std::set<std::string> names;
@@ -199,7 +81,7 @@ std::set<std::string> column_names(Database& db, const std::string& table) {
 
 // the first required column of `table` missing at `version`, or empty
 std::string missing_column(Database& db, const std::string& table, int version) {
-  const auto have = column_names(db, table);
+  const auto have = columns_in_file(db, table);
   const auto required = required_columns(version);
   for (const auto& c : required.at(table))
     if (!have.count(c)) return c;
@@ -257,13 +139,7 @@ void prepare_schema(Database& db) {
     meta.bind(1, std::to_string(kSchemaVersion)).run();
   } else if (version < kSchemaVersion) {
     // the chain of steps, in order, all in this transaction
-    while (version < kSchemaVersion) {
-      const auto chain = migrations();
-      const auto step = std::find_if(chain.begin(), chain.end(), [&](const Migration& m) { return m.from == version; });
-      if (step == chain.end()) throw StoreError("no migration from schema_version " + std::to_string(version));
-      db.exec(step->sql);
-      ++version;
-    }
+    for (; version < kSchemaVersion; ++version) db.exec(upgrade_sql(version));
     Statement meta(db.handle(), "UPDATE meta SET value=? WHERE key='schema_version'");
     meta.bind(1, std::to_string(kSchemaVersion)).run();
   }

@@ -14,7 +14,10 @@
 //      `prefix`: the journal of a done run's seed-free episodes, which other seeds replay
 //   5  results versions (harness/core/results_versions.hpp): runs.results_versions, part of the run key
 //      (UNIQUE; '' for the rows of older files, which are therefore stale for this binary)
-// A later version adds one migration step (from = kSchemaVersion - 1) and bumps kSchemaVersion.
+// The tables are declared in harness/store/tables.hpp; the CREATE TABLE of a new file and each
+// migration step are derived from them. A later version bumps kSchemaVersion and declares what it
+// adds (columns and tables with `since` = the new version, a key column with `key_since`); a step
+// that must also change rows adds its SQL to upgrade_sql.
 #include <string>
 
 #include "harness/store/sqlite_db.hpp"

@@ -1,15 +1,19 @@
 #include "harness/store/store.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <limits>
 #include <stdexcept>
 
 #include <unistd.h>
 
 #include "common/config_hash.hpp"
 #include "common/shown_value.hpp"
+#include "harness/store/run_key_sql.hpp"
+#include "harness/store/tables.hpp"
 
 namespace dsb {
 
@@ -66,37 +70,20 @@ void Store::refuse_if_moved() {
 std::set<RunKey> Store::done_keys() {
   std::lock_guard lock(mutex_);
   std::set<RunKey> keys;
-  Statement q(
-      db_.handle(),
-      "SELECT env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, results_versions "
-      "FROM runs WHERE status='done'");
-  while (q.step())
-    keys.insert({q.column_text(0), q.column_text(1), static_cast<int>(q.column_int(2)), q.column_int(3),
-                 q.column_text(4), q.column_text(5), q.column_text(6), stored_results_versions(q.column_text(7))});
+  Statement q(db_.handle(), "SELECT " + run_key_columns(kSchemaVersion) + " FROM runs WHERE status='done'");
+  while (q.step()) keys.insert(read_run_key(q, 0));
   return keys;
 }
 
 namespace {
 
-// the group of a run: its key but the seed, as SQL over runs (7 parameters from `first`)
-const char* kGroupSql =
-    "env=? AND optimizer=? AND budget=? AND env_config_hash=? AND opt_config_hash=? AND harness_version=? AND "
-    "results_versions=?";
+// the columns of a journal row (replay and prefix alike) but run_id: seq, kind, input_hash, payload
+std::string journal_columns() { return column_names(replay_table(), kSchemaVersion, "run_id"); }
 
-void bind_group(Statement& st, int first, const RunKey& key) {
-  st.bind(first, key.env)
-      .bind(first + 1, key.optimizer)
-      .bind(first + 2, key.budget)
-      .bind(first + 3, key.env_config_hash)
-      .bind(first + 4, key.opt_config_hash)
-      .bind(first + 5, key.harness_version)
-      .bind(first + 6, key.versions.text());
-}
-
+// the first `calls` entries of a run's journal in `table` (replay or prefix), up to a gap
 std::vector<ReplayEntry> read_journal(Database& db, const std::string& table, std::int64_t run_id, std::int64_t calls) {
   std::vector<ReplayEntry> journal;
-  Statement j(db.handle(),
-              "SELECT seq, kind, input_hash, payload FROM " + table + " WHERE run_id=? AND seq<? ORDER BY seq");
+  Statement j(db.handle(), "SELECT " + journal_columns() + " FROM " + table + " WHERE run_id=? AND seq<? ORDER BY seq");
   j.bind(1, run_id).bind(2, calls);
   while (j.step()) {
     if (j.column_int(0) != static_cast<std::int64_t>(journal.size())) break;  // a gap: keep the prefix
@@ -123,8 +110,8 @@ Donor find_donor(Database& db, const RunKey& key) {
                           "(SELECT count(*) FROM replay j WHERE j.run_id=r.run_id), "
                           "(SELECT count(*) FROM prefix p WHERE p.run_id=r.run_id) "
                           "FROM runs r WHERE ") +
-                  kGroupSql + " AND seed<>? AND status IN ('done', 'running') ORDER BY seed");
-  bind_group(q, 1, key);
+                  run_key_match(false) + " AND seed<>? AND status IN ('done', 'running') ORDER BY seed");
+  bind_run_key(q, 1, key, false);
   q.bind(8, static_cast<std::int64_t>(key.seed));
   while (q.step()) {
     Donor d{q.column_int(0), 0, 0, static_cast<int>(q.column_int(1)), ""};
@@ -145,6 +132,27 @@ Donor find_donor(Database& db, const RunKey& key) {
   return best;
 }
 
+// The run row a start writes: its key, its seed, 'running', when and where it started (13
+// parameters: the key's 8, then rng_seed, status, started_at, git_sha, host). A row an earlier
+// attempt left (failed, or done and redone) is taken over: those columns are written and every
+// other column of runs goes back to its default (NULL where it has none).
+std::string start_run_sql() {
+  const Table& runs = runs_table();
+  const std::vector<std::string> written = {"rng_seed", "status", "started_at", "git_sha", "host"};
+  const auto key = unique_key_columns(runs, kSchemaVersion);
+  std::string set;
+  for (const Column* c : columns_at(runs, kSchemaVersion)) {
+    const std::string name = c->name;
+    if (name == "run_id" || std::find(key.begin(), key.end(), name) != key.end()) continue;
+    const bool given = std::find(written.begin(), written.end(), name) != written.end();
+    set += (set.empty() ? "" : ", ") + name + "=" + (given ? "excluded." + name : default_value(*c));
+  }
+  std::string columns = unique_key(runs, kSchemaVersion);
+  for (const auto& c : written) columns += ", " + c;
+  return "INSERT INTO runs(" + columns + ") VALUES (" + placeholders(static_cast<int>(key.size() + written.size())) +
+      ") ON CONFLICT(" + unique_key(runs, kSchemaVersion) + ") DO UPDATE SET " + set + " RETURNING run_id";
+}
+
 }  // namespace
 
 RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohmann::json& env_config,
@@ -152,23 +160,16 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
   std::lock_guard lock(mutex_);
   refuse_if_moved();  // before a commit: the path must still name the file this store opened
   Transaction tx(db_);
-  Statement cfg(db_.handle(), "INSERT OR IGNORE INTO configs(hash, kind, json) VALUES (?, ?, ?)");
+  Statement cfg(db_.handle(),
+                "INSERT OR IGNORE INTO configs(" + column_names(configs_table(), kSchemaVersion) + ") VALUES (" +
+                    placeholders(3) + ")");
   cfg.bind(1, key.env_config_hash).bind(2, std::string("env")).bind(3, canonical_json(env_config)).run();
   cfg.bind(1, key.opt_config_hash).bind(2, std::string("optimizer")).bind(3, canonical_json(opt_config)).run();
 
   RunStart start;
   // an earlier attempt of this run left 'running': keep what it committed (resume by replay)
-  Statement find(db_.handle(),
-                 "SELECT run_id, status FROM runs WHERE env=? AND optimizer=? AND seed=? AND budget=? AND "
-                 "env_config_hash=? AND opt_config_hash=? AND harness_version=? AND results_versions=?");
-  find.bind(1, key.env)
-      .bind(2, key.optimizer)
-      .bind(3, static_cast<std::int64_t>(key.seed))
-      .bind(4, key.budget)
-      .bind(5, key.env_config_hash)
-      .bind(6, key.opt_config_hash)
-      .bind(7, key.harness_version)
-      .bind(8, key.versions.text());
+  Statement find(db_.handle(), "SELECT run_id, status FROM runs WHERE " + run_key_match());
+  bind_run_key(find, 1, key);
   const bool resumable = find.step() && find.column_text(1) == "running";
   if (resumable) {
     start.run_id = find.column_int(0);
@@ -176,13 +177,7 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
     n.bind(1, start.run_id);
     n.step();
     start.committed_episodes = n.column_int(0);
-    Statement j(db_.handle(), "SELECT seq, kind, input_hash, payload FROM replay WHERE run_id=? ORDER BY seq");
-    j.bind(1, start.run_id);
-    while (j.step()) {
-      if (j.column_int(0) != static_cast<std::int64_t>(start.journal.size())) break;  // a gap: keep the prefix
-      start.journal.push_back({static_cast<ReplayKind>(j.column_int(1)), static_cast<std::uint64_t>(j.column_int(2)),
-                               replay_payload_from_bytes(j.column_blob(3))});
-    }
+    start.journal = read_journal(db_, "replay", start.run_id, std::numeric_limits<std::int64_t>::max());
     start.journal_episodes = start.committed_episodes;
     Statement shared(db_.handle(), "SELECT shared_episodes, COALESCE(shared_from_seed, -1) FROM runs WHERE run_id=?");
     shared.bind(1, start.run_id);
@@ -199,29 +194,13 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
 
   char seed_hex[17];
   std::snprintf(seed_hex, sizeof seed_hex, "%016llx", static_cast<unsigned long long>(rng_seed));
-  Statement up(db_.handle(), R"sql(
-    INSERT INTO runs(env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed,
-                     status, started_at, harness_version, git_sha, host, results_versions)
-    VALUES (?, ?, ?, ?, ?, ?, ?, 'running', ?, ?, ?, ?, ?)
-    ON CONFLICT(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, results_versions)
-    DO UPDATE SET
-      status='running', episodes=0, failed_episodes=0, best_loss=NULL, best_x=NULL, wall_s=NULL,
-      error=NULL, diagnostics=NULL, started_at=excluded.started_at, finished_at=NULL,
-      git_sha=excluded.git_sha, host=excluded.host, seed_free_episodes=NULL, seed_free_calls=NULL,
-      shared_episodes=0, shared_from_seed=NULL
-    RETURNING run_id)sql");
-  up.bind(1, key.env)
-      .bind(2, key.optimizer)
-      .bind(3, static_cast<std::int64_t>(key.seed))
-      .bind(4, key.budget)
-      .bind(5, key.env_config_hash)
-      .bind(6, key.opt_config_hash)
-      .bind(7, std::string(seed_hex))
-      .bind(8, utc_now())
-      .bind(9, key.harness_version)
-      .bind(10, provenance_.git_sha)
-      .bind(11, provenance_.host)
-      .bind(12, key.versions.text());
+  Statement up(db_.handle(), start_run_sql());
+  bind_run_key(up, 1, key);
+  up.bind(9, std::string(seed_hex))
+      .bind(10, std::string(stored_text(RunStatus::running)))
+      .bind(11, utc_now())
+      .bind(12, provenance_.git_sha)
+      .bind(13, provenance_.host);
   if (!up.step()) throw StoreError("sqlite: no run_id returned");
   start.run_id = up.column_int(0);
   up.reset();
@@ -238,9 +217,8 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
       start.journal = read_journal(db_, donor.table, donor.run_id, donor.calls);
       if (static_cast<std::int64_t>(start.journal.size()) == donor.calls) {
         Statement copy(db_.handle(),
-                       "INSERT INTO replay(run_id, seq, kind, input_hash, payload) SELECT ?, seq, kind, "
-                       "input_hash, payload FROM " +
-                           donor.table + " WHERE run_id=? AND seq<?");
+                       "INSERT INTO replay(run_id, " + journal_columns() + ") SELECT ?, " + journal_columns() +
+                           " FROM " + donor.table + " WHERE run_id=? AND seq<?");
         copy.bind(1, start.run_id).bind(2, donor.run_id).bind(3, donor.calls).run();
         Statement mark(db_.handle(), "UPDATE runs SET shared_episodes=?, shared_from_seed=? WHERE run_id=?");
         mark.bind(1, donor.episodes).bind(2, static_cast<std::int64_t>(donor.seed)).bind(3, start.run_id).run();
@@ -258,9 +236,10 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
 namespace {
 
 void insert_evals(Database& db, std::int64_t run_id, std::span<const EvalRecord> evals) {
+  // an eval row: every column of evals, in schema order
   Statement ins(db.handle(),
-                "INSERT OR REPLACE INTO evals(run_id, episode, loss, best_loss, used_grad, wall_s, failed, metric) "
-                "VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+                "INSERT OR REPLACE INTO evals(" + column_names(evals_table(), kSchemaVersion) + ") VALUES (" +
+                    placeholders(8) + ")");
   for (const auto& e : evals) {
     ins.bind(1, run_id)
         .bind(2, e.episode)
@@ -274,6 +253,25 @@ void insert_evals(Database& db, std::int64_t run_id, std::span<const EvalRecord>
   }
 }
 
+// Journal entries as rows of `table` (replay or prefix), the first at seq `first_seq`, up to seq
+// `end_seq` (exclusive).
+void insert_journal(Database& db, const std::string& table, std::int64_t run_id, std::int64_t first_seq,
+                    const std::vector<ReplayEntry>& entries, std::int64_t end_seq) {
+  Statement ins(db.handle(),
+                "INSERT OR REPLACE INTO " + table + "(" + column_names(replay_table(), kSchemaVersion) + ") VALUES (" +
+                    placeholders(5) + ")");
+  std::int64_t seq = first_seq;
+  for (const auto& e : entries) {
+    if (seq >= end_seq) break;
+    ins.bind(1, run_id)
+        .bind(2, seq++)
+        .bind(3, static_cast<std::int64_t>(e.kind))
+        .bind(4, static_cast<std::int64_t>(e.input_hash))
+        .bind_blob(5, replay_payload_bytes(e.payload));
+    ins.run();
+  }
+}
+
 }  // namespace
 
 void Store::append_progress(std::int64_t run_id, std::span<const EvalRecord> evals, std::int64_t first_seq,
@@ -282,17 +280,7 @@ void Store::append_progress(std::int64_t run_id, std::span<const EvalRecord> eva
   refuse_if_moved();  // before a commit: the path must still name the file this store opened
   Transaction tx(db_);
   insert_evals(db_, run_id, evals);
-  Statement ins(db_.handle(),
-                "INSERT OR REPLACE INTO replay(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
-  std::int64_t seq = first_seq;
-  for (const auto& e : journal) {
-    ins.bind(1, run_id)
-        .bind(2, seq++)
-        .bind(3, static_cast<std::int64_t>(e.kind))
-        .bind(4, static_cast<std::int64_t>(e.input_hash))
-        .bind_blob(5, replay_payload_bytes(e.payload));
-    ins.run();
-  }
+  insert_journal(db_, "replay", run_id, first_seq, journal, std::numeric_limits<std::int64_t>::max());
   Statement upd(db_.handle(), "UPDATE runs SET episodes=(SELECT count(*) FROM evals WHERE run_id=?) WHERE run_id=?");
   upd.bind(1, run_id).bind(2, run_id).run();
   if (seed_free.drew) {
@@ -332,22 +320,12 @@ void Store::keep_seed_free_prefix(std::int64_t run_id, const RunResult& r) {
   longest.bind(1, run_id);
   if (longest.step() && longest.column_int(0) >= calls) return;
   // the committed journal's entries of the prefix, then those not committed yet
-  Statement copy(db_.handle(),
-                 "INSERT OR REPLACE INTO prefix(run_id, seq, kind, input_hash, payload) SELECT run_id, "
-                 "seq, kind, input_hash, payload FROM replay WHERE run_id=? AND seq<?");
+  const std::string columns = column_names(replay_table(), kSchemaVersion);
+  Statement copy(
+      db_.handle(),
+      "INSERT OR REPLACE INTO prefix(" + columns + ") SELECT " + columns + " FROM replay WHERE run_id=? AND seq<?");
   copy.bind(1, run_id).bind(2, calls).run();
-  Statement ins(db_.handle(),
-                "INSERT OR REPLACE INTO prefix(run_id, seq, kind, input_hash, payload) VALUES (?, ?, ?, ?, ?)");
-  std::int64_t seq = r.journal_tail_first_seq;
-  for (const auto& e : r.journal_tail) {
-    if (seq >= calls) break;
-    ins.bind(1, run_id)
-        .bind(2, seq++)
-        .bind(3, static_cast<std::int64_t>(e.kind))
-        .bind(4, static_cast<std::int64_t>(e.input_hash))
-        .bind_blob(5, replay_payload_bytes(e.payload));
-    ins.run();
-  }
+  insert_journal(db_, "prefix", run_id, r.journal_tail_first_seq, r.journal_tail, calls);
   Statement count(db_.handle(), "SELECT count(*) FROM prefix WHERE run_id=?");
   count.bind(1, run_id);
   count.step();

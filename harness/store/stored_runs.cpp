@@ -3,29 +3,13 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "harness/store/run_key_sql.hpp"
 #include "harness/store/schema.hpp"
 #include "harness/store/sqlite_db.hpp"
+#include "harness/store/tables.hpp"
 
 namespace dsb {
 namespace {
-
-// the run key's columns, results_versions read as '' in a file from before versions (schema 4
-// or older): 8 columns, in RunKey's order
-std::string key_columns(int version) {
-  return std::string("env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version, ") +
-      (version >= 5 ? "results_versions" : "''");
-}
-
-RunKey read_key(const Statement& q, int first) {
-  return {q.column_text(first),
-          q.column_text(first + 1),
-          static_cast<int>(q.column_int(first + 2)),
-          q.column_int(first + 3),
-          q.column_text(first + 4),
-          q.column_text(first + 5),
-          q.column_text(first + 6),
-          stored_results_versions(q.column_text(first + 7))};
-}
 
 // a results file that does not exist yet reads as none: every answer empty
 std::unique_ptr<Database> open_if_there(const std::string& path) {
@@ -46,9 +30,9 @@ std::set<RunKey> StoredRuns::done_keys() const {
 std::map<RunKey, std::string> StoredRuns::with_status(const std::string& status) const {
   std::map<RunKey, std::string> runs;
   if (version_ == 0) return runs;
-  Statement q(db_->handle(), "SELECT " + key_columns(version_) + ", COALESCE(error, '') FROM runs WHERE status=?");
+  Statement q(db_->handle(), "SELECT " + run_key_columns(version_) + ", COALESCE(error, '') FROM runs WHERE status=?");
   q.bind(1, status);
-  while (q.step()) runs.emplace(read_key(q, 0), q.column_text(8));
+  while (q.step()) runs.emplace(read_run_key(q, 0), q.column_text(8));
   return runs;
 }
 
@@ -56,11 +40,11 @@ std::map<std::string, std::int64_t> StoredRuns::kept_prefixes() const {
   std::map<std::string, std::int64_t> kept;
   if (version_ < 4) return kept;
   Statement q(db_->handle(),
-              "SELECT " + key_columns(version_) +
+              "SELECT " + run_key_columns(version_) +
                   ", seed_free_episodes FROM runs r WHERE status='done' AND seed_free_episodes > 0 AND "
                   "EXISTS (SELECT 1 FROM prefix p WHERE p.run_id=r.run_id)");
   while (q.step()) {
-    std::int64_t& e = kept[read_key(q, 0).group()];
+    std::int64_t& e = kept[read_run_key(q, 0).group()];
     e = std::max(e, q.column_int(8));
   }
   return kept;
@@ -70,9 +54,9 @@ std::map<std::string, double> StoredRuns::measured_walls() const {
   std::map<std::string, std::vector<double>> by_group;
   if (version_ == 0) return {};
   Statement q(db_->handle(),
-              "SELECT " + key_columns(version_) + ", wall_s FROM runs WHERE status='done' AND wall_s > 0" +
+              "SELECT " + run_key_columns(version_) + ", wall_s FROM runs WHERE status='done' AND wall_s > 0" +
                   (version_ >= 4 ? " AND shared_episodes = 0" : ""));
-  while (q.step()) by_group[read_key(q, 0).group()].push_back(q.column_double(8));
+  while (q.step()) by_group[read_run_key(q, 0).group()].push_back(q.column_double(8));
   std::map<std::string, double> walls;
   for (auto& [group, w] : by_group) {
     std::sort(w.begin(), w.end());
@@ -86,7 +70,7 @@ std::vector<StaleRuns> StoredRuns::stale(const std::set<std::pair<std::string, s
   std::map<std::string, StaleRuns> by_reason;
   if (version_ == 0) return {};
   Statement q(db_->handle(),
-              std::string("SELECT env, optimizer, ") + (version_ >= 5 ? "results_versions" : "''") +
+              std::string("SELECT env, optimizer, ") + read_column(runs_table(), "results_versions", version_) +
                   ", status, count(*) FROM runs GROUP BY 1, 2, 3, 4 ORDER BY 1, 2, 3, 4");
   while (q.step()) {
     const std::string env = q.column_text(0), optimizer = q.column_text(1);
