@@ -772,18 +772,24 @@ def _killed_and_failed(con):
                 "optimizer = 'random' AND seed = 2")
 
 
-def _state_claims(tmp):
-    """One claim per state the claims table tells apart, on the harness database's envs."""
-    path = os.path.join(tmp, "state_claims.csv")
+def _claims_file(path, rows):
+    """A claims table at `path`: paper_claims.csv's header, then `rows` (id, env, kind, a, b,
+    threshold; statement "s", source "t" and no note)."""
     with open(path, "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f, lineterminator="\n")
         w.writerow(["id", "env", "kind", "a", "b", "threshold", "statement", "source", "note"])
-        w.writerow(["gone", "cartpole2", "a_below_b", "cmaes", "random", "", "s", "t", ""])
-        w.writerow(["short", "sphere-2", "a_below_b", "cmaes", "random", "", "s", "t", ""])
-        w.writerow(["broken", "branin", "a_below_b", "cmaes", "random", "", "s", "t", ""])
-        w.writerow(["best", "sphere-2", "a_best", "gd", "", "", "s", "t", ""])
-        w.writerow(["variant", "sphere-3", "a_below_b", "cmaes", "random", "", "s", "t", ""])
-    return ("--claims", path)
+        w.writerows(row + ["s", "t", ""] for row in rows)
+    return path
+
+
+def _state_claims(tmp):
+    """One claim per state the claims table tells apart, on the harness database's envs."""
+    return ("--claims", _claims_file(os.path.join(tmp, "state_claims.csv"), [
+        ["gone", "cartpole2", "a_below_b", "cmaes", "random", ""],
+        ["short", "sphere-2", "a_below_b", "cmaes", "random", ""],
+        ["broken", "branin", "a_below_b", "cmaes", "random", ""],
+        ["best", "sphere-2", "a_best", "gd", "", ""],
+        ["variant", "sphere-3", "a_below_b", "cmaes", "random", ""]]))
 
 
 class TestClaimStates(ReportCase):
@@ -870,13 +876,9 @@ def _older_binary(con):
 
 def _stale_claims(tmp, *more):
     """A claim on sphere-2's cmaes and random: the runs it counts are the current ones only."""
-    path = os.path.join(tmp, "stale_claims.csv")
-    with open(path, "w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f, lineterminator="\n")
-        w.writerow(["id", "env", "kind", "a", "b", "threshold", "statement", "source", "note"])
-        w.writerow(["cm-rand", "sphere-2", "a_below_b", "cmaes", "random", "", "s", "t", ""])
-        w.writerow(["gd-cm", "branin", "a_below_b", "gd", "cmaes", "", "s", "t", ""])
-    return ("--claims", path) + more
+    return ("--claims", _claims_file(os.path.join(tmp, "stale_claims.csv"), [
+        ["cm-rand", "sphere-2", "a_below_b", "cmaes", "random", ""],
+        ["gd-cm", "branin", "a_below_b", "gd", "cmaes", ""]])) + more
 
 
 def finals_of(case, env):

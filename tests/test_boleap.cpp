@@ -16,6 +16,7 @@
 namespace dsb {
 namespace {
 
+using testing::flat_objective;
 using testing::FunctionObjective;
 
 // shifted sphere with gradient, minimum 0 at c_i = 0.4 - 0.1 i
@@ -62,12 +63,7 @@ TEST(BoLeap, LeapsRespectTheEpisodeCap) {
 TEST(BoLeap, DescentStopsAfterMoreThanThreeNonImprovingSteps) {
   // constant loss: the first step sets the best, the next four fail to improve: the paper halts a
   // descent when the loss "stagnates or increases for more than three steps" -> 5 steps
-  FunctionObjective f(
-      2, 300, [](std::span<const double>) { return 1.0; },
-      [](std::span<const double>, std::span<double> g) {
-        std::fill(g.begin(), g.end(), 0.0);
-        return 1.0;
-      });
+  FunctionObjective f = flat_objective(2, 300);
   const BoLeapStats s = run(f, 3);
   ASSERT_GE(s.descent_lengths.size(), 3u);
   for (std::size_t i = 0; i + 1 < s.descent_lengths.size(); ++i) {

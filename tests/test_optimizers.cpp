@@ -15,6 +15,7 @@
 namespace dsb {
 namespace {
 
+using testing::flat_objective;
 using testing::FunctionObjective;
 
 // minimum 0 at c_i = 0.3 - 0.05 i
@@ -91,12 +92,7 @@ TEST(Gd, RecoversFromAFailedEpisode) {
 
 TEST(RandDescents, RestartsFromRandomStartsAndStopsStaleDescents) {
   // constant function: every descent goes stale after `patience` steps and restarts
-  FunctionObjective f(
-      3, 100, [](std::span<const double>) { return 1.0; },
-      [](std::span<const double>, std::span<double> g) {
-        std::fill(g.begin(), g.end(), 0.0);
-        return 1.0;
-      });
+  FunctionObjective f = flat_objective(3, 100);
   run("rand-descents", f, 4);
   const int patience = rand_descents_defaults().patience;
   // the descent runs patience + 1 episodes (the first sets the best), then restarts elsewhere

@@ -65,4 +65,15 @@ class FunctionObjective : public Objective {
   std::vector<std::vector<double>> points_;
 };
 
+// a flat landscape: loss 1 everywhere with a zero gradient (no step ever improves; for the
+// optimizers' stall and restart rules)
+inline FunctionObjective flat_objective(int dim, std::int64_t budget) {
+  return FunctionObjective(
+      dim, budget, [](std::span<const double>) { return 1.0; },
+      [](std::span<const double>, std::span<double> g) {
+        std::fill(g.begin(), g.end(), 0.0);
+        return 1.0;
+      });
+}
+
 }  // namespace dsb::testing
