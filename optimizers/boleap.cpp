@@ -35,7 +35,7 @@ nlohmann::json BoLeapConfig::to_json() const {
   return j;
 }
 
-BoLeap::BoLeap(const BoLeapConfig& cfg) : cfg_(cfg) { cfg_.validate(); }
+BoLeap::BoLeap(const BoLeapConfig& cfg) : ConfiguredOptimizer("boleap", true, cfg) {}
 
 void BoLeap::minimize(Objective& f, Rng& rng) {
   if (!f.has_gradient()) throw std::invalid_argument("boleap needs gradients, and this env is not differentiable");
@@ -231,9 +231,7 @@ KnobTable boleap_knobs(BoLeapConfig& cfg) {
 }
 
 std::unique_ptr<Optimizer> make_boleap_with(const KnobSettings& settings) {
-  BoLeapConfig cfg;
-  boleap_knobs(cfg).apply(settings);
-  return make_boleap(cfg);
+  return make_boleap(with_knobs(boleap_knobs, BoLeapConfig{}, settings));
 }
 
 }  // namespace dsb

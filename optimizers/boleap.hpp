@@ -22,6 +22,7 @@
 #include "optimizers/cmaes.hpp"
 #include "optimizers/core/adam.hpp"
 #include "optimizers/core/knobs.hpp"
+#include "optimizers/core/configured_optimizer.hpp"
 #include "optimizers/core/optimizer.hpp"
 
 namespace dsb {
@@ -97,12 +98,9 @@ struct BoLeapStats {
   nlohmann::json gp;                       // BoSurrogate::diagnostics() after the last refit
 };
 
-class BoLeap : public Optimizer {
+class BoLeap : public ConfiguredOptimizer<BoLeapConfig> {
  public:
   explicit BoLeap(const BoLeapConfig& cfg = {});
-  const std::string& name() const override { return name_; }
-  bool needs_gradient() const override { return true; }
-  nlohmann::json config() const override { return cfg_.to_json(); }
   void minimize(Objective& f, Rng& rng) override;
   const BoLeapStats& last_run() const { return stats_; }
   // {"leaps", "descents", "stale_stops", "descent_steps" (summary), "gp" (the GP after the last
@@ -114,8 +112,6 @@ class BoLeap : public Optimizer {
   nlohmann::json diagnostics() const override;
 
  private:
-  std::string name_ = "boleap";
-  BoLeapConfig cfg_;
   BoLeapStats stats_;
 };
 

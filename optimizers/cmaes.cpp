@@ -324,7 +324,7 @@ bool CmaState::should_stop() {
 // ---------------------------------------------------------------------------------------------
 // optimizer: generations of ask / evaluate / tell, IPOP restarts on stop
 
-Cmaes::Cmaes(const CmaesConfig& cfg) : cfg_(cfg) { cfg_.validate(); }
+Cmaes::Cmaes(const CmaesConfig& cfg) : ConfiguredOptimizer("cmaes", false, cfg) {}
 
 void Cmaes::minimize(Objective& f, Rng& rng) {
   cfg_.validate();
@@ -389,9 +389,7 @@ KnobTable cmaes_knobs(CmaesConfig& cfg) {
 }
 
 std::unique_ptr<Optimizer> make_cmaes_with(const KnobSettings& settings) {
-  CmaesConfig cfg;
-  cmaes_knobs(cfg).apply(settings);
-  return make_cmaes(cfg);
+  return make_cmaes(with_knobs(cmaes_knobs, CmaesConfig{}, settings));
 }
 
 }  // namespace dsb

@@ -42,6 +42,7 @@
 
 #include "common/rng.hpp"
 #include "optimizers/core/knobs.hpp"
+#include "optimizers/core/configured_optimizer.hpp"
 #include "optimizers/core/optimizer.hpp"
 
 namespace dsb {
@@ -153,12 +154,9 @@ struct CmaesRunStats {
   int restarts() const { return populations.empty() ? 0 : static_cast<int>(populations.size()) - 1; }
 };
 
-class Cmaes : public Optimizer {
+class Cmaes : public ConfiguredOptimizer<CmaesConfig> {
  public:
   explicit Cmaes(const CmaesConfig& cfg = {});
-  const std::string& name() const override { return name_; }
-  bool needs_gradient() const override { return false; }
-  nlohmann::json config() const override { return cfg_.to_json(); }
   // Runs until f throws BudgetExhausted (propagated); returns early only when ipop is false and the
   // single instance stops.
   void minimize(Objective& f, Rng& rng) override;
@@ -169,8 +167,6 @@ class Cmaes : public Optimizer {
   nlohmann::json diagnostics() const override;
 
  private:
-  std::string name_ = "cmaes";
-  CmaesConfig cfg_;
   CmaesRunStats stats_;
 };
 

@@ -132,40 +132,29 @@ void NloptConfig::validate() const {
 
 nlohmann::json NloptConfig::to_json() const { return fields_json(*this); }
 
-NloptConfig nlopt_lbfgs_defaults() {
+namespace {
+
+// the defaults of the registered adapter of `algorithm`: NloptConfig's, and BOBYQA's initial step
+NloptConfig adapter_defaults(const char* algorithm) {
   NloptConfig c;
-  c.algorithm = "LD_LBFGS";
+  c.algorithm = algorithm;
+  if (c.algorithm == "LN_BOBYQA") c.initial_step = 0.25;  // chosen here: an eighth of the box width
   return c;
 }
 
-NloptConfig nlopt_bobyqa_defaults() {
-  NloptConfig c;
-  c.algorithm = "LN_BOBYQA";
-  c.initial_step = 0.25;  // chosen here: an eighth of the box width
-  return c;
-}
+}  // namespace
 
-NloptConfig nlopt_direct_l_defaults() {
-  NloptConfig c;
-  c.algorithm = "GN_DIRECT_L";
-  return c;
-}
-
-NloptConfig nlopt_crs2_defaults() {
-  NloptConfig c;
-  c.algorithm = "GN_CRS2_LM";
-  return c;
-}
+NloptConfig nlopt_lbfgs_defaults() { return adapter_defaults("LD_LBFGS"); }
+NloptConfig nlopt_bobyqa_defaults() { return adapter_defaults("LN_BOBYQA"); }
+NloptConfig nlopt_direct_l_defaults() { return adapter_defaults("GN_DIRECT_L"); }
+NloptConfig nlopt_crs2_defaults() { return adapter_defaults("GN_CRS2_LM"); }
 
 // ---------------------------------------------------------------------------------------------
 // optimizer
 
-NloptOptimizer::NloptOptimizer(const NloptConfig& cfg) : cfg_(cfg) {
-  cfg_.validate();
-  const AlgoInfo& a = algo_or_throw(cfg_.algorithm);
-  name_ = a.name;
-  needs_gradient_ = a.gradient;
-}
+// a bad algorithm: ConfigError from algo_or_throw, as validate() would throw it
+NloptOptimizer::NloptOptimizer(const NloptConfig& cfg)
+    : ConfiguredOptimizer(algo_or_throw(cfg.algorithm).name, algo_or_throw(cfg.algorithm).gradient, cfg) {}
 
 void NloptOptimizer::minimize(Objective& f, Rng& rng) {
   stats_ = {};

@@ -72,6 +72,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/rng.hpp"
+#include "optimizers/core/configured_optimizer.hpp"
 #include "optimizers/core/optimizer.hpp"
 
 namespace dsb {
@@ -128,12 +129,9 @@ struct NloptRunStats {
   std::string early_return;  // empty unless minimize returned before the budget was spent
 };
 
-class NloptOptimizer : public Optimizer {
+class NloptOptimizer : public ConfiguredOptimizer<NloptConfig> {
  public:
   explicit NloptOptimizer(const NloptConfig& cfg);
-  const std::string& name() const override { return name_; }
-  bool needs_gradient() const override { return needs_gradient_; }
-  nlohmann::json config() const override { return cfg_.to_json(); }
   // Throws std::invalid_argument when the gradient is needed and f has none, ConfigError when the
   // CRS2 population is below n + 1; otherwise runs until the budget is spent (BudgetExhausted)
   // or one of the early returns above.
@@ -145,9 +143,6 @@ class NloptOptimizer : public Optimizer {
   nlohmann::json diagnostics() const override;
 
  private:
-  NloptConfig cfg_;
-  std::string name_;
-  bool needs_gradient_;
   NloptRunStats stats_;
 };
 

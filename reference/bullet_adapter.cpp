@@ -1,5 +1,6 @@
 #include "reference/bullet_adapter.hpp"
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -107,7 +108,6 @@ std::unique_ptr<btRigidBody> make_ball(btCollisionShape* shape, double mass, dou
 // ---------------------------------- cartpole ------------------------------------------------
 
 struct BulletCartpole::Impl {
-  CartpoleConfig cfg;
   WorldParts<btMultiBodyDynamicsWorld, btMultiBodyConstraintSolver> parts;
   std::unique_ptr<btMultiBody> body;
   std::unique_ptr<btMultiBodyJointMotor> motor;
@@ -120,9 +120,9 @@ struct BulletCartpole::Impl {
   }
 };
 
-BulletCartpole::BulletCartpole(const CartpoleConfig& cfg) : impl_(std::make_unique<Impl>()) {
+BulletCartpole::BulletCartpole(const CartpoleConfig& cfg)
+    : EngineCartpole("BulletCartpole", cfg), impl_(std::make_unique<Impl>()) {
   cfg.validate();
-  impl_->cfg = cfg;
   const int n = cfg.links;
   const double L = cfg.link_length;
   const double rod_radius = 0.02 * L;  // as the MuJoCo model: only the axial inertia uses it
@@ -171,7 +171,7 @@ BulletCartpole::BulletCartpole(const CartpoleConfig& cfg) : impl_(std::make_uniq
 BulletCartpole::~BulletCartpole() = default;
 
 void BulletCartpole::reset() {
-  const auto& cfg = impl_->cfg;
+  const auto& cfg = cfg_;
   btMultiBody& mb = *impl_->body;
   mb.setJointPos(0, 0.0);
   mb.setJointVel(0, 0.0);
@@ -184,53 +184,28 @@ void BulletCartpole::reset() {
 
 void BulletCartpole::step(double u, const double* tau) {
   impl_->motor->setVelocityTarget(u, 1.0);
-  for (int j = 0; j < impl_->cfg.links; ++j) impl_->body->addJointTorque(1 + j, tau[j]);
+  for (int j = 0; j < cfg_.links; ++j) impl_->body->addJointTorque(1 + j, tau[j]);
   // exactly one internal step of dt (maxSubSteps = 0: the step is the given time)
-  impl_->parts.world.stepSimulation(impl_->cfg.dt, 0);
+  impl_->parts.world.stepSimulation(cfg_.dt, 0);
 }
 
 CartpoleState BulletCartpole::state() const {
   const btMultiBody& mb = *impl_->body;
-  const int n = impl_->cfg.links;
-  CartpoleState s;
-  s.x = mb.getJointPos(0);
-  s.vx = mb.getJointVel(0);
-  s.phi = LinkVec::Zero(n);
-  s.dphi = LinkVec::Zero(n);
-  double phi = 0.0, dphi = 0.0;
-  for (int i = 0; i < n; ++i) {
-    phi += mb.getJointPos(1 + i);
-    dphi += mb.getJointVel(1 + i);
-    s.phi(i) = phi;
-    s.dphi(i) = dphi;
+  // link 0 the cart's prismatic joint, links 1..n the relative revolute joints
+  std::array<double, kMaxLinks + 1> q{}, dq{};
+  const std::size_t joints = static_cast<std::size_t>(cfg_.links) + 1;
+  for (std::size_t i = 0; i < joints; ++i) {
+    q[i] = mb.getJointPos(static_cast<int>(i));
+    dq[i] = mb.getJointVel(static_cast<int>(i));
   }
-  return s;
+  return state_from_joints({q.data(), joints}, {dq.data(), joints});
 }
 
 Eigen::Vector2d BulletCartpole::tip() const {
   // the far end of the last rod: half a length below its centre of mass, in its own frame
-  const int last = impl_->cfg.links;
-  const btVector3 p = impl_->body->localPosToWorld(last, btVector3(0, -0.5 * impl_->cfg.link_length, 0));
+  const int last = cfg_.links;
+  const btVector3 p = impl_->body->localPosToWorld(last, btVector3(0, -0.5 * cfg_.link_length, 0));
   return {p.x(), p.y()};
-}
-
-std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(const CartpoleEnv& env, std::span<const double> x) {
-  const auto& cfg = impl_->cfg;
-  if (env.cartpole_config().to_json() != cfg.to_json())
-    throw std::invalid_argument("BulletCartpole: env '" + env.name() + "' has another config");
-  if (static_cast<int>(x.size()) != env.dim())
-    throw std::invalid_argument("BulletCartpole: expected " + std::to_string(env.dim()) + " parameters, got " +
-                                std::to_string(x.size()));
-  reset();
-  std::vector<Eigen::Vector2d> tips{tip()};
-  tips.reserve(cfg.steps + 1);
-  for (int t = 0; t < cfg.steps; ++t) {
-    // the env's own parameter map
-    const CartpoleControls c = env.controls(x, t);
-    step(c.u, c.tau);
-    tips.push_back(tip());
-  }
-  return tips;
 }
 
 // ------------------------------ ball setups (bounce, pinball) ------------------------------
@@ -382,13 +357,12 @@ namespace {
 bool bullet_available() { return false; }
 std::string bullet_version() { return "none"; }
 struct BulletCartpole::Impl {};
-BulletCartpole::BulletCartpole(const CartpoleConfig&) { missing(); }
+BulletCartpole::BulletCartpole(const CartpoleConfig& cfg) : EngineCartpole("BulletCartpole", cfg) { missing(); }
 BulletCartpole::~BulletCartpole() = default;
 void BulletCartpole::reset() { missing(); }
 void BulletCartpole::step(double, const double*) { missing(); }
 CartpoleState BulletCartpole::state() const { missing(); }
 Eigen::Vector2d BulletCartpole::tip() const { missing(); }
-std::vector<Eigen::Vector2d> BulletCartpole::tip_trajectory(const CartpoleEnv&, std::span<const double>) { missing(); }
 struct BulletBounce::Impl {};
 BulletBounce::BulletBounce(const BounceConfig&) { missing(); }
 BulletBounce::~BulletBounce() = default;

@@ -31,6 +31,7 @@
 #include "envs/rigid/cartpole_env.hpp"
 #include "envs/rigid/pinball_config.hpp"
 #include "envs/rigid/pinball_env.hpp"
+#include "reference/engine_cartpole.hpp"
 
 namespace dsb::reference {
 
@@ -46,24 +47,18 @@ std::string bullet_version();
 double equivalent_restitution(const ContactConfig& contact, double mass, double dt);
 
 // cartpole1 / cartpole3 as a btMultiBody
-class BulletCartpole {
+class BulletCartpole : public EngineCartpole {
  public:
   explicit BulletCartpole(const CartpoleConfig& cfg);
-  ~BulletCartpole();
+  ~BulletCartpole() override;
   BulletCartpole(const BulletCartpole&) = delete;
   BulletCartpole& operator=(const BulletCartpole&) = delete;
-  // the config's initial state
-  void reset();
-  // one step: cart speed becomes u (m/s) through the motor, joint torques tau (N m)
-  void step(double u, const double* tau);
-  // the current state in our conventions (absolute angles)
-  CartpoleState state() const;
-  // tip of the chain from Bullet's link transforms
-  Eigen::Vector2d tip() const;
-  // tips of the whole rollout for the normalized parameters x of `env` (steps + 1 entries), each
-  // step driven by env.controls(x, t); throws std::invalid_argument when env's config is not
-  // the one this model was built from
-  std::vector<Eigen::Vector2d> tip_trajectory(const CartpoleEnv& env, std::span<const double> x);
+  void reset() override;
+  // the cart's speed through the motor
+  void step(double u, const double* tau) override;
+  CartpoleState state() const override;
+  // from Bullet's link transforms
+  Eigen::Vector2d tip() const override;
 
  private:
   struct Impl;

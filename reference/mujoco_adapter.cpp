@@ -229,7 +229,8 @@ bool MujocoSim::healthy() const {
 
 // ---------------------------------- cartpole ------------------------------------------------
 
-MujocoCartpole::MujocoCartpole(const CartpoleConfig& cfg) : cfg_(cfg), sim_(cartpole_mjcf(cfg)) {
+MujocoCartpole::MujocoCartpole(const CartpoleConfig& cfg)
+    : EngineCartpole("MujocoCartpole", cfg), sim_(cartpole_mjcf(cfg)) {
   const int nv = sim_.model()->nv;
   mass_matrix_.assign(static_cast<std::size_t>(nv) * nv, 0.0);
   tip_site_ = mj_name2id(sim_.model(), mjOBJ_SITE, "tip");
@@ -275,44 +276,15 @@ void MujocoCartpole::step(double u, const double* tau) {
 
 CartpoleState MujocoCartpole::state() const {
   const mjData* d = sim_.data();
-  CartpoleState s;
-  s.x = d->qpos[0];
-  s.vx = d->qvel[0];
-  s.phi = LinkVec::Zero(cfg_.links);
-  s.dphi = LinkVec::Zero(cfg_.links);
-  // absolute angles are running sums of the relative hinge angles
-  double phi = 0.0, dphi = 0.0;
-  for (int i = 0; i < cfg_.links; ++i) {
-    phi += d->qpos[1 + i];
-    dphi += d->qvel[1 + i];
-    s.phi(i) = phi;
-    s.dphi(i) = dphi;
-  }
-  return s;
+  // qpos, qvel: the cart's slide, then the relative hinges
+  const std::size_t joints = static_cast<std::size_t>(cfg_.links) + 1;
+  return state_from_joints({d->qpos, joints}, {d->qvel, joints});
 }
 
 Eigen::Vector2d MujocoCartpole::tip() const {
   const mjtNum* p = sim_.data()->site_xpos + 3 * tip_site_;
   const Eigen::Vector3d ours = from_mujoco(Eigen::Vector3d(p[0], p[1], p[2]));
   return ours.head<2>();
-}
-
-std::vector<Eigen::Vector2d> MujocoCartpole::tip_trajectory(const CartpoleEnv& env, std::span<const double> x) {
-  if (env.cartpole_config().to_json() != cfg_.to_json())
-    throw std::invalid_argument("MujocoCartpole: env '" + env.name() + "' has another config");
-  if (static_cast<int>(x.size()) != env.dim())
-    throw std::invalid_argument("MujocoCartpole: expected " + std::to_string(env.dim()) + " parameters, got " +
-                                std::to_string(x.size()));
-  reset();
-  std::vector<Eigen::Vector2d> tips{tip()};
-  tips.reserve(cfg_.steps + 1);
-  for (int t = 0; t < cfg_.steps; ++t) {
-    // the env's own parameter map
-    const CartpoleControls c = env.controls(x, t);
-    step(c.u, c.tau);
-    tips.push_back(tip());
-  }
-  return tips;
 }
 
 // ---------------------------------- bounce --------------------------------------------------
@@ -403,12 +375,12 @@ const mjModel_* MujocoSim::model() const { missing(); }
 mjData_* MujocoSim::data() const { missing(); }
 void MujocoSim::reset() { missing(); }
 bool MujocoSim::healthy() const { missing(); }
-MujocoCartpole::MujocoCartpole(const CartpoleConfig& cfg) : cfg_(cfg), sim_(std::string()) {}
+MujocoCartpole::MujocoCartpole(const CartpoleConfig& cfg)
+    : EngineCartpole("MujocoCartpole", cfg), sim_(std::string()) {}
 void MujocoCartpole::reset() { missing(); }
 void MujocoCartpole::step(double, const double*) { missing(); }
 CartpoleState MujocoCartpole::state() const { missing(); }
 Eigen::Vector2d MujocoCartpole::tip() const { missing(); }
-std::vector<Eigen::Vector2d> MujocoCartpole::tip_trajectory(const CartpoleEnv&, std::span<const double>) { missing(); }
 MujocoBounce::MujocoBounce(const BounceConfig& cfg) : cfg_(cfg), sim_(std::string()) {}
 std::vector<BallState> MujocoBounce::trajectory(const Eigen::Vector3d&) { missing(); }
 BallState MujocoBounce::final_state(const Eigen::Vector3d&) { missing(); }

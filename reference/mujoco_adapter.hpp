@@ -34,6 +34,7 @@
 #include "envs/rigid/cartpole_env.hpp"
 #include "envs/rigid/pinball_config.hpp"
 #include "envs/rigid/pinball_env.hpp"
+#include "reference/engine_cartpole.hpp"
 
 // MuJoCo's own types, declared here so that this header does not need mujoco.h
 struct mjModel_;
@@ -90,26 +91,18 @@ class MujocoSim {
 };
 
 // cartpole1 / cartpole3 in MuJoCo: a slide joint for the cart along x and a hinge per link
-class MujocoCartpole {
+class MujocoCartpole : public EngineCartpole {
  public:
   explicit MujocoCartpole(const CartpoleConfig& cfg);
-  // the config's initial state (relative joint angles and velocities, cart at the origin)
-  void reset();
-  // one step: cart speed becomes u (m/s), joint torques tau (links entries, N m)
-  void step(double u, const double* tau);
-  // the current state in our conventions (absolute angles)
-  CartpoleState state() const;
-  // tip of the chain (our x, y) from MuJoCo's kinematics (a site at the last link's end)
-  Eigen::Vector2d tip() const;
-  // tips of the whole rollout for the normalized parameters x of `env` (steps + 1 entries), each
-  // step driven by env.controls(x, t); throws std::invalid_argument when env's config is not
-  // the one this model was built from
-  std::vector<Eigen::Vector2d> tip_trajectory(const CartpoleEnv& env, std::span<const double> x);
+  // relative joint angles and velocities as the config gives them, cart at the origin
+  void reset() override;
+  void step(double u, const double* tau) override;
+  CartpoleState state() const override;
+  // from MuJoCo's kinematics (a site at the last link's end)
+  Eigen::Vector2d tip() const override;
   const MujocoSim& sim() const { return sim_; }
-  const CartpoleConfig& config() const { return cfg_; }
 
  private:
-  CartpoleConfig cfg_;
   MujocoSim sim_;
   std::vector<double> mass_matrix_;  // dense M (nv x nv), scratch
   int tip_site_ = -1;                // id of the site at the chain's end

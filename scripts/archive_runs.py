@@ -26,6 +26,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "reports"))
+sys.path.insert(0, HERE)
+from python_modules import cannot_import  # noqa: E402
 
 RUN_KEY = ["env", "optimizer", "seed", "budget", "env_config_hash", "opt_config_hash"]
 
@@ -210,11 +212,9 @@ def main(argv=None) -> int:
     doc.add_argument("--update", metavar="FILE", help="write the archive table into FILE's block")
     doc.add_argument("--agree", metavar="FILE", help="fail when FILE's archive table is not this one")
     a = ap.parse_args(argv)
-    try:
-        import numpy  # noqa: F401
-        import pandas  # noqa: F401
-    except ImportError as err:
-        return fail(f"{sys.executable} cannot import {err.name}; use /usr/bin/python3")
+    why = cannot_import("numpy", "pandas")
+    if why:
+        return fail(why)
     return {"write": write, "check": check}[a.command](a)
 
 

@@ -34,6 +34,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "reports"))
+sys.path.insert(0, HERE)
+from python_modules import cannot_import  # noqa: E402
 
 BEGIN, END = "<!-- study_results.py: begin -->", "<!-- study_results.py: end -->"
 
@@ -206,11 +208,9 @@ def main(argv=None) -> int:
     r.add_argument("db")
     r.add_argument("out")
     a = ap.parse_args(argv)
-    try:
-        import pandas  # noqa: F401
-        import scipy.stats  # noqa: F401
-    except ImportError as err:
-        return fail(f"{sys.executable} cannot import {err.name}; use /usr/bin/python3")
+    why = cannot_import("pandas", "scipy.stats")
+    if why:
+        return fail(why)
     return {"export": export, "tables": tables, "record-seed-free": record_seed_free}[a.command](a)
 
 

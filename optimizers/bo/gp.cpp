@@ -142,19 +142,25 @@ void trtri_lower_unblocked(Eigen::Ref<Eigen::MatrixXd> A) {
   }
 }
 
+// The recursion of the blocked triangular kernels on A (n x n) = [P 0; Q R], P of n / 2 rows:
+// unblocked(A) at kBlock rows or fewer, else halves(P, Q, R) (views into A)
+template <class Unblocked, class Halves>
+void on_halves(Eigen::Ref<Eigen::MatrixXd> A, Unblocked unblocked, Halves halves) {
+  const Eigen::Index n = A.rows();
+  if (n <= kBlock) return unblocked(A);
+  const Eigen::Index n1 = n / 2, n2 = n - n1;
+  halves(A.topLeftCorner(n1, n1), A.bottomLeftCorner(n2, n1), A.bottomRightCorner(n2, n2));
+}
+
 // in-place inverse of the lower triangular A: [P 0; Q R]^-1 = [P^-1 0; -R^-1 Q P^-1, R^-1]
 void trtri_lower(Eigen::Ref<Eigen::MatrixXd> A) {
-  const Eigen::Index n = A.rows();
-  if (n <= kBlock) return trtri_lower_unblocked(A);
-  const Eigen::Index n1 = n / 2, n2 = n - n1;
-  auto P = A.topLeftCorner(n1, n1);
-  auto Q = A.bottomLeftCorner(n2, n1);
-  auto R = A.bottomRightCorner(n2, n2);
-  trtri_lower(P);
-  Q = Q * P.triangularView<Eigen::Lower>();          // Q P^-1
-  R.triangularView<Eigen::Lower>().solveInPlace(Q);  // R^-1 Q P^-1
-  Q = -Q;
-  trtri_lower(R);
+  on_halves(A, trtri_lower_unblocked, [](auto P, auto Q, auto R) {
+    trtri_lower(P);
+    Q = Q * P.template triangularView<Eigen::Lower>();          // Q P^-1
+    R.template triangularView<Eigen::Lower>().solveInPlace(Q);  // R^-1 Q P^-1
+    Q = -Q;
+    trtri_lower(R);
+  });
 }
 
 // lower triangle of M^T M in place, M lower triangular (LAPACK lauu2 order)
@@ -176,16 +182,12 @@ void lauum_lower_unblocked(Eigen::Ref<Eigen::MatrixXd> A) {
 
 // [P 0; Q R]^T [P 0; Q R] = [P^T P + Q^T Q, .; R^T Q, R^T R]  (lower triangle)
 void lauum_lower(Eigen::Ref<Eigen::MatrixXd> A) {
-  const Eigen::Index n = A.rows();
-  if (n <= kBlock) return lauum_lower_unblocked(A);
-  const Eigen::Index n1 = n / 2, n2 = n - n1;
-  auto P = A.topLeftCorner(n1, n1);
-  auto Q = A.bottomLeftCorner(n2, n1);
-  auto R = A.bottomRightCorner(n2, n2);
-  lauum_lower(P);
-  P.selfadjointView<Eigen::Lower>().rankUpdate(Q.transpose());
-  Q = R.triangularView<Eigen::Lower>().transpose() * Q;
-  lauum_lower(R);
+  on_halves(A, lauum_lower_unblocked, [](auto P, auto Q, auto R) {
+    lauum_lower(P);
+    P.template selfadjointView<Eigen::Lower>().rankUpdate(Q.transpose());
+    Q = R.template triangularView<Eigen::Lower>().transpose() * Q;
+    lauum_lower(R);
+  });
 }
 
 // log of the Gamma(x; k, rate) density and its derivative with respect to log x

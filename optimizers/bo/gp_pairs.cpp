@@ -3,14 +3,9 @@
 
 #include <cstddef>
 
+#include "optimizers/bo/gp_pairs_lanes.hpp"
+
 namespace dsb::gp_pairs {
-
-// gp_pairs_sse2.cpp, gp_pairs_avx.cpp
-void squared_distances_sse2(const double* Xt, int n, int d, double* R);
-void squared_distances_avx(const double* Xt, int n, int d, double* R);
-void ard_gradient_sse2(const double* Xs, int n, int d, const double* C, double* gl);
-void ard_gradient_avx(const double* Xs, int n, int d, const double* C, double* gl);
-
 namespace {
 
 void squared_distances_scalar(const double* Xt, int n, int d, double* R) {
@@ -38,26 +33,27 @@ void ard_gradient_scalar(const double* Xs, int n, int d, const double* C, double
     }
 }
 
+// the path's loops: the scalar reference, or the lanes of sse2 or avx (avx2 runs the avx code)
+LaneKernels kernels(SimdPath path) {
+  switch (path) {
+    case SimdPath::scalar: return {&squared_distances_scalar, &ard_gradient_scalar};
+    case SimdPath::sse2: return sse2_kernels();
+    case SimdPath::avx:
+    case SimdPath::avx2: return avx_kernels();
+  }
+  return {&squared_distances_scalar, &ard_gradient_scalar};
+}
+
 }  // namespace
 
 SimdPath default_path() { return simd_path({SimdPath::scalar, SimdPath::sse2, SimdPath::avx}); }
 
 void squared_distances(const double* Xt, int n, int d, double* R, SimdPath path) {
-  switch (path) {
-    case SimdPath::scalar: return squared_distances_scalar(Xt, n, d, R);
-    case SimdPath::sse2: return squared_distances_sse2(Xt, n, d, R);
-    case SimdPath::avx:
-    case SimdPath::avx2: return squared_distances_avx(Xt, n, d, R);
-  }
+  kernels(path).squared_distances(Xt, n, d, R);
 }
 
 void ard_gradient(const double* Xs, int n, int d, const double* C, double* gl, SimdPath path) {
-  switch (path) {
-    case SimdPath::scalar: return ard_gradient_scalar(Xs, n, d, C, gl);
-    case SimdPath::sse2: return ard_gradient_sse2(Xs, n, d, C, gl);
-    case SimdPath::avx:
-    case SimdPath::avx2: return ard_gradient_avx(Xs, n, d, C, gl);
-  }
+  kernels(path).ard_gradient(Xs, n, d, C, gl);
 }
 
 }  // namespace dsb::gp_pairs

@@ -22,10 +22,7 @@ namespace dsb::gp_pairs {
 
 typedef double V4 __attribute__((vector_size(32)));
 
-void squared_distances_avx(const double* Xt, int n, int d, double* R) { squared_distances_lanes<V4>(Xt, n, d, R); }
-void ard_gradient_avx(const double* Xs, int n, int d, const double* C, double* gl) {
-  ard_gradient_lanes<V4>(Xs, n, d, C, gl);
-}
+const LaneKernels& avx_kernels() { return lane_kernels<V4>; }
 
 }  // namespace dsb::gp_pairs
 

@@ -1,14 +1,24 @@
 #pragma once
 // The lanes kernels of gp_pairs.hpp, written once over a GCC vector type V of L doubles and
 // compiled twice: gp_pairs_sse2.cpp (V of 2 doubles) and gp_pairs_avx.cpp (V of 4, inside
-// `#pragma GCC target("avx")`). Everything sits in an anonymous namespace, so the two copies never
-// meet at link time. Loads and stores are unaligned moves.
+// `#pragma GCC target("avx")`), each file handing out its copy as a LaneKernels (gp_pairs.cpp picks
+// one per path). Everything else sits in an anonymous namespace, so the two copies never meet at
+// link time. Loads and stores are unaligned moves.
 #include <algorithm>
 #include <cstddef>
 #include <cstring>
 #include <vector>
 
 namespace dsb::gp_pairs {
+
+// gp_pairs.hpp's two loops in one register width, as gp_pairs.cpp calls them
+struct LaneKernels {
+  void (*squared_distances)(const double* Xt, int n, int d, double* R);
+  void (*ard_gradient)(const double* Xs, int n, int d, const double* C, double* gl);
+};
+const LaneKernels& sse2_kernels();  // gp_pairs_sse2.cpp
+const LaneKernels& avx_kernels();   // gp_pairs_avx.cpp: call only on a CPU with AVX
+
 namespace {
 
 // dimensions per pass over the points: a chunk of Xt (n x 32 doubles, 256 KB at n = 1,000) or of
@@ -146,6 +156,10 @@ void ard_gradient_lanes(const double* Xs, int n, int d, const double* C, double*
     }
   }
 }
+
+// the kernels over V (GCC's vector of 2 or 4 doubles)
+template <class V>
+constexpr LaneKernels lane_kernels{&squared_distances_lanes<V>, &ard_gradient_lanes<V>};
 
 }  // namespace
 }  // namespace dsb::gp_pairs

@@ -29,4 +29,18 @@ class KnobTable {
   std::map<std::string, std::variant<double*, int*, bool*>> fields_;
 };
 
+// cfg with the settings written into its fields through its knob table (table(cfg), or
+// table(owner, cfg) for a table shared by optimizers: gd's and rand-descents')
+template <class Config>
+Config with_knobs(KnobTable (*table)(Config&), Config cfg, const KnobSettings& settings) {
+  table(cfg).apply(settings);
+  return cfg;
+}
+template <class Config>
+Config with_knobs(KnobTable (*table)(const std::string&, Config&), const std::string& owner, Config cfg,
+                  const KnobSettings& settings) {
+  table(owner, cfg).apply(settings);
+  return cfg;
+}
+
 }  // namespace dsb
