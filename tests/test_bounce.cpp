@@ -1,13 +1,15 @@
 // bounce: the penalty contact law's Jacobians, reverse-pass gradient vs central differences (away
 // from contact events, with and without contacts), what happens across one contact event,
-// closed-form anchors (symplectic Euler free fall, penalty equilibrium depth), config checks.
+// closed-form anchors (symplectic Euler free fall, penalty equilibrium depth), config checks, names.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "common/error.hpp"
 #include "common/rng.hpp"
 #include "envs/core/gradient_check.hpp"
 #include "envs/registry.hpp"
@@ -343,6 +345,21 @@ TEST(BounceEnv, ParameterMapDimensionsAndDeterminism) {
   env->loss_and_grad(x, g2);
   EXPECT_EQ(g1, g2);
   EXPECT_EQ(env->config()["steps"], 960);
+}
+
+TEST(BounceNames, AVariantIsRefusedAsBounceTakesNone) {
+  auto message = [](const std::string& name) -> std::string {
+    try {
+      (void)make_env(name);
+    } catch (const UsageError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  for (const std::string bad : {"bounce-", "bounce-2", "bounce_x"})
+    EXPECT_EQ(message(bad), "unknown env '" + bad + "' (bounce takes no variants)");
+  EXPECT_EQ(message("bouncex"), "unknown env 'bouncex' (see `harness list`)");  // no family knows it
+  EXPECT_EQ(make_env("bounce")->name(), "bounce");
 }
 
 TEST(BounceConfigTest, ValidationNamesTheField) {

@@ -412,12 +412,11 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
     EXPECT_NE(r.err.find(bad), std::string::npos) << prefix << ": " << r.err;
     EXPECT_EQ(read(db("keep.sqlite")), before) << prefix;
   }
-  // eval: wrong dimension, a non-number, outside the box, unknown env
+  // eval: wrong dimension, a non-number, outside the box, unknown env, a variant of bounce (which has none)
   const std::vector<std::pair<std::string, std::string>> eval_cases = {
-      {"eval --env sphere-3 --x 0.1,0.2", "3"},
-      {"eval --env sphere-2 --x 0.1,abc", "abc"},
-      {"eval --env sphere-2 --x 0.1,1.5", "1.5"},
-      {"eval --env nosuch --x 0.1", "nosuch"},
+      {"eval --env sphere-3 --x 0.1,0.2", "3"},    {"eval --env sphere-2 --x 0.1,abc", "abc"},
+      {"eval --env sphere-2 --x 0.1,1.5", "1.5"},  {"eval --env nosuch --x 0.1", "nosuch"},
+      {"eval --env bounce-2 --x 0.1", "bounce-2"},
   };
   for (const auto& [args, bad] : eval_cases) {
     const auto r = harness(args);

@@ -5,8 +5,8 @@
 #include <limits>
 
 #include "common/det_math.hpp"
-#include "common/error.hpp"
 #include "common/parallel.hpp"
+#include "envs/cloth/cloth_task_setup.hpp"
 
 namespace dsb::cloth {
 
@@ -30,29 +30,13 @@ FlipModel build_flip_model(const FlipConfig& cfg) {
   cfg.validate();
   FlipModel m;
   // flat pancake at start_gap: vertex (col, row) at (-side/2 + col du, start_gap, -side/2 + row dv)
-  GridSpec g;
-  g.cols = cfg.cols;
-  g.rows = cfg.rows;
-  g.width = cfg.side;
-  g.height = cfg.side;
-  g.origin = Vec3(-0.5 * cfg.side, cfg.start_gap, -0.5 * cfg.side);
-  g.axis_u = Vec3::UnitX();
-  g.axis_v = Vec3::UnitZ();
-  g.total_mass = cfg.total_mass;
+  GridSpec g = flat_grid_spec(cfg, cfg.side, cfg.side, Vec3(-0.5 * cfg.side, cfg.start_gap, -0.5 * cfg.side));
   g.structural_stiffness = cfg.structural_stiffness;
   g.shear_stiffness = cfg.shear_stiffness;
   g.bending_stiffness = cfg.bending_stiffness;
-  g.structural_damping = cfg.structural_damping;
-  g.shear_damping = cfg.shear_damping;
-  g.bending_damping = cfg.bending_damping;
   m.cloth = build_grid(g);
   ClothModel& c = m.cloth;
-  c.surfaces = {PlaneSurface::floor(cfg.floor_height)};
-  c.gravity = Vec3(0.0, -cfg.gravity, 0.0);
-  c.dt = cfg.dt;
-  c.damping = cfg.damping;
-  c.tangential_keep = cfg.tangential_keep;
-  c.validate();
+  set_floor_world(c, cfg);
   m.stiffness = c.default_stiffness();
   m.steps = cfg.steps();
   m.segment_steps = cfg.segment_steps();
@@ -165,7 +149,7 @@ ClothModel cloth_with_pan(const FlipModel& m, const std::shared_ptr<PanSurface>&
 }
 
 FlipEnv::FlipEnv(std::string name, FlipConfig cfg)
-    : Env(flip_info(std::move(name), cfg)), cfg_(std::move(cfg)), model_([c = cfg_] { return build_flip_model(c); }) {}
+    : ConfigModelEnv(flip_info(std::move(name), cfg), cfg, build_flip_model) {}
 
 nlohmann::json FlipEnv::config() const {
   nlohmann::json j = cfg_.to_json();
@@ -371,19 +355,11 @@ double FlipEnv::rollout_with_grad(std::span<const double> x, std::span<double> g
 }
 
 EnvFamily flip_family() {
-  EnvFamily f;
-  f.pattern = "flip";
-  f.description =
+  return single_env_family(
+      "flip",
       "14 x 14 cm mass-spring pancake (9 x 9) in a round pan (radius 20 cm, cubic rim); 5 waypoints x (pan x, y, "
-      "tilt), 0.12 s each, then 0.4 s settling (dt 1e-3); loss: corners to their flipped-over positions in the pan";
-  f.grid_names = {"flip"};
-  f.try_make = [](const std::string& requested) -> std::unique_ptr<Env> {
-    if (requested == "flip") return std::make_unique<FlipEnv>(requested, FlipConfig{});
-    if (requested.rfind("flip", 0) == 0 && requested.size() > 4 && (requested[4] == '-' || requested[4] == '_'))
-      throw UsageError("unknown env '" + requested + "' (flip takes no variants)");
-    return nullptr;
-  };
-  return f;
+      "tilt), 0.12 s each, then 0.4 s settling (dt 1e-3); loss: corners to their flipped-over positions in the pan",
+      [] { return std::make_unique<FlipEnv>("flip", FlipConfig{}); });
 }
 
 }  // namespace dsb::cloth

@@ -36,9 +36,9 @@
 #include "envs/cloth/cloth_model.hpp"
 #include "envs/cloth/flip_config.hpp"
 #include "envs/cloth/pan_surface.hpp"
+#include "envs/core/config_model_env.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/env_family.hpp"
-#include "envs/core/lazy_model.hpp"
 
 namespace dsb::cloth {
 
@@ -65,7 +65,7 @@ struct FlipWorkspace : Workspace {
   ClothGradient grad;
 };
 
-class FlipEnv : public Env {
+class FlipEnv : public ConfigModelEnv<FlipConfig, FlipModel> {
  public:
   explicit FlipEnv(std::string name, FlipConfig cfg = {});
   nlohmann::json config() const override;
@@ -75,7 +75,6 @@ class FlipEnv : public Env {
   std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_cloth.cpp
 
   const FlipConfig& flip_config() const { return cfg_; }
-  const FlipModel& model() const { return model_.get(); }
   // waypoints 0..5 for params x
   std::array<PanPose, 6> waypoints(std::span<const double> x) const;
   // the pose at every time 0..steps
@@ -110,9 +109,6 @@ class FlipEnv : public Env {
   void fill_path(std::span<const double> x, std::vector<PanPose>& path) const;
   // a fresh FlipWorkspace after a forward rollout at x with its tape kept (frames, contact_pattern)
   std::unique_ptr<Workspace> taped_rollout(std::span<const double> x) const;
-
-  FlipConfig cfg_;
-  LazyModel<FlipModel> model_;
 };
 
 // the model's cloth with a new pan in front of its surfaces (the workspace's and RL view's)

@@ -8,6 +8,7 @@
 #include "common/det_math.hpp"
 #include "common/error.hpp"
 #include "common/parallel.hpp"
+#include "envs/cloth/cloth_task_setup.hpp"
 
 namespace dsb::cloth {
 
@@ -53,30 +54,14 @@ SwingModel build_swing_model(const SwingConfig& cfg, SwingParams params) {
   cfg.validate();
   SwingModel m;
   // flat cloth at start_height: vertex (col, row) at (-width/2 + col du, start_height, -height + row dv)
-  GridSpec g;
-  g.cols = cfg.cols;
-  g.rows = cfg.rows;
-  g.width = cfg.width;
-  g.height = cfg.height;
-  g.origin = Vec3(-0.5 * cfg.width, cfg.start_height, -cfg.height);
-  g.axis_u = Vec3::UnitX();
-  g.axis_v = Vec3::UnitZ();
-  g.total_mass = cfg.total_mass;
-  g.structural_damping = cfg.structural_damping;
-  g.shear_damping = cfg.shear_damping;
-  g.bending_damping = cfg.bending_damping;
-  m.cloth = build_grid(g);
+  m.cloth =
+      build_grid(flat_grid_spec(cfg, cfg.width, cfg.height, Vec3(-0.5 * cfg.width, cfg.start_height, -cfg.height)));
   ClothModel& c = m.cloth;
   const int W = cfg.cols, H = cfg.rows;
   // the two held corners: the front edge z = 0 (row H - 1), columns 0 and W - 1
   const int release = cfg.release_step();
   c.anchors = {{(H - 1) * W, release}, {(H - 1) * W + W - 1, release}};
-  c.surfaces = {PlaneSurface::floor(cfg.floor_height)};
-  c.gravity = Vec3(0.0, -cfg.gravity, 0.0);
-  c.dt = cfg.dt;
-  c.damping = cfg.damping;
-  c.tangential_keep = cfg.tangential_keep;
-  c.validate();
+  set_floor_world(c, cfg);
   m.steps = cfg.steps();
   m.corners = {0, W - 1, (H - 1) * W, H * W - 1};
   m.observed = grid_subsample_3x3(W, H);
@@ -191,11 +176,10 @@ class SwingRl : public RlEnv {
 std::unique_ptr<RlEnv> SwingEnv::make_rl() const { return std::make_unique<SwingRl>(*this); }
 
 SwingEnv::SwingEnv(std::string name, SwingParams params, SwingLoss loss, SwingConfig cfg)
-    : Env(swing_info(std::move(name), params, cfg)),
-      cfg_(std::move(cfg)),
+    : ConfigModelEnv(swing_info(std::move(name), params, cfg), cfg,
+                     [params](const SwingConfig& c) { return build_swing_model(c, params); }),
       params_(params),
-      loss_(loss),
-      model_([c = cfg_, params] { return build_swing_model(c, params); }) {}
+      loss_(loss) {}
 
 nlohmann::json SwingEnv::config() const {
   nlohmann::json j = cfg_.to_json();

@@ -35,9 +35,9 @@
 #include "envs/cloth/cloth_dynamics.hpp"
 #include "envs/cloth/cloth_model.hpp"
 #include "envs/cloth/swing_config.hpp"
+#include "envs/core/config_model_env.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/env_family.hpp"
-#include "envs/core/lazy_model.hpp"
 
 namespace dsb::cloth {
 
@@ -70,7 +70,7 @@ struct SwingWorkspace : Workspace {
   ClothGradient grad;
 };
 
-class SwingEnv : public Env {
+class SwingEnv : public ConfigModelEnv<SwingConfig, SwingModel> {
  public:
   SwingEnv(std::string name, SwingParams params, SwingLoss loss, SwingConfig cfg = {});
   nlohmann::json config() const override;
@@ -85,7 +85,6 @@ class SwingEnv : public Env {
   const SwingConfig& swing_config() const { return cfg_; }
   SwingParams params() const { return params_; }
   SwingLoss loss_kind() const { return loss_; }
-  const SwingModel& model() const { return model_.get(); }
   // the reference params (normalized) that produce the targets
   std::vector<double> reference() const;
   // per-spring stiffness (N/m) and initial state for normalized params x
@@ -108,10 +107,8 @@ class SwingEnv : public Env {
   void fill_stiffness(const SwingModel& m, std::span<const double> x, std::vector<double>& k) const;
   void fill_initial_state(const SwingModel& m, std::span<const double> x, ClothState& s) const;
 
-  SwingConfig cfg_;
   SwingParams params_;
   SwingLoss loss_;
-  LazyModel<SwingModel> model_;
 };
 
 // family entry for the registry: swing-{stiffness,velocity}-{single,corner,mesh}

@@ -29,4 +29,9 @@ struct EnvFamily {
   std::function<std::unique_ptr<Env>(const std::string& name, const EnvOptions& options)> make_with_options = {};
 };
 
+// A family of one env without variants (`bounce`, `flip`): `name` is its pattern and its one grid
+// member, `make` builds it; a variant of the name ("NAME-x", "NAME_x") is a UsageError saying that
+// NAME takes none.
+EnvFamily single_env_family(std::string name, std::string description, std::function<std::unique_ptr<Env>()> make);
+
 }  // namespace dsb

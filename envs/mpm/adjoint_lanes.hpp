@@ -47,24 +47,11 @@ DSB_LANE_INLINE void g2p_adjoint_terms(TransferChunk& c, const TransferGrid& g, 
 template <class R>
 DSB_LANE_INLINE void g2p_adjoint_scatter(const TransferChunk& c, const TransferGrid& g, int l, double* vb) {
   using N = Node<R>;
-  int b2;
-  const int corner = corner_node(c, g, l, b2);
   const N base = N::make(c.base_term[0][l], c.base_term[1][l], c.base_term[2][l], 0.0);
   const N c0 = N::make(c.Cs[0][l], c.Cs[1][l], c.Cs[2][l], 0.0);
   const N c1 = N::make(c.Cs[3][l], c.Cs[4][l], c.Cs[5][l], 0.0);
   const N c2 = N::make(c.Cs[6][l], c.Cs[7][l], c.Cs[8][l], 0.0);
-  const double wz0 = c.w[2][0][l], wz1 = c.w[2][1][l], wz2 = c.w[2][2][l];
-  for (int i = 0; i < 3; ++i) {
-    const N ti = base + static_cast<double>(i) * c0;
-    for (int j = 0; j < 3; ++j) {
-      const N tij = ti + static_cast<double>(j) * c1;
-      const double wij = c.w[0][i][l] * c.w[1][j][l];
-      double* node = vb + 3 * (corner + (i * g.n1 + j) * g.n2);
-      (N::load3(node) + (wij * wz0) * tij).store3(node);
-      (N::load3(node + 3) + (wij * wz1) * (tij + c2)).store3(node + 3);
-      (N::load3(node + 6) + (wij * wz2) * (tij + 2.0 * c2)).store3(node + 6);
-    }
-  }
+  scatter_affine_lanes<3>(c, g, l, base, c0, c1, c2, vb);
 }
 
 template <class T>

@@ -84,9 +84,7 @@ class FluidRl : public RlEnv {
 }  // namespace
 
 FluidEnv::FluidEnv(std::string name, FluidConfig cfg)
-    : Env(fluid_info(std::move(name), cfg)),
-      cfg_(std::move(cfg)),
-      model_([c = cfg_] { return build_fluid_model(c); }) {}
+    : ConfigModelEnv(fluid_info(std::move(name), cfg), cfg, build_fluid_model) {}
 
 std::unique_ptr<Workspace> FluidEnv::make_workspace() const {
   auto ws = std::make_unique<FluidWorkspace>(model());

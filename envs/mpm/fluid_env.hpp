@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "envs/core/config_model_env.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/env_family.hpp"
-#include "envs/core/lazy_model.hpp"
 #include "envs/mpm/fluid_config.hpp"
 #include "envs/mpm/mpm_model.hpp"
 #include "envs/mpm/mpm_workspace.hpp"
@@ -24,10 +24,9 @@ struct FluidWorkspace : Workspace {
   double cube_height = 0.0;                  // the last rollout's second metric (m above the floor)
 };
 
-class FluidEnv : public Env {
+class FluidEnv : public ConfigModelEnv<FluidConfig, MpmModel> {
  public:
   FluidEnv(std::string name, FluidConfig cfg);
-  nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
   // each env step's (forward/back, up/down) speeds: its segment's two params
@@ -38,7 +37,6 @@ class FluidEnv : public Env {
   double episode_metric(const Workspace& ws) const override;
 
   const FluidConfig& fluid_config() const { return cfg_; }
-  const MpmModel& model() const { return model_.get(); }
   // the engine's actions of every env step for params x: env_steps x (bowl x, bowl y, handle x,
   // handle y), each segment's two params held for its env steps
   void actions(std::span<const double> x, std::vector<double>& out) const;
@@ -52,10 +50,6 @@ class FluidEnv : public Env {
   double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override;
   double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
                            ThreadTeam& team) const override;
-
- private:
-  FluidConfig cfg_;
-  LazyModel<MpmModel> model_;
 };
 
 EnvFamily fluid_family();

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <vector>
 
 #include "envs/mpm/grid.hpp"
 #include "envs/mpm/mpm_types.hpp"
@@ -48,6 +49,26 @@ inline Stencil make_stencil(const Vec3& x, double inv_dx, const GridLayout& layo
 inline Vec3 weight_gradient(const Stencil& s, int i, int j, int k) {
   return Vec3(s.dw[0][i] * s.w[1][j] * s.w[2][k], s.w[0][i] * s.dw[1][j] * s.w[2][k],
               s.w[0][i] * s.w[1][j] * s.dw[2][k]);
+}
+
+// node (base + (i, j, k)) += w_x[i] w_y[j] w_z[k] (t + i a0 + j a1 + k a2) over the 27 nodes of
+// the stencil: an affine field of the node offset scattered with the node weights (P2G's (q, m) as
+// Vec4, G2P^T's velocity adjoints as Vec3). The sums in this order are the ones the lanes kernels
+// reproduce (transfer_lanes.hpp p2g_scatter, adjoint_lanes.hpp g2p_adjoint_scatter).
+template <class V>
+inline void scatter_affine(const Stencil& s, const GridLayout& L, const V& t, const V& a0, const V& a1, const V& a2,
+                           std::vector<V>& nodes) {
+  for (int i = 0; i < 3; ++i) {
+    const V ti = t + static_cast<double>(i) * a0;
+    for (int j = 0; j < 3; ++j) {
+      const V tij = ti + static_cast<double>(j) * a1;
+      const double wij = s.w[0][i] * s.w[1][j];
+      const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
+      nodes[row] += (wij * s.w[2][0]) * tij;
+      nodes[row + 1] += (wij * s.w[2][1]) * (tij + a2);
+      nodes[row + 2] += (wij * s.w[2][2]) * (tij + 2.0 * a2);
+    }
+  }
 }
 
 }  // namespace dsb::mpm

@@ -28,13 +28,12 @@
 #include "envs/mpm/transfer_lanes.hpp"
 #include "envs/mpm/adjoint_lanes.hpp"
 #include "envs/mpm/solid_adjoint_lanes.hpp"
+#include "envs/mpm/lane_kernel_table.hpp"
 
 namespace dsb::mpm {
 
 const LaneKernels& avx2_lane_kernels() {
-  static const LaneKernels kernels{&solid_stress_chunk<Pack<F4>>, &p2g_chunk<Pack<F4>>,
-                                   &g2p_chunk<Pack<F4>>,          &g2p_adjoint_chunk<Pack<F4>>,
-                                   &p2g_adjoint_gather<F4>,       &solid_adjoint_chunk<Pack<F4>>};
+  static const LaneKernels kernels = lane_kernel_table<F4>();
   return kernels;
 }
 

@@ -106,10 +106,8 @@ class PlbRl : public RlEnv {
 }  // namespace
 
 PlbEnv::PlbEnv(std::string name, PlbConfig cfg)
-    : Env(plb_info(std::move(name), cfg)),
-      cfg_(std::move(cfg)),
-      action_dim_(commands_per_step(*find_plb_task(cfg_.task))),
-      model_([c = cfg_] { return build_plb_model(c); }) {}
+    : ConfigModelEnv(plb_info(std::move(name), cfg), cfg, build_plb_model),
+      action_dim_(commands_per_step(*find_plb_task(cfg_.task))) {}
 
 std::unique_ptr<Workspace> PlbEnv::make_workspace() const {
   auto ws = std::make_unique<PlbWorkspace>(model().mpm);

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "envs/core/config_model_env.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/env_family.hpp"
-#include "envs/core/lazy_model.hpp"
 #include "envs/mpm/mpm_workspace.hpp"
 #include "envs/mpm/plb_config.hpp"
 #include "envs/mpm/plb_loss.hpp"
@@ -27,10 +27,9 @@ struct PlbWorkspace : Workspace {
   std::vector<double> actions, actions_bar;  // env_steps x action dim
 };
 
-class PlbEnv : public Env {
+class PlbEnv : public ConfigModelEnv<PlbConfig, PlbModel> {
  public:
   PlbEnv(std::string name, PlbConfig cfg);
-  nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
   // each env step's commands: its segment's params (actions())
@@ -48,7 +47,6 @@ class PlbEnv : public Env {
   double episode_metric(const Workspace& ws) const override;
 
   const PlbConfig& plb_config() const { return cfg_; }
-  const PlbModel& model() const { return model_.get(); }
   // the engine's actions of every env step for params x (env_steps x action dim)
   void actions(std::span<const double> x, std::vector<double>& out) const;
   // the params that replay the task's reference motion as closely as segments allow: none in
@@ -61,9 +59,7 @@ class PlbEnv : public Env {
                            ThreadTeam& team) const override;
 
  private:
-  PlbConfig cfg_;
   int action_dim_ = 0;  // commands of one env step
-  LazyModel<PlbModel> model_;
 };
 
 // the reference motion's per-env-step actions of a task (its phases laid end to end, cut or

@@ -94,17 +94,7 @@ void p2g(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins, Thre
     a0 << dx * A.col(0), 0.0;
     a1 << dx * A.col(1), 0.0;
     a2 << dx * A.col(2), 0.0;
-    for (int i = 0; i < 3; ++i) {
-      const Vec4 ti = base_term + static_cast<double>(i) * a0;
-      for (int j = 0; j < 3; ++j) {
-        const Vec4 tij = ti + static_cast<double>(j) * a1;
-        const double wij = s.w[0][i] * s.w[1][j];
-        const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-        g.mq[row] += (wij * s.w[2][0]) * tij;
-        g.mq[row + 1] += (wij * s.w[2][1]) * (tij + a2);
-        g.mq[row + 2] += (wij * s.w[2][2]) * (tij + 2.0 * a2);
-      }
-    }
+    scatter_affine(s, L, base_term, a0, a1, a2, g.mq);
   });
 }
 

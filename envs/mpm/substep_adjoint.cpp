@@ -57,17 +57,7 @@ void g2p_adjoint(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team, cons
     const Mat3 Cs = (4.0 * inv_dx) * ws.adj[p].C;
     const Vec3 base_term = adv.v_bar - Cs * s.fx;
     const Vec3 c0 = Cs.col(0), c1 = Cs.col(1), c2 = Cs.col(2);
-    for (int i = 0; i < 3; ++i) {
-      const Vec3 ti = base_term + static_cast<double>(i) * c0;
-      for (int j = 0; j < 3; ++j) {
-        const Vec3 tij = ti + static_cast<double>(j) * c1;
-        const double wij = s.w[0][i] * s.w[1][j];
-        const int row = L.node(s.base[0] + i, s.base[1] + j, s.base[2]);
-        vb[row] += (wij * s.w[2][0]) * tij;
-        vb[row + 1] += (wij * s.w[2][1]) * (tij + c2);
-        vb[row + 2] += (wij * s.w[2][2]) * (tij + 2.0 * c2);
-      }
-    }
+    scatter_affine(s, L, base_term, c0, c1, c2, vb);
   });
 }
 

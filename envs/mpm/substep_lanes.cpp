@@ -148,6 +148,14 @@ TransferGrid transfer_grid(const MpmModel& model) {
 
 namespace {
 
+// the workspace's transfer chunks, at least one per thread of the team, all empty
+std::vector<TransferChunk>& empty_thread_chunks(MpmWorkspace& ws, const ThreadTeam& team) {
+  std::vector<TransferChunk>& chunks = ws.lane_chunks;
+  if (chunks.size() < static_cast<std::size_t>(team.size())) chunks.resize(team.size());
+  for (TransferChunk& c : chunks) c.count = 0;
+  return chunks;
+}
+
 // lanes past the chunk's particles repeat its first particle (finite; their results are not read)
 void pad_transfer(TransferChunk& c, bool with_momentum) {
   for (int l = c.count; l < kLaneChunk; ++l) {
@@ -166,9 +174,7 @@ void p2g_lanes(const MpmModel& model, MpmWorkspace& ws, const ParticleBins& bins
   const TransferGrid g = transfer_grid(model);
   double* mq = ws.grid.mq.data()->data();
   // one chunk per thread, finished at the end of the thread's part of each colour
-  std::vector<TransferChunk>& chunks = ws.lane_chunks;
-  if (chunks.size() < static_cast<std::size_t>(team.size())) chunks.resize(team.size());
-  for (TransferChunk& c : chunks) c.count = 0;
+  std::vector<TransferChunk>& chunks = empty_thread_chunks(ws, team);
   auto finish = [&](int t) {
     TransferChunk& c = chunks[t];
     if (c.count == 0) return;
@@ -203,9 +209,7 @@ void g2p_adjoint_lanes(const MpmModel& model, MpmWorkspace& ws, ThreadTeam& team
                        const std::vector<Particle>& after, const LaneKernels& kernels) {
   const TransferGrid g = transfer_grid(model);
   double* vb = ws.grid_adj.v.data()->data();
-  std::vector<TransferChunk>& chunks = ws.lane_chunks;
-  if (chunks.size() < static_cast<std::size_t>(team.size())) chunks.resize(team.size());
-  for (TransferChunk& c : chunks) c.count = 0;
+  std::vector<TransferChunk>& chunks = empty_thread_chunks(ws, team);
   auto finish = [&](int t) {
     TransferChunk& c = chunks[t];
     if (c.count == 0) return;

@@ -120,6 +120,22 @@ DSB_SVD_INLINE Rot<T> givens(const T& x, const T& y) {
   return {sel_eq(rho, zero, one, x * inv), y * inv, rho};  // t holds rho
 }
 
+// One Givens step of the QR below on B by columns (b[col][row]): G = givens(B(0,0), B(q,0)) applied
+// to rows (0, q), (b_0, b_q) <- (c b_0 + s b_q, c b_q - s b_0), in columns 1 and 2; B(0,0) <- rho
+// (B(q,0), now zero, is not read again). Returns G.
+template <class T>
+DSB_SVD_INLINE Rot<T> givens_clear_column0(T (&b)[3][3], int q) {
+  const Rot<T> g = givens(b[0][0], b[0][q]);
+  for (int j = 1; j < 3; ++j) {
+    const T x = g.c * b[j][0] + g.s * b[j][q];
+    const T y = g.c * b[j][q] - g.s * b[j][0];
+    b[j][0] = x;
+    b[j][q] = y;
+  }
+  b[0][0] = g.t;
+  return g;
+}
+
 // Sweep counts: kSymSweeps cyclic sweeps of (0,1), (1,2), (0,2) on S = A^T A, then kColSweeps
 // one-sided sweeps on B = A V. Measured with a throwaway probe over 300,000 seeded matrices per
 // family (Gaussian, Gaussian x 1e8 and x 1e-8, I + 1e-6 N and I + 1e-12 N, rotations,
@@ -180,22 +196,8 @@ void svd3_kernel(const T (&a)[3][3], T (&u)[3][3], T (&sigma)[3], T (&v)[3][3]) 
 
   // Givens QR: B = U R. Rows (0,1) eliminate B(1,0), rows (0,2) B(2,0), rows (1,2) B(2,1).
   // U starts as the identity; U <- U G^T (columns i, j <- c u_i + s u_j, -s u_i + c u_j).
-  const Rot<T> g1 = givens(b[0][0], b[0][1]);
-  for (int j = 1; j < 3; ++j) {
-    const T x = g1.c * b[j][0] + g1.s * b[j][1];
-    const T y = g1.c * b[j][1] - g1.s * b[j][0];
-    b[j][0] = x;
-    b[j][1] = y;
-  }
-  b[0][0] = g1.t;
-  const Rot<T> g2 = givens(b[0][0], b[0][2]);
-  for (int j = 1; j < 3; ++j) {
-    const T x = g2.c * b[j][0] + g2.s * b[j][2];
-    const T y = g2.c * b[j][2] - g2.s * b[j][0];
-    b[j][0] = x;
-    b[j][2] = y;
-  }
-  b[0][0] = g2.t;
+  const Rot<T> g1 = givens_clear_column0(b, 1);
+  const Rot<T> g2 = givens_clear_column0(b, 2);
   const Rot<T> g3 = givens(b[1][1], b[1][2]);
   {
     const T y = g3.c * b[2][2] - g3.s * b[2][1];

@@ -115,6 +115,38 @@ DSB_LANE_INLINE int corner_node(const Chunk& c, const TransferGrid& g, int l, in
   return (b0 * g.n1 + b1) * g.n2 + b2;
 }
 
+// node += d for a node of K doubles (4: (q, m), 3: a velocity or its adjoint)
+template <int K, class R>
+DSB_LANE_INLINE void add_to_node(double* node, const Node<R>& d) {
+  static_assert(K == 3 || K == 4);
+  if constexpr (K == 4)
+    (Node<R>::load4(node) + d).store4(node);
+  else
+    (Node<R>::load3(node) + d).store3(node);
+}
+
+// node += w (t + i a0 + j a1 + k a2) for the 27 nodes (i, j, k) of particle l's stencil, K doubles
+// a node (4: P2G's (q, m), 3: G2P^T's velocity adjoints): kernel.hpp's scatter_affine in its order
+template <int K, class R>
+DSB_LANE_INLINE void scatter_affine_lanes(const TransferChunk& c, const TransferGrid& g, int l, const Node<R>& t,
+                                          const Node<R>& a0, const Node<R>& a1, const Node<R>& a2, double* nodes) {
+  using N = Node<R>;
+  int b2;
+  const int corner = corner_node(c, g, l, b2);
+  const double wz0 = c.w[2][0][l], wz1 = c.w[2][1][l], wz2 = c.w[2][2][l];
+  for (int i = 0; i < 3; ++i) {
+    const N ti = t + static_cast<double>(i) * a0;
+    for (int j = 0; j < 3; ++j) {
+      const N tij = ti + static_cast<double>(j) * a1;
+      const double wij = c.w[0][i][l] * c.w[1][j][l];
+      double* node = nodes + K * (corner + (i * g.n1 + j) * g.n2);
+      add_to_node<K>(node, (wij * wz0) * tij);
+      add_to_node<K>(node + K, (wij * wz1) * (tij + a2));
+      add_to_node<K>(node + 2 * K, (wij * wz2) * (tij + 2.0 * a2));
+    }
+  }
+}
+
 // ---- P2G ----------------------------------------------------------------------------------------
 
 // P2G's base term m v - dx (A fx) (Eigen: (dx A) fx) and dx A, lanes [o, o + kLanes)
@@ -138,24 +170,11 @@ DSB_LANE_INLINE void p2g_terms(TransferChunk& c, const TransferGrid& g, int o) {
 template <class R>
 DSB_LANE_INLINE void p2g_scatter(const TransferChunk& c, const TransferGrid& g, int l, double* mq) {
   using N = Node<R>;
-  int b2;
-  const int corner = corner_node(c, g, l, b2);
   const N base = N::make(c.base_term[0][l], c.base_term[1][l], c.base_term[2][l], c.mass[l]);
   const N a0 = N::make(c.dxA[0][l], c.dxA[1][l], c.dxA[2][l], 0.0);
   const N a1 = N::make(c.dxA[3][l], c.dxA[4][l], c.dxA[5][l], 0.0);
   const N a2 = N::make(c.dxA[6][l], c.dxA[7][l], c.dxA[8][l], 0.0);
-  const double wz0 = c.w[2][0][l], wz1 = c.w[2][1][l], wz2 = c.w[2][2][l];
-  for (int i = 0; i < 3; ++i) {
-    const N ti = base + static_cast<double>(i) * a0;
-    for (int j = 0; j < 3; ++j) {
-      const N tij = ti + static_cast<double>(j) * a1;
-      const double wij = c.w[0][i][l] * c.w[1][j][l];
-      double* node = mq + 4 * (corner + (i * g.n1 + j) * g.n2);
-      (N::load4(node) + (wij * wz0) * tij).store4(node);
-      (N::load4(node + 4) + (wij * wz1) * (tij + a2)).store4(node + 4);
-      (N::load4(node + 8) + (wij * wz2) * (tij + 2.0 * a2)).store4(node + 8);
-    }
-  }
+  scatter_affine_lanes<4>(c, g, l, base, a0, a1, a2, mq);
 }
 
 template <class T>

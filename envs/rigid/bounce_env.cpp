@@ -66,8 +66,7 @@ EnvInfo bounce_info(const BounceConfig& cfg) {
 
 }  // namespace
 
-BounceEnv::BounceEnv(BounceConfig cfg)
-    : Env(bounce_info(cfg)), cfg_(std::move(cfg)), model_([c = cfg_] { return BounceModel::build(c); }) {}
+BounceEnv::BounceEnv(BounceConfig cfg) : ConfigModelEnv(bounce_info(cfg), cfg, BounceModel::build) {}
 
 std::unique_ptr<Workspace> BounceEnv::make_workspace() const {
   auto ws = std::make_unique<BounceWorkspace>();
@@ -152,17 +151,10 @@ double BounceEnv::rollout_with_grad(std::span<const double> x, std::span<double>
 }
 
 EnvFamily bounce_family() {
-  EnvFamily f;
-  f.pattern = "bounce";
-  f.description =
-      "ball thrown from (0, 1, 0) bouncing on the ground and a wall at x = 2 (penalty contact, "
-      "dt 1/480, 2 s), 3-D initial velocity, target (-1, 0.5, 1)";
-  f.grid_names = {"bounce"};
-  f.try_make = [](const std::string& requested) -> std::unique_ptr<Env> {
-    if (requested != "bounce") return nullptr;
-    return std::make_unique<BounceEnv>(BounceConfig{});
-  };
-  return f;
+  return single_env_family("bounce",
+                           "ball thrown from (0, 1, 0) bouncing on the ground and a wall at x = 2 (penalty contact, "
+                           "dt 1/480, 2 s), 3-D initial velocity, target (-1, 0.5, 1)",
+                           [] { return std::make_unique<BounceEnv>(BounceConfig{}); });
 }
 
 }  // namespace dsb

@@ -11,9 +11,9 @@
 
 #include <Eigen/Dense>
 
+#include "envs/core/config_model_env.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/env_family.hpp"
-#include "envs/core/lazy_model.hpp"
 #include "envs/rigid/bounce_config.hpp"
 
 namespace dsb {
@@ -62,16 +62,14 @@ struct BounceWorkspace : Workspace {
   std::vector<BounceStepCache> caches;  // steps
 };
 
-class BounceEnv : public Env {
+class BounceEnv : public ConfigModelEnv<BounceConfig, BounceModel> {
  public:
   explicit BounceEnv(BounceConfig cfg = {});
-  nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   bool renderable() const override { return true; }
   std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_rigid.cpp
 
   const BounceConfig& bounce_config() const { return cfg_; }
-  const BounceModel& model() const { return model_.get(); }
   // physical initial velocity (m/s) for the normalized parameters x (size 3)
   Eigen::Vector3d initial_velocity(std::span<const double> x) const;
   BallState initial_state(std::span<const double> x) const;
@@ -85,10 +83,6 @@ class BounceEnv : public Env {
   double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override;
   double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
                            ThreadTeam& team) const override;
-
- private:
-  BounceConfig cfg_;
-  LazyModel<BounceModel> model_;
 };
 
 // family entry for the registry: `bounce`

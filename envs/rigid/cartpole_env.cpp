@@ -26,9 +26,7 @@ EnvInfo cartpole_info(std::string name, const CartpoleConfig& cfg) {
 }  // namespace
 
 CartpoleEnv::CartpoleEnv(std::string name, CartpoleConfig cfg)
-    : Env(cartpole_info(std::move(name), cfg)),
-      cfg_(std::move(cfg)),
-      model_([c = cfg_] { return CartpoleModel::build(c); }) {}
+    : ConfigModelEnv(cartpole_info(std::move(name), cfg), cfg, CartpoleModel::build) {}
 
 std::unique_ptr<Workspace> CartpoleEnv::make_workspace() const {
   auto ws = std::make_unique<CartpoleWorkspace>();

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "envs/core/config_model_env.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/env_family.hpp"
-#include "envs/core/lazy_model.hpp"
 #include "envs/rigid/cartpole_config.hpp"
 #include "envs/rigid/cartpole_dynamics.hpp"
 
@@ -28,10 +28,9 @@ struct CartpoleControls {
   double tau[kMaxLinks] = {};
 };
 
-class CartpoleEnv : public Env {
+class CartpoleEnv : public ConfigModelEnv<CartpoleConfig, CartpoleModel> {
  public:
   CartpoleEnv(std::string name, CartpoleConfig cfg);
-  nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   std::unique_ptr<RlEnv> make_rl() const override;
   // x itself: the params are every step's normalized controls, as the RL view's actions are
@@ -40,7 +39,6 @@ class CartpoleEnv : public Env {
   std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_rigid.cpp
 
   const CartpoleConfig& cartpole_config() const { return cfg_; }
-  const CartpoleModel& model() const { return model_.get(); }
   // the parameter map: physical controls of step t for the normalized parameters x (the
   // references drive their engines with it)
   CartpoleControls controls(std::span<const double> x, int t) const;
@@ -53,10 +51,6 @@ class CartpoleEnv : public Env {
   double rollout(std::span<const double> x, Workspace& ws, ThreadTeam& team) const override;
   double rollout_with_grad(std::span<const double> x, std::span<double> grad, Workspace& ws,
                            ThreadTeam& team) const override;
-
- private:
-  CartpoleConfig cfg_;
-  LazyModel<CartpoleModel> model_;
 };
 
 // family entry for the registry: links = 1 gives `cartpole1`, 3 gives `cartpole3`

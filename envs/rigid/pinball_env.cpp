@@ -122,9 +122,7 @@ EnvInfo pinball_info(std::string name, const PinballConfig& cfg) {
 }  // namespace
 
 PinballEnv::PinballEnv(std::string name, PinballConfig cfg)
-    : Env(pinball_info(std::move(name), cfg)),
-      cfg_(std::move(cfg)),
-      model_([c = cfg_] { return PinballModel::build(c); }) {}
+    : ConfigModelEnv(pinball_info(std::move(name), cfg), cfg, PinballModel::build) {}
 
 std::unique_ptr<Workspace> PinballEnv::make_workspace() const {
   auto ws = std::make_unique<PinballWorkspace>();

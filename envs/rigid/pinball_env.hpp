@@ -17,9 +17,9 @@
 
 #include <Eigen/Dense>
 
+#include "envs/core/config_model_env.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/env_family.hpp"
-#include "envs/core/lazy_model.hpp"
 #include "envs/rigid/pinball_config.hpp"
 
 namespace dsb {
@@ -93,16 +93,14 @@ struct PinballWorkspace : Workspace {
   std::vector<PaddleContactGrad> contacts;  // grows to the most contacts seen, then reused
 };
 
-class PinballEnv : public Env {
+class PinballEnv : public ConfigModelEnv<PinballConfig, PinballModel> {
  public:
   PinballEnv(std::string name, PinballConfig cfg);
-  nlohmann::json config() const override { return cfg_.to_json(); }
   std::unique_ptr<Workspace> make_workspace() const override;
   bool renderable() const override { return true; }
   std::vector<Frame> frames(std::span<const double> x, int n, ThreadTeam& team) const override;  // frames_rigid.cpp
 
   const PinballConfig& pinball_config() const { return cfg_; }
-  const PinballModel& model() const { return model_.get(); }
   // physical paddle angles (rad, row-major) for the normalized parameters x
   std::vector<double> paddle_angles(std::span<const double> x) const;
   Ball2State initial_state() const;
@@ -119,8 +117,6 @@ class PinballEnv : public Env {
 
  private:
   PaddleAxes axes(std::span<const double> x) const;
-  PinballConfig cfg_;
-  LazyModel<PinballModel> model_;
 };
 
 // family entry for the registry: `pinball-RxC` (1x2 and 4x4 are the grid's members)
