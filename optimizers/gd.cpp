@@ -6,6 +6,7 @@
 
 #include "common/config_fields.hpp"
 #include "common/field_check.hpp"
+#include "optimizers/core/configured_optimizer.hpp"
 #include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
@@ -55,12 +56,9 @@ struct DescentRecord {
   DescentStop stop = DescentStop::budget;
 };
 
-class Descents : public Optimizer {
+class Descents : public ConfiguredOptimizer<DescentConfig> {
  public:
-  Descents(std::string name, DescentConfig cfg) : name_(std::move(name)), cfg_(cfg) { cfg_.validate(name_); }
-  const std::string& name() const override { return name_; }
-  bool needs_gradient() const override { return true; }
-  nlohmann::json config() const override { return cfg_.to_json(); }
+  Descents(std::string name, DescentConfig cfg) : ConfiguredOptimizer(std::move(name), true, cfg) {}
 
   void minimize(Objective& f, Rng& rng) override {
     descents_.clear();
@@ -140,8 +138,6 @@ class Descents : public Optimizer {
     record.stop = DescentStop::max_steps;
   }
 
-  std::string name_;
-  DescentConfig cfg_;
   std::vector<DescentRecord> descents_;
   int recoveries_ = 0;
 };
@@ -163,15 +159,11 @@ KnobTable descent_knobs(const std::string& owner, DescentConfig& cfg) {
 }
 
 std::unique_ptr<Optimizer> make_gd_with(const KnobSettings& settings) {
-  DescentConfig cfg = gd_defaults();
-  descent_knobs("gd", cfg).apply(settings);
-  return make_gd(cfg);
+  return make_gd(with_knobs(descent_knobs, "gd", gd_defaults(), settings));
 }
 
 std::unique_ptr<Optimizer> make_rand_descents_with(const KnobSettings& settings) {
-  DescentConfig cfg = rand_descents_defaults();
-  descent_knobs("rand-descents", cfg).apply(settings);
-  return make_rand_descents(cfg);
+  return make_rand_descents(with_knobs(descent_knobs, "rand-descents", rand_descents_defaults(), settings));
 }
 
 }  // namespace dsb

@@ -15,6 +15,7 @@
 #include "envs/registry.hpp"
 #include "envs/rigid/bounce_env.hpp"
 #include "envs/rigid/contact.hpp"
+#include "support/contact_jacobian_check.hpp"
 
 namespace dsb {
 namespace {
@@ -51,13 +52,7 @@ bool smooth_at(const BounceEnv& env, const std::vector<double>& x, double h) {
 // relative error (|analytic - central| / (|central| + 1))
 double expect_gradient_matches(const BounceEnv& env, std::uint64_t seed, int points,
                                int* contact_steps_seen = nullptr) {
-  // |analytic - central| <= 1e-5 (|central| + 1): a relative tolerance with an absolute floor;
-  // loss() and loss_and_grad() bit-equal
-  GradientCheckOptions options;
-  options.step = 1e-7;
-  options.tolerance = 1e-5;
-  options.relative_floor = 0.0;
-  options.absolute_floor = 1.0;
+  const GradientCheckOptions options = testing::rigid_gradient_check_options();
   Rng rng(seed);
   double worst = 0.0;
   int accepted = 0, tried = 0;
@@ -106,17 +101,7 @@ TEST(ContactLaw, PlaneJacobiansMatchCentralDifferences) {
     ASSERT_TRUE(c.active);
     EXPECT_NEAR(c.penetration, depth, 1e-12);
     EXPECT_GT(c.f.dot(n), 0.0);  // never pulling
-    for (int j = 0; j < 3; ++j) {
-      const Eigen::Vector3d e = Eigen::Vector3d::Unit(j) * h;
-      const Eigen::Vector3d fdx = (force(p + e, v).f - force(p - e, v).f) / (2.0 * h);
-      const Eigen::Vector3d fdv = (force(p, v + e).f - force(p, v - e).f) / (2.0 * h);
-      for (int i = 0; i < 3; ++i) {
-        EXPECT_NEAR(c.df_dx(i, j), fdx(i), 1e-6 * std::abs(fdx(i)) + 1e-5) << k << " " << i << j;
-        EXPECT_NEAR(c.df_dv(i, j), fdv(i), 1e-6 * std::abs(fdv(i)) + 1e-5) << k << " " << i << j;
-        worst = std::max(worst, std::abs(c.df_dx(i, j) - fdx(i)) / (std::abs(fdx(i)) + 1.0));
-        worst = std::max(worst, std::abs(c.df_dv(i, j) - fdv(i)) / (std::abs(fdv(i)) + 1.0));
-      }
-    }
+    worst = std::max(worst, testing::expect_contact_jacobians_match<3>(force, p, v, h, k));
   }
   std::printf("plane contact Jacobians: worst relative error %.2e\n", worst);
   // outside the plane's reach there is no force and no derivative

@@ -15,7 +15,6 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sqlite3.h>
 #include <unistd.h>
 
 #include "common/error.hpp"
@@ -26,6 +25,7 @@
 #include "envs/core/gradient_check.hpp"
 #include "envs/core/lazy_model.hpp"
 #include "envs/registry.hpp"
+#include "support/config_error.hpp"
 #include "support/harness_process.hpp"
 #include "support/temp_dir_test.hpp"
 #include "tests/support/contact_window.hpp"
@@ -59,12 +59,7 @@ TEST(FlipConfig, DefaultsAreValidAndStoredWithTheRun) {
 
 TEST(FlipConfig, InvalidFieldsAreNamed) {
   auto expect_field = [](const cloth::FlipConfig& c, const std::string& field) {
-    try {
-      c.validate();
-      ADD_FAILURE() << "no error for " << field;
-    } catch (const ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
-    }
+    testing::expect_config_error_naming(c, field);
   };
   cloth::FlipConfig c;
   c.dt = 0.0;
@@ -499,16 +494,10 @@ TEST_F(FlipHarness, ListEvalBadNameAndGd) {
   const std::string db = (dir_ / "flip.sqlite").string();
   r = testing::run_harness(dir_, "--env flip --optimizer gd --seeds 1 --budget 3 --quiet --db " + db);
   ASSERT_EQ(r.code, 0) << r.err;
-  sqlite3* h = nullptr;
-  ASSERT_EQ(sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* q = nullptr;
-  sqlite3_prepare_v2(h, "SELECT count(*), sum(loss IS NOT NULL), sum(used_grad) FROM evals", -1, &q, nullptr);
-  ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(q, 0), 3);
-  EXPECT_EQ(sqlite3_column_int(q, 1), 3) << "every episode finite";
-  EXPECT_EQ(sqlite3_column_int(q, 2), 3) << "gd's episodes carry gradients";
-  sqlite3_finalize(q);
-  sqlite3_close(h);
+  const auto n = testing::episode_counts(db);
+  EXPECT_EQ(n.episodes, 3);
+  EXPECT_EQ(n.finite, 3) << "every episode finite";
+  EXPECT_EQ(n.matching, 3) << "gd's episodes carry gradients";
 }
 
 }  // namespace

@@ -9,7 +9,6 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sqlite3.h>
 #include <unistd.h>
 
 #include "common/error.hpp"
@@ -146,21 +145,12 @@ TEST_F(FluidHarness, ListEvalAndAGridOfCmaesAndGd) {
   const std::string db = (dir_ / "fluid.sqlite").string();
   r = testing::run_harness(dir_, "--env fluid --optimizer cmaes,gd --seeds 1 --budget 3 --quiet --db " + db);
   ASSERT_EQ(r.code, 0) << r.err;
-  sqlite3* h = nullptr;
-  ASSERT_EQ(sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* q = nullptr;
-  sqlite3_prepare_v2(h, "SELECT count(*), sum(loss IS NOT NULL), sum(used_grad) FROM evals", -1, &q, nullptr);
-  ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(q, 0), 6);
-  EXPECT_EQ(sqlite3_column_int(q, 1), 6) << "every episode finite";
-  EXPECT_EQ(sqlite3_column_int(q, 2), 3) << "gd's episodes carry gradients";
-  sqlite3_finalize(q);
+  const auto n = testing::episode_counts(db);
+  EXPECT_EQ(n.episodes, 6);
+  EXPECT_EQ(n.finite, 6) << "every episode finite";
+  EXPECT_EQ(n.matching, 3) << "gd's episodes carry gradients";
   // every episode stores the cube's final height (metres above the floor, inside the domain)
-  sqlite3_prepare_v2(h, "SELECT count(*) FROM evals WHERE metric > 0 AND metric < 0.4", -1, &q, nullptr);
-  ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(q, 0), 6);
-  sqlite3_finalize(q);
-  sqlite3_close(h);
+  EXPECT_EQ(testing::episode_counts(db, "metric > 0 AND metric < 0.4").matching, 6);
 }
 
 }  // namespace

@@ -24,6 +24,7 @@
 #include "envs/core/gradient_check.hpp"
 #include "envs/registry.hpp"
 #include "envs/synthetic/synthetic.hpp"
+#include "support/config_error.hpp"
 
 namespace dsb {
 namespace {
@@ -242,12 +243,16 @@ FunctionEnv step_function_env() {
   });
 }
 
+// the survey of step_function_env at `points` points, the other options the defaults
+GradientSurvey survey_step_function(int points) {
+  GradientSurveyOptions o;
+  o.points = points;
+  return survey_gradient(step_function_env(), o);
+}
+
 TEST(GradientCheck, StepFunctionCountsAsExactlyZero) {
   // gradient 0 everywhere but on the steps
-  const FunctionEnv env = step_function_env();
-  GradientSurveyOptions o;
-  o.points = 50;
-  const auto s = survey_gradient(env, o);
+  const auto s = survey_step_function(50);
   EXPECT_EQ(s.exactly_zero, 50);
   EXPECT_EQ(s.agreeing, 50);  // no step within 1e-6 of any of these points
   EXPECT_EQ(s.non_finite, 0);
@@ -255,6 +260,7 @@ TEST(GradientCheck, StepFunctionCountsAsExactlyZero) {
   EXPECT_EQ(s.gradient_norm.max, 0.0);
   EXPECT_TRUE(s.passed);
   // on a step the difference sees the jump: 1 / 2h, and the exactly-zero gradient disagrees
+  const FunctionEnv env = step_function_env();
   const auto r = check_gradient(env, std::vector<double>{0.25, 0.1});
   EXPECT_TRUE(r.exactly_zero);
   EXPECT_FALSE(r.passed);
@@ -411,10 +417,7 @@ TEST(LargeStep, ExactOnAQuadraticAlongTheSphereGradient) {
 }
 
 TEST(LargeStep, ZeroGradientHasNoDirection) {
-  const FunctionEnv env = step_function_env();
-  GradientSurveyOptions o;
-  o.points = 10;
-  const auto s = survey_gradient(env, o);
+  const auto s = survey_step_function(10);
   EXPECT_EQ(s.exactly_zero, 10);
   ASSERT_EQ(s.large_steps.size(), 10u);
   EXPECT_EQ(s.large_step_directed, 0);
@@ -453,12 +456,7 @@ TEST(GradientCheck, OptionsNameTheBadField) {
   auto message = [](auto mutate) {
     GradientSurveyOptions o;
     mutate(o);
-    try {
-      o.validate();
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("valid");
+    return testing::validation_message(o);
   };
   EXPECT_NE(message([](auto& o) { o.check.step = 0.0; }).find("'step'"), std::string::npos);
   EXPECT_NE(message([](auto& o) { o.check.step = 0.5; }).find("'step'"), std::string::npos);

@@ -148,14 +148,8 @@ TEST_F(HarnessCli, ExternalSigkillDuringALongRunLeavesNothingHalfDone) {
   // background, killed once the database shows its first run 'running' (polled, no sleep that a
   // loaded machine could outlast)
   const std::string grid = "--env cartpole3 --optimizer cmaes --seeds 3 --budget 20000 --jobs 1 --quiet";
-  const std::string cmd =
-      std::string("exec ") + DSB_HARNESS_EXE + " " + grid + " --db " + db("k.sqlite") + " > /dev/null 2>&1 < /dev/null";
-  const pid_t pid = ::fork();
+  const pid_t pid = testing::start_harness(grid + " --db " + db("k.sqlite"));
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
   const bool started = wait_until(db("k.sqlite"), "SELECT count(*) FROM runs WHERE status='running'", "1", pid,
                                   std::chrono::seconds(120));
   ::kill(pid, SIGKILL);
@@ -306,14 +300,8 @@ TEST_F(HarnessCli, SigkillMidRunLosesOnlyWhatWasNotCommitted) {
 
 TEST_F(HarnessCli, ASecondHarnessOnTheSameDatabaseIsRefusedAndSigtermStopsTheFirst) {
   const std::string grid = "--env cartpole3 --optimizer cmaes --seeds 2 --budget 20000 --jobs 1 --quiet";
-  const std::string cmd =
-      std::string("exec ") + DSB_HARNESS_EXE + " " + grid + " --db " + db("l.sqlite") + " > /dev/null 2>&1 < /dev/null";
-  const pid_t pid = ::fork();
+  const pid_t pid = testing::start_harness(grid + " --db " + db("l.sqlite"));
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
   const bool started = wait_until(db("l.sqlite"), "SELECT count(*) FROM runs WHERE status='running'", "1", pid,
                                   std::chrono::seconds(120));
   const auto second = started ? harness(grid + " --db " + db("l.sqlite")) : Result{};

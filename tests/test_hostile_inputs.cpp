@@ -21,6 +21,7 @@
 #include <gtest/gtest.h>
 
 #include "support/harness_process.hpp"
+#include "support/process_watch.hpp"
 #include "support/sqlite_rows.hpp"
 #include "support/temp_dir_test.hpp"
 
@@ -28,9 +29,11 @@ namespace dsb {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::alive;
+using testing::eventually;
 using testing::read_file;
 using testing::scalar;
-using Clock = std::chrono::steady_clock;
+using testing::wait_exit_code;
 
 const std::string kSmallGrid = "--env sphere-2,branin --optimizer random,cmaes --seeds 2 --budget 6 --quiet";
 // a bound on a command that must not wait for anything, far above what it needs
@@ -59,31 +62,6 @@ class HostileInputs : public testing::TempDirTest {
     EXPECT_NE(r.err.find(says), std::string::npos) << what << ": " << r.err;
   }
 };
-
-// a process that exists and is not a zombie
-bool alive(pid_t pid) {
-  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-  std::string text;
-  if (!std::getline(stat, text)) return false;
-  const auto paren = text.rfind(')');
-  return paren != std::string::npos && paren + 2 < text.size() && text[paren + 2] != 'Z';
-}
-
-template <class F>
-bool eventually(F&& done, std::chrono::seconds timeout) {
-  const auto end = Clock::now() + timeout;
-  while (Clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return done();
-}
-
-int wait_exit_code(pid_t pid) {
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
 
 // ---- 1. a FIFO anywhere a file is read: refused at once, never waited on ----
 

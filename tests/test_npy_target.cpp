@@ -190,6 +190,13 @@ class NpyTarget : public ::testing::Test {
     return "";
   }
 
+  // a refusal's message starts with the path of the file `name` and says `problem`
+  static void expect_names_file_and_problem(const std::string& why, const std::string& name,
+                                            const std::string& problem) {
+    EXPECT_EQ(why.rfind(file(name) + ": ", 0), 0u) << why;
+    EXPECT_NE(why.find(problem), std::string::npos) << why;
+  }
+
   static fs::path dir_;
 };
 
@@ -236,8 +243,7 @@ TEST_F(NpyTarget, RefusesBadFilesWithOneLineNamingFileAndProblem) {
   for (const auto& [name, problem] : cases) {
     SCOPED_TRACE(name);
     const std::string why = refusal([&] { read_npy(file(name)); });
-    EXPECT_EQ(why.rfind(file(name) + ": ", 0), 0u) << why;
-    EXPECT_NE(why.find(problem), std::string::npos) << why;
+    expect_names_file_and_problem(why, name, problem);
     EXPECT_EQ(why.find('\n'), std::string::npos) << why;
   }
   EXPECT_NE(refusal([&] { read_npy(dir_.string()); }).find("is a directory, not a regular file"), std::string::npos);
@@ -321,8 +327,7 @@ TEST_F(NpyTarget, ATargetMustBeAMassGrid) {
   for (const auto& [name, problem] : bad) {
     SCOPED_TRACE(name);
     const std::string why = refusal([&] { read_plb_target(file(name), cfg.mpm); });
-    EXPECT_EQ(why.rfind(file(name) + ": ", 0), 0u) << why;
-    EXPECT_NE(why.find(problem), std::string::npos) << why;
+    expect_names_file_and_problem(why, name, problem);
     EXPECT_EQ(why.find('\n'), std::string::npos) << why;
   }
   // PlasticineLab's own files hold negatives down to -2.3e-5: those load, and so does -1e-4 itself
@@ -398,8 +403,7 @@ TEST_F(NpyTarget, TargetLandsOnOurNodesAndIsKnownByItsValues) {
   for (const auto& [name, problem] : bad) {
     SCOPED_TRACE(name);
     const std::string why = refusal([&] { read_plb_target(file(name), cfg.mpm); });
-    EXPECT_EQ(why.rfind(file(name) + ": ", 0), 0u) << why;
-    EXPECT_NE(why.find(problem), std::string::npos) << why;
+    expect_names_file_and_problem(why, name, problem);
   }
 }
 

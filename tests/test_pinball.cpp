@@ -13,6 +13,7 @@
 #include "envs/core/gradient_check.hpp"
 #include "envs/registry.hpp"
 #include "envs/rigid/contact.hpp"
+#include "support/contact_jacobian_check.hpp"
 #include "envs/rigid/pinball_env.hpp"
 
 namespace dsb {
@@ -42,13 +43,7 @@ bool smooth_at(const PinballEnv& env, const std::vector<double>& x, double h) {
 void expect_gradient_matches(const std::string& name, std::uint64_t seed, int points, int max_tries) {
   const auto env = make_env(name);
   const auto& pinball = as_pinball(*env);
-  // |analytic - central| <= 1e-5 (|central| + 1): a relative tolerance with an absolute floor;
-  // loss() and loss_and_grad() bit-equal
-  GradientCheckOptions options;
-  options.step = 1e-7;
-  options.tolerance = 1e-5;
-  options.relative_floor = 0.0;
-  options.absolute_floor = 1.0;
+  const GradientCheckOptions options = testing::rigid_gradient_check_options();
   Rng rng(seed);
   double worst = 0.0, largest = 0.0;
   int accepted = 0, tried = 0;
@@ -106,17 +101,7 @@ TEST(ContactLaw, CapsuleJacobiansMatchCentralDifferences) {
     const ContactForce<2> c = force(p, v);
     ASSERT_TRUE(c.active) << k;
     EXPECT_NEAR(c.penetration, depth, 1e-12) << k;
-    for (int j = 0; j < 2; ++j) {
-      const Eigen::Vector2d e = Eigen::Vector2d::Unit(j) * h;
-      const Eigen::Vector2d fdx = (force(p + e, v).f - force(p - e, v).f) / (2.0 * h);
-      const Eigen::Vector2d fdv = (force(p, v + e).f - force(p, v - e).f) / (2.0 * h);
-      for (int i = 0; i < 2; ++i) {
-        EXPECT_NEAR(c.df_dx(i, j), fdx(i), 1e-6 * std::abs(fdx(i)) + 1e-5) << k << " " << i << j;
-        EXPECT_NEAR(c.df_dv(i, j), fdv(i), 1e-6 * std::abs(fdv(i)) + 1e-5) << k << " " << i << j;
-        worst = std::max(worst, std::abs(c.df_dx(i, j) - fdx(i)) / (std::abs(fdx(i)) + 1.0));
-        worst = std::max(worst, std::abs(c.df_dv(i, j) - fdv(i)) / (std::abs(fdv(i)) + 1.0));
-      }
-    }
+    worst = std::max(worst, testing::expect_contact_jacobians_match<2>(force, p, v, h, k));
   }
   std::printf("capsule contact Jacobians: worst relative error %.2e\n", worst);
   // the distance: 0.3 above the face minus the half thickness

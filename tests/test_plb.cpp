@@ -8,7 +8,6 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 #include <unistd.h>
 
 #include "common/error.hpp"
@@ -224,17 +223,10 @@ TEST_F(PlbHarness, EveryTaskRunsEndToEndWithItsMetricStored) {
   const std::string db = (dir_ / "plb.sqlite").string();
   r = testing::run_harness(dir_, "--env " + envs + " --optimizer cmaes --seeds 1 --budget 2 --quiet --db " + db);
   ASSERT_EQ(r.code, 0) << r.err;
-  sqlite3* h = nullptr;
-  ASSERT_EQ(sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* q = nullptr;
-  sqlite3_prepare_v2(h, "SELECT count(*), sum(loss IS NOT NULL), sum(metric >= 0 AND metric <= 1) FROM evals", -1, &q,
-                     nullptr);
-  ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(q, 0), 16);
-  EXPECT_EQ(sqlite3_column_int(q, 1), 16);
-  EXPECT_EQ(sqlite3_column_int(q, 2), 16) << "every episode's soft IoU is stored";
-  sqlite3_finalize(q);
-  sqlite3_close(h);
+  const auto n = testing::episode_counts(db, "metric >= 0 AND metric <= 1");
+  EXPECT_EQ(n.episodes, 16);
+  EXPECT_EQ(n.finite, 16);
+  EXPECT_EQ(n.matching, 16) << "every episode's soft IoU is stored";
 }
 
 }  // namespace

@@ -21,6 +21,8 @@
 #include "optimizers/registry.hpp"
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/ppo.hpp"
+#include "support/config_error.hpp"
+#include "support/gradient_vs_differences.hpp"
 #include "support/harness_process.hpp"
 #include "tests/support/reach_env.hpp"
 
@@ -121,13 +123,7 @@ TEST(PpoLossTest, GradientMatchesCentralDifferencesOnAFixedBatch) {
   for (std::size_t i = 0; i < x.size(); ++i) {
     const bool dense = (i >= policy_head && i < np) || i >= np + nv;
     if (!dense && i % 7 != 0) continue;
-    const double h = 1e-6, xi = x[i];
-    x[i] = xi + h;
-    const double up = fx.loss_at(x);
-    x[i] = xi - h;
-    const double down = fx.loss_at(x);
-    x[i] = xi;
-    const double fd = (up - down) / (2 * h);
+    const double fd = testing::central_difference(x[i], 1e-6, [&] { return fx.loss_at(x); });
     err2 += (grad[i] - fd) * (grad[i] - fd);
     ref2 += fd * fd;
     max_abs = std::max(max_abs, std::abs(fd));
@@ -298,12 +294,7 @@ TEST(PpoConfigTest, InvalidFieldsAreNamed) {
   const auto field_of = [](auto mutate) {
     PpoConfig c;
     mutate(c);
-    try {
-      c.validate();
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("valid");
+    return testing::validation_message(c);
   };
   EXPECT_NE(field_of([](PpoConfig& c) { c.batch_size = 4096; }).find("batch_size"), std::string::npos);
   EXPECT_NE(field_of([](PpoConfig& c) { c.gamma = 1.5; }).find("gamma"), std::string::npos);

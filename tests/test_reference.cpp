@@ -144,31 +144,42 @@ TEST(ReferenceMujoco, CartpoleTipMatchesOursToOneMicrometre) {
   }
 }
 
-// the state read back from MuJoCo (cart, absolute angles and rates) is ours after every step,
-// from a start away from hanging down with joint velocities
-TEST(ReferenceMujoco, CartpoleStateReadsBackInOurConventions) {
-  REQUIRE_MUJOCO();
+// the three-link cartpole from a start away from hanging down, with joint velocities
+CartpoleConfig cartpole3_started_aside() {
   CartpoleConfig cfg = CartpoleConfig::three_links();
   cfg.start_joint_angles = {0.4, -0.3, 0.2};
   cfg.start_joint_velocities = {0.5, 1.0, -2.0};
+  return cfg;
+}
+
+// the state an engine (MujocoCartpole, BulletCartpole) built from cfg reads back (cart, absolute
+// angles and rates) and its tip are ours after every one of 60 steps of varying commands
+template <class Engine>
+void expect_engine_reads_back_our_states(Engine& engine, const CartpoleConfig& cfg) {
   const CartpoleModel model = CartpoleModel::build(cfg);
   CartpoleState ours = cartpole_initial_state(model, cfg);
-  MujocoCartpole mj(cfg);
-  EXPECT_NEAR(mj.state().phi(2), 0.3, 1e-15);  // absolute = running sum of the joint angles
-  EXPECT_NEAR(mj.state().dphi(2), -0.5, 1e-15);
   for (int t = 0; t < 60; ++t) {
     const double u = 2.0 * std::sin(0.1 * t), tau[3] = {5.0 * std::cos(0.2 * t), -3.0, 1.0};
     cartpole_step(model, ours, u, tau);
-    mj.step(u, tau);
-    const CartpoleState s = mj.state();
+    engine.step(u, tau);
+    const CartpoleState s = engine.state();
     ASSERT_NEAR(s.x, ours.x, 1e-12) << t;
-    ASSERT_NEAR(s.vx, u, 1e-12) << t;  // velocity control: the cart's speed is the command
+    ASSERT_NEAR(s.vx, u, 1e-12) << t;  // velocity control: the cart's speed is the command, exactly
     for (int i = 0; i < 3; ++i) {
       ASSERT_NEAR(s.phi(i), ours.phi(i), 1e-10) << t;
       ASSERT_NEAR(s.dphi(i), ours.dphi(i), 1e-10) << t;
     }
-    ASSERT_NEAR((mj.tip() - cartpole_tip(model, ours)).norm(), 0.0, 1e-10) << t;
+    ASSERT_NEAR((engine.tip() - cartpole_tip(model, ours)).norm(), 0.0, 1e-10) << t;
   }
+}
+
+TEST(ReferenceMujoco, CartpoleStateReadsBackInOurConventions) {
+  REQUIRE_MUJOCO();
+  const CartpoleConfig cfg = cartpole3_started_aside();
+  MujocoCartpole mj(cfg);
+  EXPECT_NEAR(mj.state().phi(2), 0.3, 1e-15);  // absolute = running sum of the joint angles
+  EXPECT_NEAR(mj.state().dphi(2), -0.5, 1e-15);
+  expect_engine_reads_back_our_states(mj, cfg);
 }
 
 // ---------------------------------- cartpoles: Bullet ---------------------------------------
@@ -187,26 +198,11 @@ TEST(ReferenceBullet, CartpoleTipMatchesOurs) {
 
 TEST(ReferenceBullet, CartpoleStateReadsBackInOurConventions) {
   REQUIRE_BULLET();
-  CartpoleConfig cfg = CartpoleConfig::three_links();
-  cfg.start_joint_angles = {0.4, -0.3, 0.2};
-  cfg.start_joint_velocities = {0.5, 1.0, -2.0};
+  const CartpoleConfig cfg = cartpole3_started_aside();
   const CartpoleModel model = CartpoleModel::build(cfg);
-  CartpoleState ours = cartpole_initial_state(model, cfg);
   BulletCartpole bt(cfg);
-  EXPECT_NEAR((bt.tip() - cartpole_tip(model, ours)).norm(), 0.0, 1e-12);
-  for (int t = 0; t < 60; ++t) {
-    const double u = 2.0 * std::sin(0.1 * t), tau[3] = {5.0 * std::cos(0.2 * t), -3.0, 1.0};
-    cartpole_step(model, ours, u, tau);
-    bt.step(u, tau);
-    const CartpoleState s = bt.state();
-    ASSERT_NEAR(s.vx, u, 1e-12) << t;  // the motor row reaches the commanded speed exactly
-    ASSERT_NEAR(s.x, ours.x, 1e-12) << t;
-    for (int i = 0; i < 3; ++i) {
-      ASSERT_NEAR(s.phi(i), ours.phi(i), 1e-10) << t;
-      ASSERT_NEAR(s.dphi(i), ours.dphi(i), 1e-10) << t;
-    }
-    ASSERT_NEAR((bt.tip() - cartpole_tip(model, ours)).norm(), 0.0, 1e-10) << t;
-  }
+  EXPECT_NEAR((bt.tip() - cartpole_tip(model, cartpole_initial_state(model, cfg))).norm(), 0.0, 1e-12);
+  expect_engine_reads_back_our_states(bt, cfg);  // Bullet's motor row reaches the commanded speed
 }
 
 // ---------------------------------- cartpoles: the parameter map ---------------------------

@@ -22,6 +22,7 @@
 
 #include "common/usable_cpus.hpp"
 #include "support/harness_process.hpp"
+#include "support/process_watch.hpp"
 #include "support/sqlite_rows.hpp"
 #include "support/temp_dir_test.hpp"
 
@@ -29,11 +30,14 @@ namespace dsb {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::alive;
+using testing::eventually;
 using testing::execute;
 using testing::read_file;
 using testing::rows;
 using testing::scalar;
 using testing::start_harness;
+using testing::wait_exit_code;
 using testing::wait_until;
 using Clock = std::chrono::steady_clock;
 
@@ -68,32 +72,6 @@ class Reliability : public testing::TempDirTest {
     return names;
   }
 };
-
-// a process that exists and is not a zombie
-bool alive(pid_t pid) {
-  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-  std::string text;
-  if (!std::getline(stat, text)) return false;
-  const auto paren = text.rfind(')');
-  return paren != std::string::npos && paren + 2 < text.size() && text[paren + 2] != 'Z';
-}
-
-// polls until `done()` or `timeout` (a generous bound, not a timing assertion)
-template <class F>
-bool eventually(F&& done, std::chrono::seconds timeout) {
-  const auto end = Clock::now() + timeout;
-  while (Clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return done();
-}
-
-int wait_exit_code(pid_t pid) {
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
 
 // ---- 1. no command writes over a database, or over another file without --force ----
 

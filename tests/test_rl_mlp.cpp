@@ -17,6 +17,7 @@
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/mlp.hpp"
 #include "optimizers/rl/network_adam.hpp"
+#include "support/gradient_vs_differences.hpp"
 
 using namespace dsb;
 
@@ -48,22 +49,6 @@ Eigen::MatrixXd reference_forward(const Mlp& net, const Eigen::MatrixXd& x, doub
   return a;
 }
 
-struct GradErr {
-  double normwise;  // |ga - gf| / |gf|
-  double max_rel;   // max_i |ga_i - gf_i| / max_i |gf_i|
-};
-
-GradErr compare(const std::vector<double>& ga, const std::vector<double>& gf) {
-  double num = 0, den = 0, maxd = 0, maxg = 0;
-  for (std::size_t i = 0; i < ga.size(); ++i) {
-    num += (ga[i] - gf[i]) * (ga[i] - gf[i]);
-    den += gf[i] * gf[i];
-    maxd = std::max(maxd, std::abs(ga[i] - gf[i]));
-    maxg = std::max(maxg, std::abs(gf[i]));
-  }
-  return {std::sqrt(num / den), maxd / maxg};
-}
-
 // L = sum(R .* net(x)); analytic dL/dparams, dL/dx vs central differences with step h
 void check_mlp_gradient(Mlp& net, const Eigen::MatrixXd& x, const Eigen::MatrixXd& r, double h, const char* name,
                         double tol_normwise, double tol_max) {
@@ -76,15 +61,7 @@ void check_mlp_gradient(Mlp& net, const Eigen::MatrixXd& x, const Eigen::MatrixX
 
   std::vector<double> gf(net.param_count());
   auto p = net.params();
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    const double p0 = p[i];
-    p[i] = p0 + h;
-    const double lp = loss(x);
-    p[i] = p0 - h;
-    const double lm = loss(x);
-    p[i] = p0;
-    gf[i] = (lp - lm) / (2 * h);
-  }
+  for (std::size_t i = 0; i < p.size(); ++i) gf[i] = dsb::testing::central_difference(p[i], h, [&] { return loss(x); });
   std::vector<double> xa(dx.data(), dx.data() + dx.size()), xf(x.size());
   for (Eigen::Index i = 0; i < x.size(); ++i) {
     Eigen::MatrixXd xp = x, xm = x;
@@ -92,7 +69,8 @@ void check_mlp_gradient(Mlp& net, const Eigen::MatrixXd& x, const Eigen::MatrixX
     xm.data()[i] -= h;
     xf[i] = (loss(xp) - loss(xm)) / (2 * h);
   }
-  const GradErr ep = compare(ga, gf), ex = compare(xa, xf);
+  const dsb::testing::GradientError ep = dsb::testing::gradient_error(ga, gf),
+                                    ex = dsb::testing::gradient_error(xa, xf);
   std::printf("%s: %zu params, h %.0e: param grad normwise %.3e max %.3e; input grad normwise %.3e max %.3e\n", name,
               net.param_count(), h, ep.normwise, ep.max_rel, ex.normwise, ex.max_rel);
   EXPECT_LT(ep.normwise, tol_normwise);

@@ -20,6 +20,7 @@
 #include "optimizers/rl/network_adam.hpp"
 #include "optimizers/rl/replay_buffer.hpp"
 #include "optimizers/rl/sac.hpp"
+#include "support/gradient_vs_differences.hpp"
 #include "tests/support/function_objective.hpp"
 #include "tests/support/reach_env.hpp"
 
@@ -32,18 +33,6 @@ Eigen::MatrixXd normal_matrix(int rows, int cols, Rng& rng, double scale = 1.0) 
   for (int j = 0; j < cols; ++j)
     for (int i = 0; i < rows; ++i) m(i, j) = scale * rng.normal();
   return m;
-}
-
-// |ga - gf| / |gf| and max_i |ga_i - gf_i| / max_i |gf_i|
-std::pair<double, double> grad_error(const std::vector<double>& ga, const std::vector<double>& gf) {
-  double num = 0, den = 0, maxd = 0, maxg = 0;
-  for (std::size_t i = 0; i < ga.size(); ++i) {
-    num += (ga[i] - gf[i]) * (ga[i] - gf[i]);
-    den += gf[i] * gf[i];
-    maxd = std::max(maxd, std::fabs(ga[i] - gf[i]));
-    maxg = std::max(maxg, std::fabs(gf[i]));
-  }
-  return {std::sqrt(num / den), maxd / maxg};
 }
 
 double median(std::vector<double> v) {
@@ -208,16 +197,11 @@ TEST_F(SacGrad, ActorLossGradientMatchesCentralDifferences) {
   const double loss = sac_actor_loss(actor, pass, critics, obs, alpha, ga);
   std::vector<double> gf(ga.size());
   const double h = 1e-6;
-  for (std::size_t i = 0; i < ga.size(); ++i) {
-    const double p0 = actor.params()[i];
-    actor.params()[i] = p0 + h;
-    const double lp = sac_actor_loss(actor, sac_actor_pass(actor, obs, eps), critics, obs, alpha);
-    actor.params()[i] = p0 - h;
-    const double lm = sac_actor_loss(actor, sac_actor_pass(actor, obs, eps), critics, obs, alpha);
-    actor.params()[i] = p0;
-    gf[i] = (lp - lm) / (2 * h);
-  }
-  const auto [normwise, maxrel] = grad_error(ga, gf);
+  for (std::size_t i = 0; i < ga.size(); ++i)
+    gf[i] = dsb::testing::central_difference(actor.params()[i], h, [&] {
+      return sac_actor_loss(actor, sac_actor_pass(actor, obs, eps), critics, obs, alpha);
+    });
+  const auto [normwise, maxrel] = dsb::testing::gradient_error(ga, gf);
   std::printf("actor loss %.6f, %zu params: |g - fd| / |fd| = %.3g, max rel = %.3g\n", loss, ga.size(), normwise,
               maxrel);
   EXPECT_LT(normwise, 1e-6);
@@ -241,16 +225,10 @@ TEST_F(SacGrad, CriticLossGradientMatchesCentralDifferences) {
   const double h = 1e-6;
   for (int k = 0; k < 2; ++k) {
     std::vector<double> gf(ga[k].size());
-    for (std::size_t i = 0; i < gf.size(); ++i) {
-      const double p0 = critics[k].params()[i];
-      critics[k].params()[i] = p0 + h;
-      const double lp = sac_critic_loss(critics, obs, act, y);
-      critics[k].params()[i] = p0 - h;
-      const double lm = sac_critic_loss(critics, obs, act, y);
-      critics[k].params()[i] = p0;
-      gf[i] = (lp - lm) / (2 * h);
-    }
-    const auto [normwise, maxrel] = grad_error(ga[k], gf);
+    for (std::size_t i = 0; i < gf.size(); ++i)
+      gf[i] = dsb::testing::central_difference(critics[k].params()[i], h,
+                                               [&] { return sac_critic_loss(critics, obs, act, y); });
+    const auto [normwise, maxrel] = dsb::testing::gradient_error(ga[k], gf);
     std::printf("critic %d: loss %.6f, %zu params: |g - fd| / |fd| = %.3g, max rel = %.3g\n", k, loss, gf.size(),
                 normwise, maxrel);
     EXPECT_LT(normwise, 1e-6);

@@ -34,6 +34,19 @@ def write_claims(path, mode, rows):
         csv.writer(f, lineterminator="\n").writerows(rows)
 
 
+class TempDirCase(unittest.TestCase):
+    """A test class with a fresh folder cls.tmp, made by setUpClass (a subclass's calls it first)
+    and removed after its last test."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp()
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp)
+
+
 def exported(tmp, db):
     """The runs CSV of `db`, written by `study_results.py export` into `tmp`."""
     out = os.path.join(tmp, "runs.csv")
@@ -42,10 +55,10 @@ def exported(tmp, db):
     return out
 
 
-class StudyResults(unittest.TestCase):
+class StudyResults(TempDirCase):
     @classmethod
     def setUpClass(cls):
-        cls.tmp = tempfile.mkdtemp()
+        super().setUpClass()
         cls.db = os.path.join(cls.tmp, "grid.sqlite")
         subprocess.run([HARNESS, "--env", "cartpole1,sphere-2", "--optimizer", "random,cmaes,rand-descents,bo,gd",
                         "--seeds", "5", "--budget", "20", "--quiet", "--db", cls.db], check=True)
@@ -63,10 +76,6 @@ class StudyResults(unittest.TestCase):
             ["lifts", "cartpole1", "metric_most", "cmaes", "", "0.5", "cmaes lifts", "t", ""],
             ["sphere", "sphere-2", "a_below_b", "cmaes", "random bo", "", "cmaes first", "t", ""]])
         cls.csv = exported(cls.tmp, cls.db)
-
-    @classmethod
-    def tearDownClass(cls):
-        shutil.rmtree(cls.tmp)
 
     def test_every_run_to_the_bit(self):
         con = sqlite3.connect(self.db)
@@ -210,7 +219,7 @@ _SD = math.sqrt(25 / 12 * (11 - (5 ** 3 - 5) / (10 * 9)))
 MANY_TIES_P = 0.5 * math.erfc(-((0.5 - 12.5) / _SD) / math.sqrt(2))   # 0.00375
 
 
-class SeedsThatAreOneRun(unittest.TestCase):
+class SeedsThatAreOneRun(TempDirCase):
     """An (env, optimizer) whose seeds are one run counts as one sample: on a real database of
     sphere-2 x gd, nlopt-direct-l (never draw in 200 episodes: one run), nlopt-lbfgs, nlopt-bobyqa
     (every seed ends at 0.0, reached before their first draw, but their runs differ after it: a tie,
@@ -218,7 +227,7 @@ class SeedsThatAreOneRun(unittest.TestCase):
 
     @classmethod
     def setUpClass(cls):
-        cls.tmp = tempfile.mkdtemp()
+        super().setUpClass()
         cls.db = os.path.join(cls.tmp, "one-run.sqlite")
         subprocess.run([HARNESS, "--env", "sphere-2", "--optimizer", "gd,nlopt-direct-l,nlopt-lbfgs,nlopt-bobyqa,random",
                         "--seeds", "5", "--budget", "200", "--quiet", "--db", cls.db], check=True)
@@ -230,10 +239,6 @@ class SeedsThatAreOneRun(unittest.TestCase):
             ["order", "sphere-2", "a_below_b", "gd", "nlopt-direct-l", "", "s", "t", ""],
             ["tie", "sphere-2", "not_significant", "nlopt-lbfgs", "nlopt-bobyqa", "", "s", "t", ""]])
         cls.csv = exported(cls.tmp, cls.db)
-
-    @classmethod
-    def tearDownClass(cls):
-        shutil.rmtree(cls.tmp)
 
     def one_run(self, data):
         from dsb_report import stats

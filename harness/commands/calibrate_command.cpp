@@ -83,14 +83,10 @@ int command_calibrate(const RunArgs& a, bool force) {
 }  // namespace
 
 Command calibrate_command() {
-  return {"calibrate", "time one episode of each env of a grid on this machine (cached for plan and ETAs)",
-          [](CLI::App& app) {
-            auto args = std::make_shared<RunArgs>();
-            auto force = std::make_shared<bool>(false);
-            add_grid_options(app, *args);
-            app.add_flag("--force", *force, "measure again envs already in the cache");
-            return [args, force] { return command_calibrate(*args, *force); };
-          }};
+  return grid_command<bool>(
+      "calibrate", "time one episode of each env of a grid on this machine (cached for plan and ETAs)", GridFlags::grid,
+      [](CLI::App& app, bool& force) { app.add_flag("--force", force, "measure again envs already in the cache"); },
+      command_calibrate);
 }
 
 }  // namespace dsb

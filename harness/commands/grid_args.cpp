@@ -17,6 +17,7 @@
 #include "harness/plan/claims_grid.hpp"
 #include "harness/core/shell_word.hpp"
 #include "harness/store/sqlite_db.hpp"
+#include "harness/store/stored_runs.hpp"
 #include "optimizers/registry.hpp"
 
 namespace dsb {
@@ -189,5 +190,12 @@ CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
 }
 
 PlanContext plan_context(const RunArgs& a, const CheckedRun& run) { return {a.db, run.jobs, a.threads, grid_flags(a)}; }
+
+GridPlan plan_against(const RunArgs& a, const CheckedRun& run, const StoredRuns& stored) {
+  GridPlan plan = plan_grid(run.grid, stored.done_keys(), harness_version(), run.shard);
+  if (!a.no_sharing) estimate_sharing(plan, stored.kept_prefixes());
+  use_measured_walls(plan, stored.measured_walls());
+  return plan;
+}
 
 }  // namespace dsb

@@ -3,9 +3,13 @@
 // their storage, their CLI11 options, and the one check of them all (every name and number, before
 // any database is opened).
 #include <cstddef>
+#include <functional>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "harness/commands/command.hpp"
 #include "harness/plan/grid.hpp"
 #include "harness/plan/plan.hpp"
 #include "harness/plan/plan_report.hpp"
@@ -15,6 +19,8 @@ class App;
 }
 
 namespace dsb {
+
+class StoredRuns;
 
 // this binary's harness version (part of every run key)
 const char* harness_version();
@@ -60,5 +66,31 @@ PlanContext plan_context(const RunArgs& a, const CheckedRun& run);
 
 // this machine's name, for the runs it stores
 std::string host_name();
+
+// The plan of a checked grid against the runs a results file holds: its done runs skipped, the
+// episodes its runs keep for other seeds counted (unless --no-sharing) and its measured walls
+// used (`run` and `plan`)
+GridPlan plan_against(const RunArgs& a, const CheckedRun& run, const StoredRuns& stored);
+
+// Which grid flags a command takes: those of the grid (add_grid_options) or also those of how it
+// runs (add_run_options)
+enum class GridFlags { grid, run };
+
+// A command over a grid (`run`, `plan`, `calibrate`, `slurm`): its grid flags, then its own
+// options (add_own(app, own) binds them to an Own it keeps), and its action, action(args, own),
+// run once the command line is parsed.
+template <class Own, class AddOwn, class Action>
+Command grid_command(std::string name, std::string help, GridFlags flags, AddOwn add_own, Action action) {
+  return {std::move(name), std::move(help), [flags, add_own, action](CLI::App& app) {
+            auto args = std::make_shared<RunArgs>();
+            auto own = std::make_shared<Own>();
+            if (flags == GridFlags::run)
+              add_run_options(app, *args);
+            else
+              add_grid_options(app, *args);
+            add_own(app, *own);
+            return std::function<int()>([args, own, action] { return action(*args, *own); });
+          }};
+}
 
 }  // namespace dsb

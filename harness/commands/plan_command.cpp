@@ -27,26 +27,18 @@ int command_plan(const RunArgs& a, const std::string& runs_csv) {
   const auto start = std::chrono::steady_clock::now();
   const CheckedRun run = check_run_args(a, false);
   // the database, opened once and read-only (nothing when it does not exist)
-  std::unique_ptr<StoredRunsFile> file;
-  std::set<RunKey> done;
+  GridPlan plan;
   std::map<RunKey, std::string> failed;
-  std::map<std::string, std::int64_t> kept;
-  std::map<std::string, double> walls;
   std::vector<StaleRuns> stale;
   try {
-    file = std::make_unique<StoredRunsFile>(a.db);
-    const StoredRuns& stored = file->runs();
-    done = stored.done_keys();
+    const StoredRunsFile file(a.db);
+    const StoredRuns& stored = file.runs();
     failed = stored.with_status("failed");
-    if (!a.no_sharing) kept = stored.kept_prefixes();
-    walls = stored.measured_walls();
+    plan = plan_against(a, run, stored);
     stale = stored.stale(grid_pairs(run.grid));
   } catch (const StoreError& e) {
     throw UsageError(std::string("--db: ") + e.what());
   }
-  GridPlan plan = plan_grid(run.grid, done, harness_version(), run.shard);
-  if (!a.no_sharing) estimate_sharing(plan, kept);
-  use_measured_walls(plan, walls);
   const CostModel costs;
   print_plan(std::cout, plan, costs, plan_context(a, run));
   print_failed_runs(std::cout, plan, failed);
@@ -61,16 +53,15 @@ int command_plan(const RunArgs& a, const std::string& runs_csv) {
 }  // namespace
 
 Command plan_command() {
-  return {"plan", "what a grid would run (runs, core-hours per env and family, wall, Slurm), writing nothing",
-          [](CLI::App& app) {
-            auto args = std::make_shared<RunArgs>();
-            auto runs_csv = std::make_shared<std::string>();
-            add_run_options(app, *args);
-            app.add_option("--runs-csv", *runs_csv,
-                           "also write each run to run with its estimated seconds and its place in the start order "
-                           "(CSV: env,optimizer,seed,budget,planned_s,source,start_rank,lead_seed; a new file)");
-            return [args, runs_csv] { return command_plan(*args, *runs_csv); };
-          }};
+  return grid_command<std::string>(
+      "plan", "what a grid would run (runs, core-hours per env and family, wall, Slurm), writing nothing",
+      GridFlags::run,
+      [](CLI::App& app, std::string& runs_csv) {
+        app.add_option("--runs-csv", runs_csv,
+                       "also write each run to run with its estimated seconds and its place in the start order "
+                       "(CSV: env,optimizer,seed,budget,planned_s,source,start_rank,lead_seed; a new file)");
+      },
+      command_plan);
 }
 
 }  // namespace dsb

@@ -44,9 +44,7 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
   }
   // what the file holds, read once over the store's connection
   const StoredRuns stored = store->runs();
-  GridPlan plan = plan_grid(run.grid, stored.done_keys(), harness_version(), run.shard);
-  if (!a.no_sharing) estimate_sharing(plan, stored.kept_prefixes());
-  use_measured_walls(plan, stored.measured_walls());
+  const GridPlan plan = plan_against(a, run, stored);
   const CostModel costs;
   if (!a.quiet) {
     std::ostringstream text;
@@ -112,15 +110,14 @@ int command_run(const RunArgs& a, const std::string& report_dir) {
 }  // namespace
 
 Command run_command() {
-  return {"run", "run a grid (also implied by bare flags: harness --all --seeds 5)", [](CLI::App& app) {
-            auto args = std::make_shared<RunArgs>();
-            auto report = std::make_shared<std::string>();
-            add_run_options(app, *args);
-            app.add_option("--report", *report,
-                           "keep a comparison report of the grid in this folder (new, empty, or an earlier report), "
-                           "rebuilt as runs finish");
-            return [args, report] { return command_run(*args, *report); };
-          }};
+  return grid_command<std::string>(
+      "run", "run a grid (also implied by bare flags: harness --all --seeds 5)", GridFlags::run,
+      [](CLI::App& app, std::string& report) {
+        app.add_option("--report", report,
+                       "keep a comparison report of the grid in this folder (new, empty, or an earlier report), "
+                       "rebuilt as runs finish");
+      },
+      command_run);
 }
 
 }  // namespace dsb

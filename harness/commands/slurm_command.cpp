@@ -399,18 +399,17 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
 }  // namespace
 
 Command slurm_command() {
-  return {"slurm", "write sbatch scripts that run the grid as a Slurm job array, then merge", [](CLI::App& app) {
-            auto args = std::make_shared<RunArgs>();
-            auto opts = std::make_shared<SlurmOptions>();
-            add_grid_options(app, *args);
-            app.add_option("--shards", opts->shards, "array tasks N: task I runs shard I/N")->required();
-            app.add_option("--dir", opts->dir, "folder for the scripts, logs, shard databases and results.sqlite")
-                ->required();
-            app.add_option("--cpus-per-task", opts->cpus_per_task, "CPUs per task, its --jobs (default 1)");
-            app.add_option("--time", opts->time, "time limit per task, e.g. 12:00:00 (default: the cluster's)");
-            app.add_option("--partition", opts->partition, "Slurm partition (default: the cluster's)");
-            return [args, opts] { return command_slurm_scripts(*args, *opts); };
-          }};
+  return grid_command<SlurmOptions>(
+      "slurm", "write sbatch scripts that run the grid as a Slurm job array, then merge", GridFlags::grid,
+      [](CLI::App& app, SlurmOptions& opts) {
+        app.add_option("--shards", opts.shards, "array tasks N: task I runs shard I/N")->required();
+        app.add_option("--dir", opts.dir, "folder for the scripts, logs, shard databases and results.sqlite")
+            ->required();
+        app.add_option("--cpus-per-task", opts.cpus_per_task, "CPUs per task, its --jobs (default 1)");
+        app.add_option("--time", opts.time, "time limit per task, e.g. 12:00:00 (default: the cluster's)");
+        app.add_option("--partition", opts.partition, "Slurm partition (default: the cluster's)");
+      },
+      command_slurm_scripts);
 }
 
 }  // namespace dsb

@@ -7,6 +7,7 @@
 #include "common/config_fields.hpp"
 #include "common/field_check.hpp"
 #include "optimizers/bo/sobol.hpp"
+#include "optimizers/core/configured_optimizer.hpp"
 #include "optimizers/core/diagnostics.hpp"
 
 namespace dsb {
@@ -116,12 +117,9 @@ Eigen::VectorXd BoSurrogate::propose(Rng& rng) {
 
 namespace {
 
-class BayesOpt : public Optimizer {
+class BayesOpt : public ConfiguredOptimizer<BoConfig> {
  public:
-  explicit BayesOpt(const BoConfig& cfg) : cfg_(cfg) { cfg_.validate(); }
-  const std::string& name() const override { return name_; }
-  bool needs_gradient() const override { return false; }
-  nlohmann::json config() const override { return cfg_.to_json(); }
+  explicit BayesOpt(const BoConfig& cfg) : ConfiguredOptimizer("bo", false, cfg) {}
 
   void minimize(Objective& f, Rng& rng) override {
     diagnostics_ = nlohmann::json::object();
@@ -156,8 +154,6 @@ class BayesOpt : public Optimizer {
     }
   }
 
-  std::string name_ = "bo";
-  BoConfig cfg_;
   nlohmann::json diagnostics_ = nlohmann::json::object();
 };
 

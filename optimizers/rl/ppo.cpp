@@ -9,6 +9,7 @@
 #include "common/det_math.hpp"
 #include "common/field_check.hpp"
 #include "common/number_text.hpp"
+#include "optimizers/core/configured_optimizer.hpp"
 #include "optimizers/rl/gaussian.hpp"
 #include "optimizers/rl/network_adam.hpp"
 #include "optimizers/rl/rl_core.hpp"
@@ -150,12 +151,9 @@ PpoLoss ppo_loss(const PpoNetworks& nets, const PpoBatch& batch, const PpoConfig
 
 namespace {
 
-class Ppo : public Optimizer {
+class Ppo : public ConfiguredOptimizer<PpoConfig> {
  public:
-  explicit Ppo(PpoConfig cfg) : cfg_(std::move(cfg)) { cfg_.validate(); }
-  const std::string& name() const override { return name_; }
-  bool needs_gradient() const override { return false; }
-  nlohmann::json config() const override { return cfg_.to_json(); }
+  explicit Ppo(PpoConfig cfg) : ConfiguredOptimizer("ppo", false, std::move(cfg)) {}
   nlohmann::json diagnostics() const override { return diag_; }
 
   void minimize(Objective& f, Rng& rng) override {
@@ -275,8 +273,6 @@ class Ppo : public Optimizer {
   }
 
   static constexpr int kBlock = 20;  // episodes per point of the learning curve
-  PpoConfig cfg_;
-  std::string name_ = "ppo";
   nlohmann::json diag_ = nlohmann::json::object();
   EpisodeLosses episodes_{FailedEpisodeLoss{}, kBlock};
   std::int64_t updates_ = 0, obs_sanitized_ = 0;  // observations clamped to +-1e6 or NaN set to 0 (rl_core.hpp)

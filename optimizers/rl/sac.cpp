@@ -9,6 +9,7 @@
 #include "common/field_check.hpp"
 #include "common/number_text.hpp"
 #include "common/rng.hpp"
+#include "optimizers/core/configured_optimizer.hpp"
 #include "optimizers/core/diagnostics.hpp"
 #include "optimizers/rl/network_adam.hpp"
 #include "optimizers/rl/replay_buffer.hpp"
@@ -17,20 +18,14 @@
 namespace dsb {
 namespace {
 
-class Sac : public Optimizer {
+class Sac : public ConfiguredOptimizer<SacConfig> {
  public:
-  explicit Sac(const SacConfig& cfg) : cfg_(cfg) { cfg_.validate(); }
-  const std::string& name() const override { return name_; }
-  bool needs_gradient() const override { return false; }
-  nlohmann::json config() const override { return cfg_.to_json(); }
+  explicit Sac(const SacConfig& cfg) : ConfiguredOptimizer("sac", false, cfg) {}
   nlohmann::json diagnostics() const override;
   void minimize(Objective& f, Rng& rng) override;
 
  private:
   void train(Rng& rng, int gradient_steps);
-
-  SacConfig cfg_;
-  std::string name_ = "sac";
 
   // run state (rebuilt by minimize)
   int obs_dim_ = 0, act_dim_ = 0;

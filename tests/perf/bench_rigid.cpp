@@ -81,11 +81,13 @@ void BM_Cartpole3StepMujoco(benchmark::State& state) {
 }
 BENCHMARK(BM_Cartpole3StepMujoco);
 
-void BM_Cartpole3StepMujocoVelocityControl(benchmark::State& state) {
-  if (!mujoco_available()) return state.SkipWithError("built without MuJoCo");
+// kSteps cartpole3 steps of a reference engine's adapter (MujocoCartpole, BulletCartpole), reset
+// each iteration
+template <class Engine>
+void cartpole3_adapter_steps(benchmark::State& state) {
   const CartpoleConfig cfg = CartpoleConfig::three_links();
   const auto c = cartpole_controls(cfg);
-  MujocoCartpole cp(cfg);
+  Engine cp(cfg);
   for (auto _ : state) {
     cp.reset();
     for (int t = 0; t < kSteps; ++t) cp.step(c[4 * t], &c[4 * t + 1]);
@@ -93,19 +95,16 @@ void BM_Cartpole3StepMujocoVelocityControl(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * kSteps);
 }
+
+void BM_Cartpole3StepMujocoVelocityControl(benchmark::State& state) {
+  if (!mujoco_available()) return state.SkipWithError("built without MuJoCo");
+  cartpole3_adapter_steps<MujocoCartpole>(state);
+}
 BENCHMARK(BM_Cartpole3StepMujocoVelocityControl);
 
 void BM_Cartpole3StepBullet(benchmark::State& state) {
   if (!bullet_available()) return state.SkipWithError("built without Bullet");
-  const CartpoleConfig cfg = CartpoleConfig::three_links();
-  const auto c = cartpole_controls(cfg);
-  BulletCartpole cp(cfg);
-  for (auto _ : state) {
-    cp.reset();
-    for (int t = 0; t < kSteps; ++t) cp.step(c[4 * t], &c[4 * t + 1]);
-    benchmark::DoNotOptimize(cp.state().x);
-  }
-  state.SetItemsProcessed(state.iterations() * kSteps);
+  cartpole3_adapter_steps<BulletCartpole>(state);
 }
 BENCHMARK(BM_Cartpole3StepBullet);
 

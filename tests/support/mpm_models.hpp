@@ -40,13 +40,9 @@ inline void add_block(mpm::MpmModel& m, const std::string& name, const mpm::Mate
   m.bodies.push_back({name, static_cast<int>(m.materials.size()) - 1, begin, m.particles(), h * h * h});
 }
 
+// materials by their fields (the ones not named keep Material's defaults)
 inline mpm::Material elastic(double E, double nu, double density = 1.0) {
-  mpm::Material mat;
-  mat.kind = mpm::MaterialKind::elastic;
-  mat.youngs_modulus = E;
-  mat.poisson_ratio = nu;
-  mat.density = density;
-  return mat;
+  return {.kind = mpm::MaterialKind::elastic, .youngs_modulus = E, .poisson_ratio = nu, .density = density};
 }
 
 inline mpm::Material plastic(double E, double nu, double yield, double density = 1.0) {
@@ -57,12 +53,7 @@ inline mpm::Material plastic(double E, double nu, double yield, double density =
 }
 
 inline mpm::Material fluid(double K, double eta, double density = 1.0) {
-  mpm::Material mat;
-  mat.kind = mpm::MaterialKind::fluid;
-  mat.bulk_modulus = K;
-  mat.viscosity = eta;
-  mat.density = density;
-  return mat;
+  return {.kind = mpm::MaterialKind::fluid, .density = density, .bulk_modulus = K, .viscosity = eta};
 }
 
 // A translating primitive with soft contact (band ln 10 / 300) and friction 0.5, moved by actions

@@ -62,6 +62,29 @@ inline std::string quiet_scalar(const std::string& path, const std::string& sql)
   return v;
 }
 
+// a grid's episodes in a database file (table evals): how many, how many have a finite loss (stored
+// non-NULL), and how many satisfy the SQL condition `which` (gd's gradients by default); -1 each
+// when the file cannot be read
+struct EpisodeCounts {
+  long long episodes = -1, finite = -1, matching = -1;
+};
+inline EpisodeCounts episode_counts(const std::string& path, const std::string& which = "used_grad") {
+  EpisodeCounts n;
+  const std::string sql = "SELECT count(*), sum(loss IS NOT NULL), sum(" + which + ") FROM evals";
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK) << path;
+  sqlite3_stmt* q = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(db, sql.c_str(), -1, &q, nullptr), SQLITE_OK) << sql;
+  if (q && sqlite3_step(q) == SQLITE_ROW) {
+    n.episodes = sqlite3_column_int64(q, 0);
+    n.finite = sqlite3_column_int64(q, 1);
+    n.matching = sqlite3_column_int64(q, 2);
+  }
+  sqlite3_finalize(q);
+  sqlite3_close(db);
+  return n;
+}
+
 // runs SQL that changes a database (a test's tampering with a copy)
 inline void execute(const std::string& path, const std::string& sql) {
   sqlite3* db = nullptr;
