@@ -18,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "optimizers/bo/bo.hpp"
 #include "optimizers/cmaes.hpp"
 #include "optimizers/core/adam.hpp"
@@ -66,18 +67,10 @@ struct BoLeapConfig {
   // plain_steps as the descent step's name
   template <class Visit>
   void fields(Visit&& visit) const {
-    visit("population", population);
-    visit("sigma0", sigma0);
-    visit("max_descent_steps", max_descent_steps);
-    visit("patience", patience);
-    visit("episodes_per_leap", episodes_per_leap);
-    visit("leap_iterations", leap_iterations);
+    DSB_VISIT_FIELDS(visit, population, sigma0, max_descent_steps, patience, episodes_per_leap, leap_iterations);
     visit("elite", elite_count());
     visit("descent_step", plain_steps ? "plain clipped gradient" : "adam");
-    visit("step_size", step_size);
-    visit("adam", adam);
-    visit("adam_per_leap", adam_per_leap);
-    visit("bo", bo);
+    DSB_VISIT_FIELDS(visit, step_size, adam, adam_per_leap, bo);
   }
 };
 

@@ -40,6 +40,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "common/rng.hpp"
 #include "optimizers/core/knobs.hpp"
 #include "optimizers/core/configured_optimizer.hpp"
@@ -61,18 +62,7 @@ struct CmaesConfig {
   void validate() const;
   nlohmann::json to_json() const;
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("sigma0", sigma0);
-    visit("population", population);
-    visit("max_resampling", max_resampling);
-    visit("ipop", ipop);
-    visit("ipop_factor", ipop_factor);
-    visit("tolfun", tolfun);
-    visit("tolx_factor", tolx_factor);
-    visit("tolxup", tolxup);
-    visit("condition_max", condition_max);
-  }
+  DSB_CONFIG_FIELDS(sigma0, population, max_resampling, ipop, ipop_factor, tolfun, tolx_factor, tolxup, condition_max)
 };
 
 // Strategy constants for dimension n and population lambda, exactly by the library's formulas.

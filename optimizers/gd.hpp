@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "optimizers/core/adam.hpp"
 #include "optimizers/core/knobs.hpp"
 #include "optimizers/core/optimizer.hpp"
@@ -25,15 +26,7 @@ struct DescentConfig {
   void validate(const std::string& owner) const;
   nlohmann::json to_json() const;
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("adam", adam);
-    visit("random_starts", random_starts);
-    visit("max_steps", max_steps);
-    visit("patience", patience);
-    visit("min_improvement", min_improvement);
-    visit("start_scale", start_scale);
-  }
+  DSB_CONFIG_FIELDS(adam, random_starts, max_steps, patience, min_improvement, start_scale)
 };
 
 DescentConfig gd_defaults();             // centre start, whole budget

@@ -71,6 +71,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "common/rng.hpp"
 #include "optimizers/core/configured_optimizer.hpp"
 #include "optimizers/core/optimizer.hpp"
@@ -89,15 +90,7 @@ struct NloptConfig {
   void validate() const;
   nlohmann::json to_json() const;
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("algorithm", algorithm);
-    visit("ftol_rel", ftol_rel);
-    visit("xtol_rel", xtol_rel);
-    visit("initial_step", initial_step);
-    visit("population", population);
-    visit("restart_from_random", restart_from_random);
-  }
+  DSB_CONFIG_FIELDS(algorithm, ftol_rel, xtol_rel, initial_step, population, restart_from_random)
 };
 
 // The defaults of the four registered adapters (chosen here): tolerances 1e-10, BOBYQA initial

@@ -24,6 +24,7 @@
 
 #include "harness/store/result_table.hpp"
 #include "support/harness_process.hpp"
+#include "support/sqlite_rows.hpp"
 #include "support/temp_dir_test.hpp"
 
 namespace dsb {
@@ -42,27 +43,16 @@ class ExportIoh : public dsb::testing::TempDirTest {
   }
 };
 
-// (env, optimizer, seed, budget) -> losses by episode (NULL as NaN)
+// (env, optimizer, seed, budget) -> losses by episode (NULL as NaN) of the done runs
 using RunKey = std::tuple<std::string, std::string, int, std::int64_t>;
 std::map<RunKey, std::vector<double>> read_losses(const std::string& path) {
-  sqlite3* db = nullptr;
-  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* q = nullptr;
-  sqlite3_prepare_v2(db,
-                     "SELECT r.env, r.optimizer, r.seed, r.budget, e.episode, e.loss FROM evals e "
-                     "JOIN runs r USING(run_id) WHERE r.status = 'done' ORDER BY r.run_id, e.episode",
-                     -1, &q, nullptr);
   std::map<RunKey, std::vector<double>> losses;
-  while (sqlite3_step(q) == SQLITE_ROW) {
-    RunKey k{reinterpret_cast<const char*>(sqlite3_column_text(q, 0)),
-             reinterpret_cast<const char*>(sqlite3_column_text(q, 1)), sqlite3_column_int(q, 2),
-             sqlite3_column_int64(q, 3)};
-    auto& v = losses[k];
-    EXPECT_EQ(static_cast<std::int64_t>(v.size()), sqlite3_column_int64(q, 4));
-    v.push_back(sqlite3_column_type(q, 5) == SQLITE_NULL ? std::nan("") : sqlite3_column_double(q, 5));
+  for (const auto& [k, loss] : testing::stored_losses(path, "r.status = 'done'")) {
+    const auto& [env, optimizer, seed, budget, episode] = k;
+    auto& v = losses[RunKey{env, optimizer, seed, budget}];
+    EXPECT_EQ(static_cast<std::int64_t>(v.size()), episode);  // episodes 0, 1, ... in order
+    v.push_back(loss);
   }
-  sqlite3_finalize(q);
-  sqlite3_close(db);
   return losses;
 }
 

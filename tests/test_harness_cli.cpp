@@ -25,6 +25,7 @@
 #include "harness/plan/grid.hpp"
 #include "optimizers/registry.hpp"
 #include "support/harness_process.hpp"
+#include "support/sqlite_rows.hpp"
 #include "support/temp_dir_test.hpp"
 
 namespace dsb {
@@ -44,28 +45,10 @@ class HarnessCli : public dsb::testing::TempDirTest {
   std::string db(const std::string& name) { return path(name); }
 };
 
-using EvalKey = std::tuple<std::string, std::string, int, std::int64_t>;
+using testing::EvalKey;
 
-// every eval's loss by (env, optimizer, seed, episode); NULL (failed) as NaN
-std::map<EvalKey, double> read_evals(const std::string& path) {
-  sqlite3* db = nullptr;
-  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* q = nullptr;
-  sqlite3_prepare_v2(db,
-                     "SELECT r.env, r.optimizer, r.seed, e.episode, e.loss FROM evals e "
-                     "JOIN runs r USING(run_id)",
-                     -1, &q, nullptr);
-  std::map<EvalKey, double> evals;
-  while (sqlite3_step(q) == SQLITE_ROW) {
-    EvalKey k{reinterpret_cast<const char*>(sqlite3_column_text(q, 0)),
-              reinterpret_cast<const char*>(sqlite3_column_text(q, 1)), sqlite3_column_int(q, 2),
-              sqlite3_column_int64(q, 3)};
-    evals[k] = sqlite3_column_type(q, 4) == SQLITE_NULL ? std::nan("") : sqlite3_column_double(q, 4);
-  }
-  sqlite3_finalize(q);
-  sqlite3_close(db);
-  return evals;
-}
+// every eval's loss by (env, optimizer, seed, budget, episode); NULL (failed) as NaN
+std::map<EvalKey, double> read_evals(const std::string& path) { return testing::stored_losses(path); }
 
 std::string scalar(const std::string& path, const std::string& sql) {
   sqlite3* db = nullptr;
@@ -89,7 +72,7 @@ void expect_same_evals(const std::map<EvalKey, double>& a, const std::map<EvalKe
     ASSERT_NE(it, b.end());
     // bit-identical (NaN matches NaN)
     EXPECT_TRUE(std::memcmp(&v, &it->second, sizeof v) == 0 || (std::isnan(v) && std::isnan(it->second)))
-        << std::get<0>(k) << "/" << std::get<1>(k) << " seed " << std::get<2>(k) << " episode " << std::get<3>(k)
+        << std::get<0>(k) << "/" << std::get<1>(k) << " seed " << std::get<2>(k) << " episode " << std::get<4>(k)
         << ": " << v << " vs " << it->second;
   }
 }

@@ -150,53 +150,24 @@ TEST_F(StoreTest, StoresTheRunDiagnosticsAsJsonAndTheMetricAsNull) {
 // ---------------------------------------------------------------------------------------------
 // version 1 files
 
-// Version 1's schema, frozen: harness/store/store.cpp as of commit 7ec3474 (the first release). A
-// version-1 database is this SQL plus meta.schema_version = '1'.
-const char* kSchemaV1 = R"sql(
-CREATE TABLE IF NOT EXISTS meta(
-  key TEXT PRIMARY KEY,
-  value TEXT NOT NULL);
-CREATE TABLE IF NOT EXISTS configs(
-  hash TEXT PRIMARY KEY,
-  kind TEXT NOT NULL,           -- 'env' or 'optimizer'
-  json TEXT NOT NULL);          -- resolved config, canonical JSON
-CREATE TABLE IF NOT EXISTS runs(
-  run_id INTEGER PRIMARY KEY,
-  env TEXT NOT NULL,
-  optimizer TEXT NOT NULL,
-  seed INTEGER NOT NULL,        -- seed index 0..seeds-1
-  budget INTEGER NOT NULL,      -- episodes
-  env_config_hash TEXT NOT NULL REFERENCES configs(hash),
-  opt_config_hash TEXT NOT NULL REFERENCES configs(hash),
-  rng_seed TEXT NOT NULL,       -- per-run 64-bit seed, hex
-  status TEXT NOT NULL CHECK(status IN ('done', 'failed', 'running')),
-  episodes INTEGER NOT NULL DEFAULT 0,
-  failed_episodes INTEGER NOT NULL DEFAULT 0,
-  best_loss REAL,               -- NULL when no episode succeeded
-  best_x TEXT,                  -- JSON array, normalized units
-  wall_s REAL,
-  error TEXT,
-  started_at TEXT,
-  finished_at TEXT,
-  harness_version TEXT,
-  git_sha TEXT,
-  host TEXT,
-  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash));
-CREATE TABLE IF NOT EXISTS evals(
-  run_id INTEGER NOT NULL REFERENCES runs(run_id),
-  episode INTEGER NOT NULL,     -- 0-based
-  loss REAL,                    -- NULL for a failed episode (simulation blew up)
-  best_loss REAL,               -- best finite loss so far
-  used_grad INTEGER NOT NULL,
-  wall_s REAL NOT NULL,
-  failed INTEGER NOT NULL DEFAULT 0,
-  PRIMARY KEY(run_id, episode)) WITHOUT ROWID;
-)sql";
+// a frozen SQL text of an older version (tests/fixtures/store/NAME); a test fails on a missing one
+std::string fixture(const std::string& name) {
+  const std::string path = std::string(DSB_SOURCE_DIR) + "/tests/fixtures/store/" + name;
+  const std::string sql = testing::read_file(path);
+  EXPECT_FALSE(sql.empty()) << "missing fixture " << path;
+  return sql;
+}
+
+// Version 1's schema, frozen (tests/fixtures/store/schema_v1.sql)
+const std::string kSchemaV1 = fixture("schema_v1.sql");
 
 const char* kRunsV1Columns =
     "run_id, env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, "
     "failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, harness_version, git_sha, host";
 const char* kEvalsV1Columns = "run_id, episode, loss, best_loss, used_grad, wall_s, failed";
+// a file's rows of the version-1 columns, which every later version keeps
+const std::string kRunsV1Query = std::string("SELECT ") + kRunsV1Columns + " FROM runs ORDER BY run_id";
+const std::string kEvalsV1Query = std::string("SELECT ") + kEvalsV1Columns + " FROM evals ORDER BY run_id, episode";
 
 // every value of a query, exactly: integers as integers, reals by their 64 bits, texts, NULLs
 std::string exact_rows(const std::string& path, const std::string& sql) {
@@ -278,10 +249,8 @@ void expect_tables_of_a_new_file(const std::string& path, const std::string& fre
 
 TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
   write_version1_file(path_);
-  const std::string runs_sql = std::string("SELECT ") + kRunsV1Columns + " FROM runs ORDER BY run_id";
-  const std::string evals_sql = std::string("SELECT ") + kEvalsV1Columns + " FROM evals ORDER BY run_id, episode";
   const std::string configs_sql = "SELECT hash, kind, json FROM configs ORDER BY hash";
-  const std::string runs_before = exact_rows(path_, runs_sql), evals_before = exact_rows(path_, evals_sql),
+  const std::string runs_before = exact_rows(path_, kRunsV1Query), evals_before = exact_rows(path_, kEvalsV1Query),
                     configs_before = exact_rows(path_, configs_sql);
   ASSERT_EQ(query("SELECT count(*) FROM evals"), "5;");
   ASSERT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "1;");
@@ -295,8 +264,8 @@ TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
     EXPECT_EQ(done.begin()->versions, ResultsVersions{});
   }
   EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "5;");
-  EXPECT_EQ(exact_rows(path_, runs_sql), runs_before);
-  EXPECT_EQ(exact_rows(path_, evals_sql), evals_before);
+  EXPECT_EQ(exact_rows(path_, kRunsV1Query), runs_before);
+  EXPECT_EQ(exact_rows(path_, kEvalsV1Query), evals_before);
   EXPECT_EQ(exact_rows(path_, configs_sql), configs_before);
   // the new columns, after the old ones, NULL in old rows (shared_episodes 0: nothing was shared)
   EXPECT_EQ(query("SELECT name FROM pragma_table_info('runs') WHERE cid >= 20"),
@@ -320,85 +289,34 @@ TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
     store.finish_run(id, r);
   }
   EXPECT_EQ(query("SELECT count(*) FROM runs WHERE diagnostics IS NOT NULL"), "1;");
-  EXPECT_EQ(exact_rows(path_, evals_sql + " LIMIT 5"), evals_before);
+  EXPECT_EQ(exact_rows(path_, kEvalsV1Query + " LIMIT 5"), evals_before);
 }
 
-// The steps that made versions 2, 3 and 4 of a file, frozen: harness/store/schema.cpp as of
-// commit 3044ed5 (a file of version 1 plus steps 1..v-1 is a file of version v).
-const char* kStepsFromVersion1[] = {
-    // 1 -> 2
-    "ALTER TABLE runs ADD COLUMN diagnostics TEXT;"
-    "ALTER TABLE evals ADD COLUMN metric REAL;",
-    // 2 -> 3
-    R"sql(CREATE TABLE runs_v3(
-  run_id INTEGER PRIMARY KEY,
-  env TEXT NOT NULL,
-  optimizer TEXT NOT NULL,
-  seed INTEGER NOT NULL,        -- seed index 0..seeds-1
-  budget INTEGER NOT NULL,      -- episodes
-  env_config_hash TEXT NOT NULL REFERENCES configs(hash),
-  opt_config_hash TEXT NOT NULL REFERENCES configs(hash),
-  rng_seed TEXT NOT NULL,       -- per-run 64-bit seed, hex
-  status TEXT NOT NULL CHECK(status IN ('done', 'failed', 'running')),
-  episodes INTEGER NOT NULL DEFAULT 0,
-  failed_episodes INTEGER NOT NULL DEFAULT 0,
-  best_loss REAL,               -- NULL when no episode succeeded
-  best_x TEXT,                  -- JSON array, normalized units
-  wall_s REAL,
-  error TEXT,
-  started_at TEXT,
-  finished_at TEXT,
-  harness_version TEXT NOT NULL DEFAULT '',  -- part of the run key (version 3)
-  git_sha TEXT,
-  host TEXT,
-  diagnostics TEXT,             -- JSON {"optimizer": {...}, "objective": {...}} (version 2)
-  UNIQUE(env, optimizer, seed, budget, env_config_hash, opt_config_hash, harness_version));
-INSERT INTO runs_v3 SELECT run_id, env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed,
-  status, episodes, failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at,
-  COALESCE(harness_version, ''), git_sha, host, diagnostics FROM runs;
-DROP TABLE runs;
-ALTER TABLE runs_v3 RENAME TO runs;
-CREATE TABLE replay(
-  run_id INTEGER NOT NULL REFERENCES runs(run_id),
-  seq INTEGER NOT NULL,         -- 0-based call index within the run
-  kind INTEGER NOT NULL,
-  input_hash INTEGER NOT NULL,
-  payload BLOB NOT NULL,
-  PRIMARY KEY(run_id, seq)) WITHOUT ROWID;)sql",
-    // 3 -> 4
-    R"sql(ALTER TABLE runs ADD COLUMN seed_free_episodes INTEGER;
-ALTER TABLE runs ADD COLUMN seed_free_calls INTEGER;
-ALTER TABLE runs ADD COLUMN shared_episodes INTEGER NOT NULL DEFAULT 0;
-ALTER TABLE runs ADD COLUMN shared_from_seed INTEGER;
-CREATE TABLE prefix(
-  run_id INTEGER NOT NULL REFERENCES runs(run_id),
-  seq INTEGER NOT NULL,
-  kind INTEGER NOT NULL,
-  input_hash INTEGER NOT NULL,
-  payload BLOB NOT NULL,
-  PRIMARY KEY(run_id, seq)) WITHOUT ROWID;)sql",
-};
+// The steps that made versions 2, 3 and 4 of a file, frozen (tests/fixtures/store/step_*.sql):
+// a file of version 1 plus steps 1..v-1 is a file of version v.
+// step v - 1 -> v as SQL
+std::string step_to_version(int v) {
+  return fixture("step_" + std::to_string(v - 1) + "_to_" + std::to_string(v) + ".sql");
+}
 
 // the version-1 file, taken to `version` by the steps that made that version
 void write_version_file(const std::string& path, int version) {
   write_version1_file(path);
   Database db(path);
-  for (int step = 1; step < version; ++step) db.exec(kStepsFromVersion1[step - 1]);
+  for (int v = 2; v <= version; ++v) db.exec(step_to_version(v));
   db.exec("UPDATE meta SET value='" + std::to_string(version) + "' WHERE key='schema_version'");
 }
 
 TEST_F(StoreTest, EveryOlderVersionMigratesToTheTablesOfANewFileKeepingItsRows) {
-  const std::string runs_sql = std::string("SELECT ") + kRunsV1Columns + " FROM runs ORDER BY run_id";
-  const std::string evals_sql = std::string("SELECT ") + kEvalsV1Columns + " FROM evals ORDER BY run_id, episode";
   for (int version = 2; version <= 4; ++version) {
     SCOPED_TRACE("schema_version " + std::to_string(version));
     const std::string file = path("v" + std::to_string(version) + ".sqlite");
     write_version_file(file, version);
-    const std::string runs_before = exact_rows(file, runs_sql), evals_before = exact_rows(file, evals_sql);
+    const std::string runs_before = exact_rows(file, kRunsV1Query), evals_before = exact_rows(file, kEvalsV1Query);
     { Store store(file, {"0.2.0", "def", "host"}); }
     EXPECT_EQ(exact_rows(file, "SELECT value FROM meta WHERE key='schema_version'"), "t5|\n");
-    EXPECT_EQ(exact_rows(file, runs_sql), runs_before);
-    EXPECT_EQ(exact_rows(file, evals_sql), evals_before);
+    EXPECT_EQ(exact_rows(file, kRunsV1Query), runs_before);
+    EXPECT_EQ(exact_rows(file, kEvalsV1Query), evals_before);
     EXPECT_EQ(exact_rows(file, "SELECT count(*) FROM runs WHERE results_versions = '' AND shared_episodes = 0"),
               "i3|\n");
     expect_tables_of_a_new_file(file, path("fresh" + std::to_string(version) + ".sqlite"));
@@ -407,8 +325,6 @@ TEST_F(StoreTest, EveryOlderVersionMigratesToTheTablesOfANewFileKeepingItsRows) 
 
 // merge reads a file of any version as it is (read-only): a column the file lacks as its default
 TEST_F(StoreTest, MergeCopiesTheRunsOfAFileOfEveryOlderVersion) {
-  const std::string runs_sql = std::string("SELECT ") + kRunsV1Columns + " FROM runs ORDER BY run_id";
-  const std::string evals_sql = std::string("SELECT ") + kEvalsV1Columns + " FROM evals ORDER BY run_id, episode";
   for (int version = 1; version <= 4; ++version) {
     SCOPED_TRACE("schema_version " + std::to_string(version));
     const std::string input = path("in" + std::to_string(version) + ".sqlite");
@@ -422,8 +338,8 @@ TEST_F(StoreTest, MergeCopiesTheRunsOfAFileOfEveryOlderVersion) {
     }
     EXPECT_EQ(testing::read_file(input), input_bytes);
     // the same rows, under the same run_ids (the output was empty), with the defaults of the rest
-    EXPECT_EQ(exact_rows(out, runs_sql), exact_rows(input, runs_sql));
-    EXPECT_EQ(exact_rows(out, evals_sql), exact_rows(input, evals_sql));
+    EXPECT_EQ(exact_rows(out, kRunsV1Query), exact_rows(input, kRunsV1Query));
+    EXPECT_EQ(exact_rows(out, kEvalsV1Query), exact_rows(input, kEvalsV1Query));
     EXPECT_EQ(exact_rows(out,
                          "SELECT count(*) FROM runs WHERE diagnostics IS NULL AND shared_episodes = 0 AND "
                          "results_versions = ''"),

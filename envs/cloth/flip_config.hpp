@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "envs/cloth/pan_surface.hpp"
 
 namespace dsb::cloth {
@@ -86,31 +87,14 @@ struct FlipConfig {
   // the stored fields, each named once (common/config_fields.hpp)
   template <class Visit>
   void fields(Visit&& visit) const {
-    visit("cols", cols);
-    visit("rows", rows);
-    visit("side", side);
-    visit("total_mass", total_mass);
-    visit("start_gap", start_gap);
-    visit("structural_stiffness", structural_stiffness);
-    visit("shear_stiffness", shear_stiffness);
-    visit("bending_stiffness", bending_stiffness);
-    visit("structural_damping", structural_damping);
-    visit("shear_damping", shear_damping);
-    visit("bending_damping", bending_damping);
-    visit("damping", damping);
-    visit("gravity", gravity);
-    visit("tangential_keep", tangential_keep);
+    DSB_VISIT_FIELDS(visit, cols, rows, side, total_mass, start_gap, structural_stiffness, shear_stiffness,
+                     bending_stiffness, structural_damping, shear_damping, bending_damping, damping, gravity,
+                     tangential_keep);
     visit("pan_radius", pan.radius);
     visit("pan_flat_radius", pan.flat_radius);
     visit("pan_rim_height", pan.rim_height);
     visit("pan_thickness", pan.thickness);
-    visit("floor_height", floor_height);
-    visit("dt", dt);
-    visit("segment_time", segment_time);
-    visit("settle_time", settle_time);
-    visit("half_range", half_range);
-    visit("control_steps", control_steps);
-    visit("flip_example", flip_example);
+    DSB_VISIT_FIELDS(visit, floor_height, dt, segment_time, settle_time, half_range, control_steps, flip_example);
   }
 };
 

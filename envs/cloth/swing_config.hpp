@@ -15,6 +15,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
+
 namespace dsb::cloth {
 
 struct SwingConfig {
@@ -76,36 +78,10 @@ struct SwingConfig {
   void validate() const;
   nlohmann::json to_json() const;  // fields() plus the step counts, the swing and the integrator
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("cols", cols);
-    visit("rows", rows);
-    visit("width", width);
-    visit("height", height);
-    visit("total_mass", total_mass);
-    visit("start_height", start_height);
-    visit("shear_ratio", shear_ratio);
-    visit("bending_ratio", bending_ratio);
-    visit("k_low", k_low);
-    visit("k_high", k_high);
-    visit("structural_damping", structural_damping);
-    visit("shear_damping", shear_damping);
-    visit("bending_damping", bending_damping);
-    visit("damping", damping);
-    visit("gravity", gravity);
-    visit("dt", dt);
-    visit("duration", duration);
-    visit("swing_time", swing_time);
-    visit("forward", forward);
-    visit("lift", lift);
-    visit("release_time", release_time);
-    visit("floor_height", floor_height);
-    visit("tangential_keep", tangential_keep);
-    visit("v_low", v_low);
-    visit("v_high", v_high);
-    visit("stiffness_reference", stiffness_reference);
-    visit("velocity_reference", velocity_reference);
-  }
+  DSB_CONFIG_FIELDS(cols, rows, width, height, total_mass, start_height, shear_ratio, bending_ratio, k_low, k_high,
+                    structural_damping, shear_damping, bending_damping, damping, gravity, dt, duration, swing_time,
+                    forward, lift, release_time, floor_height, tangential_keep, v_low, v_high, stiffness_reference,
+                    velocity_reference)
 };
 
 }  // namespace dsb::cloth

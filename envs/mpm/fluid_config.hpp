@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "envs/mpm/material.hpp"
 #include "envs/mpm/mpm_config.hpp"
 
@@ -69,36 +70,10 @@ struct FluidConfig {
   void validate() const;           // throws ConfigError naming the field
   nlohmann::json to_json() const;  // fields() plus units, params and loss in words
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("mpm", mpm);
-    visit("env_steps", env_steps);
-    visit("segments", segments);
-    visit("syrup", syrup);
-    visit("syrup_depth", syrup_depth);
-    visit("syrup_particles_per_cell", syrup_particles_per_cell);
-    visit("cube", cube);
-    visit("cube_size", cube_size);
-    visit("cube_xz", cube_xz);
-    visit("cube_particles_per_axis_per_cell", cube_particles_per_axis_per_cell);
-    visit("bowl_radius", bowl_radius);
-    visit("bowl_thickness", bowl_thickness);
-    visit("bowl_rim_height", bowl_rim_height);
-    visit("bowl_tilt", bowl_tilt);
-    visit("handle_radius", handle_radius);
-    visit("handle_half_length", handle_half_length);
-    visit("ladle_start", ladle_start);
-    visit("ladle_lower", ladle_lower);
-    visit("ladle_upper", ladle_upper);
-    visit("max_speed", max_speed);
-    visit("friction", friction);
-    visit("softness", softness);
-    visit("rim_height", rim_height);
-    visit("tank_axis_xz", tank_axis_xz);
-    visit("ladle_weight", ladle_weight);
-    visit("axis_weight", axis_weight);
-    visit("seed", seed);
-  }
+  DSB_CONFIG_FIELDS(mpm, env_steps, segments, syrup, syrup_depth, syrup_particles_per_cell, cube, cube_size, cube_xz,
+                    cube_particles_per_axis_per_cell, bowl_radius, bowl_thickness, bowl_rim_height, bowl_tilt,
+                    handle_radius, handle_half_length, ladle_start, ladle_lower, ladle_upper, max_speed, friction,
+                    softness, rim_height, tank_axis_xz, ladle_weight, axis_weight, seed)
 };
 
 }  // namespace dsb::mpm

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "envs/mpm/mpm_types.hpp"
 
 namespace dsb::mpm {
@@ -43,15 +44,9 @@ struct MpmConfig {
   // the stored fields, each named once (common/config_fields.hpp); gravity as [x, y, z]
   template <class Visit>
   void fields(Visit&& visit) const {
-    visit("grid", grid);
-    visit("dx", dx);
-    visit("dt", dt);
-    visit("substeps", substeps);
+    DSB_VISIT_FIELDS(visit, grid, dx, dt, substeps);
     visit("gravity", std::array<double, 3>{gravity.x(), gravity.y(), gravity.z()});
-    visit("bound", bound);
-    visit("floor_friction", floor_friction);
-    visit("grid_mass_epsilon", grid_mass_epsilon);
-    visit("pad", pad);
+    DSB_VISIT_FIELDS(visit, bound, floor_friction, grid_mass_epsilon, pad);
   }
 };
 

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "envs/mpm/mpm_config.hpp"
 #include "envs/mpm/plb_target_file.hpp"
 #include "envs/mpm/plb_tasks.hpp"
@@ -40,19 +41,12 @@ struct PlbConfig {
   // the stored fields, each named once (common/config_fields.hpp); the loss weights under "loss"
   template <class Visit>
   void fields(Visit&& visit) const {
-    visit("task", task);
-    visit("mpm", mpm);
-    visit("env_steps", env_steps);
-    visit("segments", segments);
-    visit("softness", softness);
-    visit("particle_volume", particle_volume);
-    visit("density", density);
+    DSB_VISIT_FIELDS(visit, task, mpm, env_steps, segments, softness, particle_volume, density);
     visit("loss.sdf_weight", sdf_weight);
     visit("loss.density_weight", density_weight);
     visit("loss.contact_weight", contact_weight);
     visit("loss.target_threshold", target_threshold);
-    visit("seed", seed);
-    visit("observed_particles", observed_particles);
+    DSB_VISIT_FIELDS(visit, seed, observed_particles);
   }
 };
 

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "envs/rigid/contact_config.hpp"
 
 namespace dsb {
@@ -26,20 +27,7 @@ struct BounceConfig {
   void validate() const;
   nlohmann::json to_json() const;  // fields() plus steps and the model's description
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("radius", radius);
-    visit("mass", mass);
-    visit("start", start);
-    visit("v_low", v_low);
-    visit("v_high", v_high);
-    visit("wall_x", wall_x);
-    visit("gravity", gravity);
-    visit("dt", dt);
-    visit("duration", duration);
-    visit("target", target);
-    visit("contact", contact);
-  }
+  DSB_CONFIG_FIELDS(radius, mass, start, v_low, v_high, wall_x, gravity, dt, duration, target, contact)
 };
 
 }  // namespace dsb

@@ -11,13 +11,9 @@ namespace dsb {
 BounceModel BounceModel::build(const BounceConfig& cfg) {
   cfg.validate();
   BounceModel m;
-  m.dt = cfg.dt;
-  m.steps = static_cast<int>(std::lround(cfg.duration / cfg.dt));
-  m.mass = cfg.mass;
-  m.radius = cfg.radius;
-  m.gravity = cfg.gravity;
+  static_cast<BallConstants&>(m) =
+      BallConstants::of(cfg.dt, cfg.duration, cfg.mass, cfg.radius, cfg.gravity, cfg.contact);
   m.wall_x = cfg.wall_x;
-  m.contact = cfg.contact;
   return m;
 }
 

@@ -14,34 +14,23 @@
 #include "envs/core/config_model_env.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/env_family.hpp"
+#include "envs/rigid/ball.hpp"
 #include "envs/rigid/bounce_config.hpp"
 
 namespace dsb {
 
-// state of the ball, also used as its adjoint (dLoss/dposition, dLoss/dvelocity)
-struct BallState {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // centre (m)
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // (m/s)
-};
+using BallState = BallStateOf<3>;
 
 // constants of one simulation, built from a validated config
-struct BounceModel {
-  double dt = 0.0;       // s
-  int steps = 0;         // round(duration / dt)
-  double mass = 0.0;     // kg
-  double radius = 0.0;   // m, contact radius
-  double gravity = 0.0;  // m/s^2 along -y
-  double wall_x = 0.0;   // m, wall plane x = wall_x (normal -x)
-  ContactConfig contact;
+struct BounceModel : BallConstants {
+  double wall_x = 0.0;  // m, wall plane x = wall_x (normal -x)
 
   static BounceModel build(const BounceConfig& cfg);
 };
 
-// what the reverse pass needs from one step: the contact Jacobians summed over the surfaces
-struct BounceStepCache {
-  Eigen::Matrix3d df_dx = Eigen::Matrix3d::Zero();  // d(total contact force)/d position (3 x 3)
-  Eigen::Matrix3d df_dv = Eigen::Matrix3d::Zero();  // d(total contact force)/d velocity (3 x 3)
-  bool ground = false, wall = false;                // which contacts were active
+// what the reverse pass needs from one step: the contact Jacobians (3 x 3) and the active contacts
+struct BounceStepCache : BallForceJacobians<3> {
+  bool ground = false, wall = false;  // which contacts were active
 };
 
 // one semi-implicit Euler step: v += dt (g + f(x, v) / m); x += dt v. Fills `cache` when given.

@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
+
 namespace dsb {
 
 struct CartpoleConfig {
@@ -28,21 +30,8 @@ struct CartpoleConfig {
   void validate() const;                // throws ConfigError naming the field
   nlohmann::json to_json() const;       // fields() plus the model's description
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("links", links);
-    visit("link_masses", link_masses);
-    visit("link_length", link_length);
-    visit("cart_mass", cart_mass);
-    visit("gravity", gravity);
-    visit("dt", dt);
-    visit("steps", steps);
-    visit("max_cart_speed", max_cart_speed);
-    visit("max_torque", max_torque);
-    visit("target", target);
-    visit("start_joint_angles", start_joint_angles);
-    visit("start_joint_velocities", start_joint_velocities);
-  }
+  DSB_CONFIG_FIELDS(links, link_masses, link_length, cart_mass, gravity, dt, steps, max_cart_speed, max_torque, target,
+                    start_joint_angles, start_joint_velocities)
 };
 
 }  // namespace dsb

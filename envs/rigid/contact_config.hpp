@@ -16,6 +16,8 @@
 // m = 1 kg, dt = 1/480 s, mu = 0.25, eps = 0.5 m/s keeps the step stable up to f_n = 1920 N.
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
+
 namespace dsb {
 
 struct ContactConfig {
@@ -27,13 +29,7 @@ struct ContactConfig {
   void validate(const char* owner) const;  // throws ConfigError naming the field
   nlohmann::json to_json() const;          // fields() plus the law
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("ke", ke);
-    visit("kd", kd);
-    visit("mu", mu);
-    visit("friction_smoothing", friction_smoothing);
-  }
+  DSB_CONFIG_FIELDS(ke, kd, mu, friction_smoothing)
 };
 
 }  // namespace dsb

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "envs/rigid/contact_config.hpp"
 
 namespace dsb {
@@ -43,28 +44,8 @@ struct PinballConfig {
   void validate() const;
   nlohmann::json to_json() const;  // fields() plus the paddle centres, steps and the model's description
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("rows", rows);
-    visit("cols", cols);
-    visit("width", width);
-    visit("height", height);
-    visit("ball_radius", ball_radius);
-    visit("ball_mass", ball_mass);
-    visit("start", start);
-    visit("paddle_length", paddle_length);
-    visit("paddle_thickness", paddle_thickness);
-    visit("first_row_y", first_row_y);
-    visit("last_row_y", last_row_y);
-    visit("first_col_x", first_col_x);
-    visit("last_col_x", last_col_x);
-    visit("max_angle", max_angle);
-    visit("gravity", gravity);
-    visit("dt", dt);
-    visit("duration", duration);
-    visit("target", target);
-    visit("contact", contact);
-  }
+  DSB_CONFIG_FIELDS(rows, cols, width, height, ball_radius, ball_mass, start, paddle_length, paddle_thickness,
+                    first_row_y, last_row_y, first_col_x, last_col_x, max_angle, gravity, dt, duration, target, contact)
 };
 
 }  // namespace dsb

@@ -12,11 +12,8 @@ namespace dsb {
 PinballModel PinballModel::build(const PinballConfig& cfg) {
   cfg.validate();
   PinballModel m;
-  m.dt = cfg.dt;
-  m.steps = static_cast<int>(std::lround(cfg.duration / cfg.dt));
-  m.mass = cfg.ball_mass;
-  m.radius = cfg.ball_radius;
-  m.gravity = cfg.gravity;
+  static_cast<BallConstants&>(m) =
+      BallConstants::of(cfg.dt, cfg.duration, cfg.ball_mass, cfg.ball_radius, cfg.gravity, cfg.contact);
   m.width = cfg.width;
   m.half_segment = 0.5 * (cfg.paddle_length - cfg.paddle_thickness);
   m.paddle_radius = 0.5 * cfg.paddle_thickness;
@@ -29,7 +26,6 @@ PinballModel PinballModel::build(const PinballConfig& cfg) {
       const auto p = cfg.paddle_centre(r, c);
       m.centres.emplace_back(p[0], p[1]);
     }
-  m.contact = cfg.contact;
   return m;
 }
 

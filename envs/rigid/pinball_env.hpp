@@ -20,25 +20,17 @@
 #include "envs/core/config_model_env.hpp"
 #include "envs/core/env.hpp"
 #include "envs/core/env_family.hpp"
+#include "envs/rigid/ball.hpp"
 #include "envs/rigid/pinball_config.hpp"
 
 namespace dsb {
 
 constexpr int kMaxPaddles = PinballConfig::max_paddles;  // validate() bounds rows * cols by this
 
-// state of the ball, also used as its adjoint (dLoss/dposition, dLoss/dvelocity)
-struct Ball2State {
-  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // centre (m)
-  Eigen::Vector2d velocity = Eigen::Vector2d::Zero();  // (m/s)
-};
+using Ball2State = BallStateOf<2>;
 
 // constants of one simulation, built from a validated config (the angles are not in it)
-struct PinballModel {
-  double dt = 0.0;                       // s
-  int steps = 0;                         // round(duration / dt)
-  double mass = 0.0;                     // kg
-  double radius = 0.0;                   // m, ball contact radius
-  double gravity = 0.0;                  // m/s^2 along -y
+struct PinballModel : BallConstants {
   double width = 0.0;                    // m, walls at x = 0 and x = width, floor at y = 0
   double half_segment = 0.0;             // m, (paddle_length - paddle_thickness) / 2
   double paddle_radius = 0.0;            // m, paddle_thickness / 2
@@ -46,7 +38,6 @@ struct PinballModel {
                                          // farther from a paddle centre the ball cannot touch it
   int paddles = 0;                       // rows * cols
   std::vector<Eigen::Vector2d> centres;  // paddle centres, row-major (paddles)
-  ContactConfig contact;
 
   static PinballModel build(const PinballConfig& cfg);
 };
@@ -62,10 +53,8 @@ struct PaddleContactGrad {
   Eigen::Vector2d df_dangle = Eigen::Vector2d::Zero();  // N/rad (2)
 };
 
-// what the reverse pass needs from one step
-struct PinballStepCache {
-  Eigen::Matrix2d df_dx = Eigen::Matrix2d::Zero();  // d(total contact force)/d position (2 x 2)
-  Eigen::Matrix2d df_dv = Eigen::Matrix2d::Zero();  // d(total contact force)/d velocity (2 x 2)
+// what the reverse pass needs from one step: the contact Jacobians (2 x 2) and the active contacts
+struct PinballStepCache : BallForceJacobians<2> {
   int walls = 0;            // active wall contacts, bit mask: 1 wall x = 0, 2 wall x = width, 4 floor
   int paddle_contacts = 0;  // entries written to the contact buffer
 };

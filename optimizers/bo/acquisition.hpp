@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "common/rng.hpp"
 #include "optimizers/bo/gp.hpp"
 #include "optimizers/bo/sobol.hpp"
@@ -19,13 +20,7 @@ struct LcbConfig {
   void validate(const std::string& owner) const;
   nlohmann::json to_json() const;
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("beta", beta);
-    visit("raw_samples", raw_samples);
-    visit("restarts", restarts);
-    visit("max_evaluations", max_evaluations);
-  }
+  DSB_CONFIG_FIELDS(beta, raw_samples, restarts, max_evaluations)
 };
 
 // LCB value at u (unit box) and, when grad is non-null, its gradient (d)

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "optimizers/bo/acquisition.hpp"
 #include "optimizers/bo/gp.hpp"
 #include "optimizers/core/optimizer.hpp"
@@ -24,14 +25,7 @@ struct BoConfig {
   void validate() const;
   nlohmann::json to_json() const;
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("initial_points", initial_points);
-    visit("refit_every_until", refit_every_until);
-    visit("refit_growth", refit_growth);
-    visit("lcb", lcb);
-    visit("gp", gp);
-  }
+  DSB_CONFIG_FIELDS(initial_points, refit_every_until, refit_growth, lcb, gp)
   int initial_points_for(int dim) const;
 };
 

@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "common/rng.hpp"
 
 namespace dsb {
@@ -27,20 +28,9 @@ struct GpConfig {
   void validate() const;          // throws ConfigError naming the field
   nlohmann::json to_json() const;
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("lengthscale_prior_concentration", lengthscale_prior_concentration);
-    visit("lengthscale_prior_rate", lengthscale_prior_rate);
-    visit("outputscale_prior_concentration", outputscale_prior_concentration);
-    visit("outputscale_prior_rate", outputscale_prior_rate);
-    visit("noise_prior_concentration", noise_prior_concentration);
-    visit("noise_prior_rate", noise_prior_rate);
-    visit("noise_floor", noise_floor);
-    visit("constant_mean", constant_mean);
-    visit("fit_attempts", fit_attempts);
-    visit("fit_max_evaluations", fit_max_evaluations);
-    visit("min_variance", min_variance);
-  }
+  DSB_CONFIG_FIELDS(lengthscale_prior_concentration, lengthscale_prior_rate, outputscale_prior_concentration,
+                    outputscale_prior_rate, noise_prior_concentration, noise_prior_rate, noise_floor, constant_mean,
+                    fit_attempts, fit_max_evaluations, min_variance)
 };
 
 // What a hyperparameter fit starts from (GaussianProcess::begin_fit): per L-BFGS start, the

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "common/det_math.hpp"
 
 namespace dsb {
@@ -19,13 +20,7 @@ struct AdamConfig {
   void validate(const std::string& owner) const;
   nlohmann::json to_json() const;
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("lr", lr);
-    visit("beta1", beta1);
-    visit("beta2", beta2);
-    visit("eps", eps);
-  }
+  DSB_CONFIG_FIELDS(lr, beta1, beta2, eps)
 };
 
 class Adam {

@@ -29,6 +29,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "optimizers/core/optimizer.hpp"
 #include "optimizers/rl/mlp.hpp"
 #include "optimizers/rl/rl_core.hpp"
@@ -56,22 +57,8 @@ struct PpoConfig {
   nlohmann::json to_json() const;
   // the stored fields, each named once (common/config_fields.hpp); failed_loss only
   // where it is not the default (to_json)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("learning_rate", learning_rate);
-    visit("n_steps", n_steps);
-    visit("batch_size", batch_size);
-    visit("n_epochs", n_epochs);
-    visit("gamma", gamma);
-    visit("gae_lambda", gae_lambda);
-    visit("clip_range", clip_range);
-    visit("ent_coef", ent_coef);
-    visit("vf_coef", vf_coef);
-    visit("max_grad_norm", max_grad_norm);
-    visit("adam_eps", adam_eps);
-    visit("log_std_init", log_std_init);
-    visit("hidden", hidden);
-  }
+  DSB_CONFIG_FIELDS(learning_rate, n_steps, batch_size, n_epochs, gamma, gae_lambda, clip_range, ent_coef, vf_coef,
+                    max_grad_norm, adam_eps, log_std_init, hidden)
 };
 
 // The policy mean network, the value network and the log-std. Flat parameter order for the

@@ -53,6 +53,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config_fields.hpp"
 #include "optimizers/core/optimizer.hpp"
 #include "optimizers/rl/rl_core.hpp"
 #include "optimizers/rl/sac_update.hpp"
@@ -80,24 +81,9 @@ struct SacConfig {
   void validate() const;
   nlohmann::json to_json() const;
   // the stored fields, each named once (common/config_fields.hpp)
-  template <class Visit>
-  void fields(Visit&& visit) const {
-    visit("learning_rate", learning_rate);
-    visit("adam_eps", adam_eps);
-    visit("buffer_size", buffer_size);
-    visit("learning_starts", learning_starts);
-    visit("batch_size", batch_size);
-    visit("tau", tau);
-    visit("gamma", gamma);
-    visit("train_freq", train_freq);
-    visit("gradient_steps", gradient_steps);
-    visit("target_update_interval", target_update_interval);
-    visit("n_critics", n_critics);
-    visit("net_arch", net_arch);
-    visit("ent_coef_init", ent_coef_init);
-    visit("failed_loss_factor", failed_loss_factor);
-    visit("failed_loss_floor", failed_loss_floor);
-  }
+  DSB_CONFIG_FIELDS(learning_rate, adam_eps, buffer_size, learning_starts, batch_size, tau, gamma, train_freq,
+                    gradient_steps, target_update_interval, n_critics, net_arch, ent_coef_init, failed_loss_factor,
+                    failed_loss_floor)
 };
 
 std::unique_ptr<Optimizer> make_sac(const SacConfig& cfg = {});

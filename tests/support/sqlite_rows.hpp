@@ -1,8 +1,12 @@
 #pragma once
 // Test helper: what a query returns on a database file, read-only through the SQLite C API (not
 // through the harness's own store code, so the tests check the file itself).
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <map>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -60,6 +64,32 @@ inline std::string quiet_scalar(const std::string& path, const std::string& sql)
   }
   sqlite3_close(db);
   return v;
+}
+
+// one stored episode: (env, optimizer, seed, budget, episode)
+using EvalKey = std::tuple<std::string, std::string, int, std::int64_t, std::int64_t>;
+
+// every stored episode's loss (NULL, a failed episode, as NaN) of the runs the SQL condition
+// `which_runs` (over runs r) selects
+inline std::map<EvalKey, double> stored_losses(const std::string& path, const std::string& which_runs = "1") {
+  const std::string sql =
+      "SELECT r.env, r.optimizer, r.seed, r.budget, e.episode, e.loss FROM evals e JOIN runs r USING(run_id) "
+      "WHERE " +
+      which_runs;
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK) << path;
+  sqlite3_stmt* q = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(db, sql.c_str(), -1, &q, nullptr), SQLITE_OK) << sql;
+  std::map<EvalKey, double> losses;
+  while (q && sqlite3_step(q) == SQLITE_ROW) {
+    const EvalKey k{reinterpret_cast<const char*>(sqlite3_column_text(q, 0)),
+                    reinterpret_cast<const char*>(sqlite3_column_text(q, 1)), sqlite3_column_int(q, 2),
+                    sqlite3_column_int64(q, 3), sqlite3_column_int64(q, 4)};
+    losses[k] = sqlite3_column_type(q, 5) == SQLITE_NULL ? std::nan("") : sqlite3_column_double(q, 5);
+  }
+  sqlite3_finalize(q);
+  sqlite3_close(db);
+  return losses;
 }
 
 // a grid's episodes in a database file (table evals): how many, how many have a finite loss (stored
