@@ -8,10 +8,10 @@
 #include <stdexcept>
 #include <utility>
 
+#include "common/number_text.hpp"
+
 #if DSB_HAVE_MUJOCO
 #include <mujoco/mujoco.h>
-
-#include "common/number_text.hpp"
 #endif
 
 namespace dsb::reference {

@@ -251,7 +251,9 @@ TEST(BoSurrogateMemo, RecalledFitsAndArgminsLeaveTheModelTheGeneratorAndTheCount
     again.next = 0;
     const SurrogateRun r = run_surrogate(&again);
     EXPECT_EQ(r.fits_recalled + r.proposals_recalled, static_cast<int>(serve)) << serve;
-    if (serve == memo.entries.size()) EXPECT_EQ(r.fits_recalled, plain.fits);  // no search ran
+    if (serve == memo.entries.size()) {
+      EXPECT_EQ(r.fits_recalled, plain.fits);  // no search ran
+    }
     EXPECT_EQ(again.entries, memo.entries) << serve;  // what was computed again is what was remembered
     ASSERT_EQ(r.proposals.size(), computed.proposals.size());
     for (std::size_t i = 0; i < r.proposals.size(); ++i)

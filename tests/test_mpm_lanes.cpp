@@ -195,8 +195,9 @@ TEST(MpmLanes, PathsComeFromTheOneDispatch) {
   EXPECT_NE(mpm::default_lane_path(), SimdPath::avx);  // the engine has no AVX (without AVX2) lanes
   EXPECT_LE(mpm::default_lane_path(), simd_ceiling());
   const char* forced = std::getenv("DSB_SIMD");
-  if (!forced || !*forced)
+  if (!forced || !*forced) {
     EXPECT_EQ(mpm::default_lane_path(), cpu_supports(SimdPath::avx2) ? SimdPath::avx2 : SimdPath::sse2);
+  }
 }
 
 }  // namespace

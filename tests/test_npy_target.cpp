@@ -302,7 +302,9 @@ TEST_F(NpyTarget, HeadersAreReadByPythonsLiteralRulesAsNumpyReadsThem) {
       EXPECT_EQ(why.find_first_of("\n\x1b"), std::string::npos) << why;
     }
     // what numpy refuses, we refuse
-    if (numpy.at(c.name) == "refuses") EXPECT_NE(why, "");
+    if (numpy.at(c.name) == "refuses") {
+      EXPECT_NE(why, "");
+    }
   }
   EXPECT_EQ(numpy.at("h_leading_zero.npy"), "refuses");
   EXPECT_EQ(numpy.at("target_leading_zero.npy"), "refuses");

@@ -169,7 +169,9 @@ TEST(Render, PlbTargetFrameDrawsTheTargetsCellsAndPlasticineLabsBoxes) {
               k = static_cast<int>(std::lround(p[2] * 64)) + pad;
     ASSERT_GT(g.at(i, j, k), 0.01 * g.max());
     // a lit face is a top face: no cell above it
-    if (d.role == Role::state) EXPECT_LE(g.at(i, j + 1, k), 0.01 * g.max());
+    if (d.role == Role::state) {
+      EXPECT_LE(g.at(i, j + 1, k), 0.01 * g.max());
+    }
     tops += d.role == Role::state;
     sides += d.role == Role::trace;
   }
