@@ -220,9 +220,13 @@ TEST_P(EveryOptimizer, SurvivesNaNAndInfiniteLossesAndNaNGradients) {
     std::int64_t nan_losses = 0;
     for (const EvalRecord& e : r.evals) nan_losses += std::isnan(e.loss) ? 1 : 0;
     EXPECT_EQ(nan_losses, r.failed_episodes) << "a failed episode is stored as NULL (NaN)";
-    if (r.failed_episodes < r.episodes) EXPECT_TRUE(std::isfinite(r.best_loss)) << "seed " << seed;
+    if (r.failed_episodes < r.episodes) {
+      EXPECT_TRUE(std::isfinite(r.best_loss)) << "seed " << seed;
+    }
     // a uniform sampler lands in the hostile half of the box (|x_0| > 0.5) about 24 times in 48
-    if (GetParam() == "random" || GetParam() == kExt) EXPECT_GT(r.failed_episodes, 5) << "seed " << seed;
+    if (GetParam() == "random" || GetParam() == kExt) {
+      EXPECT_GT(r.failed_episodes, 5) << "seed " << seed;
+    }
   }
 }
 
