@@ -158,9 +158,6 @@ std::string fixture(const std::string& name) {
   return sql;
 }
 
-// Version 1's schema, frozen (tests/fixtures/store/schema_v1.sql)
-const std::string kSchemaV1 = fixture("schema_v1.sql");
-
 const char* kRunsV1Columns =
     "run_id, env, optimizer, seed, budget, env_config_hash, opt_config_hash, rng_seed, status, episodes, "
     "failed_episodes, best_loss, best_x, wall_s, error, started_at, finished_at, harness_version, git_sha, host";
@@ -205,7 +202,7 @@ std::string exact_rows(const std::string& path, const std::string& sql) {
 void write_version1_file(const std::string& path) {
   Database db(path);
   db.exec("PRAGMA journal_mode=WAL");
-  db.exec(kSchemaV1);
+  db.exec(fixture("schema_v1.sql"));
   db.exec(R"sql(
     INSERT INTO meta VALUES ('schema_version', '1');
     INSERT INTO configs VALUES ('e1', 'env', '{"dim":2}'), ('o1', 'optimizer', '{"sigma0":0.5}');
