@@ -325,9 +325,13 @@ TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSe
   // cmaes: its measured run itself (the plan writes 6 significant digits)
   EXPECT_NEAR(planned_seconds(csv, "cartpole3,cmaes,0,300,"), cmaes_s, 1e-5 * cmaes_s) << csv;
   // boleap: the measured 200 episodes carried to 300 by its model: the episodes at their calibrated
-  // costs (47% gradient episodes), its own time the probe's plus the model's growth from 200 to 300
+  // costs (the registry's share of gradient episodes), its own time the probe's plus the model's
+  // growth from 200 to 300
   const auto costs = j.at("costs").begin().value();
-  const double per_episode = 0.47 * costs.at("gradient_s").get<double>() + 0.53 * costs.at("forward_s").get<double>();
+  const double g = optimizer_entry("boleap").costs.gradient_share;
+  EXPECT_GT(g, 0.0);
+  EXPECT_LT(g, 1.0);
+  const double per_episode = g * costs.at("gradient_s").get<double>() + (1.0 - g) * costs.at("forward_s").get<double>();
   const auto& own = optimizer_entry("boleap").costs.own_seconds;
   const double expected = per_episode * 300.0 + (boleap_s - per_episode * 200.0) + own(400, 300) - own(400, 200);
   EXPECT_NEAR(planned_seconds(csv, "cartpole3,boleap,0,300,"), expected, 1e-5 * expected) << csv;

@@ -1,0 +1,133 @@
+#!/usr/bin/env python3
+"""scripts/plan_vs_measured.py on real piece databases (the harness's, on sphere-2) with a plan,
+a calibration and a CPU log written here, so every figure it prints is known.
+
+    python3 tests/test_plan_vs_measured.py SOURCE_DIR HARNESS
+"""
+import csv
+import datetime
+import json
+import os
+import sqlite3
+import subprocess
+import sys
+import tempfile
+import unittest
+
+SOURCE = sys.argv.pop(1) if len(sys.argv) > 2 else os.path.join(os.path.dirname(__file__), "..")
+HARNESS = sys.argv.pop(1) if len(sys.argv) > 1 else os.path.join(SOURCE, "build", "bin", "harness")
+SCRIPT = os.path.join(SOURCE, "scripts", "plan_vs_measured.py")
+BUDGET = 30
+
+
+def stretch_run(db, seconds):
+    """The run's start and finish (unix), its finish moved `seconds` after its start (a sphere-2
+    run takes a second; the pieces this script is for take an hour), and its gradient episodes."""
+    con = sqlite3.connect(db)
+    try:
+        start, = con.execute("SELECT started_at FROM runs").fetchone()
+        start = int(datetime.datetime.strptime(start, "%Y-%m-%dT%H:%M:%SZ")
+                    .replace(tzinfo=datetime.timezone.utc).timestamp())
+        end = datetime.datetime.fromtimestamp(start + seconds, datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+        con.execute("UPDATE runs SET finished_at = ?", (end,))
+        con.commit()
+        grad, = con.execute("SELECT SUM(used_grad) FROM evals").fetchone()
+    finally:
+        con.close()
+    return start, start + seconds, grad
+
+
+class PlanVsMeasured(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory()
+        cls.dir = cls.tmp.name
+        cls.pieces = os.path.join(cls.dir, "pieces")
+        os.mkdir(cls.pieces)
+        cls.times = {}
+        for opt in ("cmaes", "boleap", "random"):
+            db = os.path.join(cls.pieces, f"sphere-2__{opt}.sqlite")
+            r = subprocess.run([HARNESS, "--env", "sphere-2", "--optimizer", opt, "--seeds", "1", "--budget",
+                                str(BUDGET), "--jobs", "1", "--quiet", "--db", db], capture_output=True, text=True)
+            assert r.returncode == 0, r.stderr
+            cls.times[opt] = stretch_run(db, 1000)
+        # the plan (harness plan --runs-csv's columns), a calibration of 1 s forward, 3 s gradient
+        cls.plan = os.path.join(cls.dir, "plan.csv")
+        with open(cls.plan, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["env", "optimizer", "seed", "budget", "planned_s", "source", "start_rank", "lead_seed"])
+            for rank, (opt, s) in enumerate((("cmaes", 100.0), ("boleap", 200.0), ("random", 50.0))):
+                w.writerow(["sphere-2", opt, 0, BUDGET, s, "model", rank, ""])
+        cls.costs = os.path.join(cls.dir, "costs.json")
+        with open(cls.costs, "w") as f:
+            json.dump({"costs": {"sphere-2|abc|0.1.0+x|CPU": {"forward_s": 1.0, "gradient_s": 3.0}}}, f)
+        # CPU samples: cmaes one process, 150 s; boleap two (stopped and resumed), 120 + 180 s; random
+        # a process first seen 60 s after its run started (an unseen earlier one may have run)
+        cls.cpu = os.path.join(cls.dir, "cpu.csv")
+        c0, c1, _ = cls.times["cmaes"]
+        b0, b1, _ = cls.times["boleap"]
+        r0, r1, _ = cls.times["random"]
+        with open(cls.cpu, "w") as f:
+            f.write("unix_time,pid,piece,cpu_s,started_at_unix\n")
+            f.write(f"{c0 + 5},11,sphere-2__cmaes,2,{c0}\n{c1},11,sphere-2__cmaes,150,{c0}\n")
+            f.write(f"{b0 + 5},21,sphere-2__boleap,100,{b0}\n{b0 + 9},21,sphere-2__boleap,120,{b0}\n")
+            f.write(f"{b1 - 3},22,sphere-2__boleap,180,{b0 + 500}\n")
+            f.write(f"{r1},31,sphere-2__random,40,{r0 + 60}\n")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def script(self, *extra):
+        return subprocess.run([sys.executable, SCRIPT, "--plan", self.plan, "--cpu", self.cpu, "--costs", self.costs,
+                               "--pieces", self.pieces, *extra], capture_output=True, text=True)
+
+    def test_rows(self):
+        out = os.path.join(self.dir, "rows.csv")
+        r = self.script("--share", "boleap=0.5", "--out", out, "--markdown")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(out, newline="") as f:
+            rows = {row["optimizer"]: row for row in csv.DictReader(f)}
+        self.assertEqual(rows["cmaes"]["measured"], "1")
+        self.assertAlmostEqual(float(rows["cmaes"]["cpu_s"]), 150.0)
+        self.assertAlmostEqual(float(rows["cmaes"]["ratio"]), 1.5)
+        self.assertEqual(rows["cmaes"]["grad_episodes"], "0")
+        # boleap: both processes counted; its plan at the run's own share of gradient episodes is
+        # the plan's own time (200 - 30 x (0.5 x 3 + 0.5 x 1) = 140) plus its episodes at 3 s and 1 s
+        grad = self.times["boleap"][2]
+        self.assertGreater(grad, 0)
+        self.assertLess(grad, BUDGET)
+        self.assertEqual(rows["boleap"]["grad_episodes"], str(grad))
+        self.assertAlmostEqual(float(rows["boleap"]["cpu_s"]), 300.0)
+        self.assertAlmostEqual(float(rows["boleap"]["ratio"]), 1.5)
+        own_share = 140.0 + 3.0 * grad + 1.0 * (BUDGET - grad)
+        self.assertAlmostEqual(float(rows["boleap"]["planned_at_own_share_s"]), own_share, places=2)
+        self.assertAlmostEqual(float(rows["boleap"]["ratio_at_own_share"]), round(300.0 / own_share, 3))
+        # random: its first process began after its run: unmeasured, no figure
+        self.assertEqual(rows["random"]["measured"], "0")
+        self.assertEqual(rows["random"]["cpu_s"], "")
+        # the family table: forward episodes counts cmaes (measured) and not random
+        self.assertIn("| forward episodes (cmaes) | 1 (2) | 100 | 150 | 1.50 |", r.stdout)
+        self.assertIn("| gp (episodes + GP time) (boleap) | 1 (1) | 200 | 300 | 1.50 |", r.stdout)
+
+    def test_mixed_optimizer_needs_its_share(self):
+        r = self.script()
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--share boleap=G", r.stderr)
+
+    def test_bad_input_exits_2_and_writes_nothing(self):
+        existing = os.path.join(self.dir, "existing.csv")
+        with open(existing, "w") as f:
+            f.write("mine\n")
+        r = self.script("--share", "boleap=0.5", "--out", existing)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn(existing, r.stderr)
+        with open(existing) as f:
+            self.assertEqual(f.read(), "mine\n")
+        r = self.script("--share", "boleap=1.5")
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("boleap=1.5", r.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
