@@ -336,5 +336,35 @@ TEST_F(RenderCli, BestOfRendersTheBestDoneRun) {
   EXPECT_NE(none.err.find("no done run of env 'cartpole1'"), std::string::npos) << none.err;
 }
 
+TEST_F(RenderCli, BestOfOneOptimizerRendersThatOptimizersBestRun) {
+  const std::string db = path("two.sqlite");
+  ASSERT_EQ(harness("--env bounce --optimizer random,cmaes --seeds 2 --budget 6 --quiet --db " + db).code, 0);
+  const BestRun overall = best_run_of(db, "bounce");
+  const BestRun cmaes = best_run_of(db, "bounce", "cmaes");
+  const BestRun random = best_run_of(db, "bounce", "random");
+  EXPECT_EQ(cmaes.optimizer, "cmaes");
+  EXPECT_EQ(random.optimizer, "random");
+  // the overall best is the better of the two optimizers' bests
+  EXPECT_EQ(overall.best_loss, std::min(cmaes.best_loss, random.best_loss));
+  const std::string other = overall.optimizer == "cmaes" ? "random" : "cmaes";
+  const BestRun& theirs = other == "cmaes" ? cmaes : random;
+  const auto r = harness("render --env bounce --best-of " + db + " --optimizer " + other + " --out " + path("o.png"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find(other + ", seed " + std::to_string(theirs.seed)), std::string::npos) << r.out;
+  ASSERT_EQ(harness("render --env bounce --x " + theirs.best_x + " --out " + path("ox.png")).code, 0);
+  EXPECT_EQ(testing::read_file(path("o.png")), testing::read_file(path("ox.png")));
+  // an optimizer without runs there, and --optimizer without --best-of: exit 2 naming it, no file
+  const auto none = harness("render --env bounce --best-of " + db + " --optimizer gd --out " + path("n.png"));
+  EXPECT_EQ(none.code, 2);
+  EXPECT_NE(none.err.find("by optimizer 'gd'"), std::string::npos) << none.err;
+  const auto alone = harness("render --env bounce --x 0,0,0 --optimizer cmaes --out " + path("n.png"));
+  EXPECT_EQ(alone.code, 2);
+  EXPECT_NE(alone.err.find("--optimizer cmaes"), std::string::npos) << alone.err;
+  const auto target = harness("render --env plb-pinch --target --optimizer cmaes --out " + path("n.png"));
+  EXPECT_EQ(target.code, 2);
+  EXPECT_NE(target.err.find("--optimizer"), std::string::npos) << target.err;
+  EXPECT_FALSE(fs::exists(path("n.png")));
+}
+
 }  // namespace
 }  // namespace dsb

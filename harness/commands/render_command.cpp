@@ -25,8 +25,8 @@ namespace {
 
 // `render --target`: the env's target shape alone (Env::target_frames), one panel
 int render_target(const RenderArgs& a, const render::RenderOptions& options) {
-  if (!a.x.empty() || !a.best_of.empty())
-    throw UsageError("--target draws the env's target: it takes no --x or --best-of");
+  if (!a.x.empty() || !a.best_of.empty() || !a.optimizer.empty())
+    throw UsageError("--target draws the env's target: it takes no --x, --best-of or --optimizer");
   if (a.frames_given) throw UsageError("--target draws one picture: it takes no --frames");
   const auto env = make_env(a.env);
   if (!env->renderable()) throw UsageError(fmt::format("env '{}' is not simulated: nothing to render", a.env));
@@ -52,13 +52,15 @@ int command_render(const RenderArgs& a) {
   if (a.width < 64 || a.width > 2000) throw UsageError(fmt::format("--width must be from 64 to 2000, got {}", a.width));
   if (a.target) return render_target(a, options);
   if (a.x.empty() == a.best_of.empty()) throw UsageError("render needs exactly one of --x, --best-of and --target");
+  if (!a.optimizer.empty() && a.best_of.empty())
+    throw UsageError(fmt::format("--optimizer {} picks among --best-of's runs: it needs --best-of", a.optimizer));
   // the env, which must be simulated, and the point
   const auto env = make_env(a.env);
   if (!env->renderable()) throw UsageError(fmt::format("env '{}' is not simulated: nothing to render", a.env));
   std::string source = "--x";
   std::string x_text = a.x;
   if (!a.best_of.empty()) {
-    const BestRun best = best_run_of(a.best_of, a.env);
+    const BestRun best = best_run_of(a.best_of, a.env, a.optimizer);
     x_text = best.best_x;
     source =
         fmt::format("best run of {} ({}, seed {}, loss {:.6g})", a.best_of, best.optimizer, best.seed, best.best_loss);
@@ -82,6 +84,7 @@ Command render_command() {
             app.add_option("--env", a->env, "env name (a simulated env)")->required();
             app.add_option("--x", a->x, "comma-separated parameters in [-1, 1]");
             app.add_option("--best-of", a->best_of, "harness database: render the best_x of the env's best done run");
+            app.add_option("--optimizer", a->optimizer, "with --best-of: the best done run of this optimizer");
             app.add_option("--out", a->out, "FILE.png (frames side by side) or FILE.gif (animation)")->required();
             auto* frames = app.add_option("--frames", a->frames, "time points from the start to the end (default 5)");
             app.add_option("--width", a->width, "pixels per frame (default 320)");

@@ -11,6 +11,7 @@ struct RenderArgs {
   std::string env;
   std::string x;              // comma-separated point in [-1, 1]^dim, or
   std::string best_of;        // a harness database: the best_x of --env's best done run
+  std::string optimizer;      // with best_of: of this optimizer's runs only
   std::string out;            // FILE.png (strip) or FILE.gif (animation)
   int frames = 5;             // 1 to 20 time points, from the start to the end of the episode
   bool frames_given = false;  // --frames on the command line
@@ -22,7 +23,8 @@ struct RenderArgs {
 // Checks every argument before any rollout (one-line UsageError naming the bad value: unknown or
 // synthetic env, --x of the wrong dimension or outside the box, an extension other than .png or
 // .gif, an unwritable or existing --out, --frames or --width out of range; --target with --x,
-// --best-of or --frames, or for an env without a target shape), renders and writes --out whole or
+// --best-of or --frames, or for an env without a target shape; --optimizer without --best-of),
+// renders and writes --out whole or
 // not at all.
 int command_render(const RenderArgs& args);
 
