@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -272,6 +273,21 @@ TEST_F(PlanFromDatabase, SlurmTakesItsTimeLimitFromThePlanUnlessGivenOne) {
   ASSERT_EQ(t.code, 0) << t.err;
   EXPECT_NE(testing::read_file(path("d/array.sbatch")).find("#SBATCH --time=2:00:00"), std::string::npos);
   EXPECT_EQ(slurm_time_limit(3600.0), "0-01:45:00");  // 1.5 h + 15 min
+}
+
+TEST_F(PlanFromDatabase, ThePlansSlurmLineNamesTheLargestTaskWhichSlurmTakesItsLimitFrom) {
+  // the claims grid at the cost hints: runs are cut by run-key hash, so tasks differ, and the plan
+  // names the largest, the one `harness slurm` sets its time limit from (one core per task)
+  const auto p = harness("plan --claims --seeds 5");
+  ASSERT_EQ(p.code, 0) << p.err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(p.out, m, std::regex(R"(--shards (\d+) .* of (\S+ \S+) \(median\) up to (\S+ \S+):)")))
+      << p.out;
+  const std::string shards = m[1], median = m[2], largest = m[3];
+  EXPECT_NE(median, largest) << p.out;
+  const auto s = harness("slurm --claims --seeds 5 --shards " + shards + " --dir " + path("e"));
+  ASSERT_EQ(s.code, 0) << s.err;
+  EXPECT_NE(s.out.find("the plan's longest task, " + largest + ","), std::string::npos) << p.out << s.out;
 }
 
 // the planned seconds of (env, optimizer, seed) in a --runs-csv file

@@ -155,14 +155,23 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
       "  total: about {:.4g} core-hours (with the GP optimizers' and RL learners' own time, roughly); "
       "with --jobs {} --threads {}: about {} wall (the longest run alone {})\n",
       total / 3600.0, ctx.jobs, ctx.threads, human_duration(wall), human_duration(longest));
-  // array tasks of about kShardTargetSeconds each, or one per job when --jobs names a cluster's cores
+  // array tasks of about kShardTargetSeconds each on average, or one per job when --jobs names a
+  // cluster's cores
   const int shards = static_cast<int>(std::clamp<double>(
       std::max(std::ceil(total / kShardTargetSeconds), 1.0 * ctx.jobs), 1.0, static_cast<double>(plan.pending.size())));
-  if (wall > 24.0 * 3600.0 || shards > 1)
+  if (wall > 24.0 * 3600.0 || shards > 1) {
+    // the runs are cut by run-key hash (a sharing group's seeds in one shard), not by cost, so
+    // tasks differ: the largest, which `harness slurm` sets its time limit from, is what to expect
+    std::vector<double> task(static_cast<std::size_t>(shards), 0.0);
+    for (std::size_t i = 0; i < plan.pending.size(); ++i)
+      task[static_cast<std::size_t>(shard_of(plan.pending[i], shards))] += cost[i];
+    std::sort(task.begin(), task.end());
     out << fmt::format(
         "  on a Slurm cluster: harness slurm {} --shards {} --dir slurm-run && bash slurm-run/submit.sh "
-        "({} array tasks of about {} on one core each; docs/running.md, \"Running on a Slurm cluster\")\n",
-        ctx.grid_flags, shards, shards, human_duration(std::max(total / shards, longest)));
+        "({} array tasks on one core each, of {} (median) up to {}: cut by run-key hash, not by cost; "
+        "docs/running.md, \"Running on a Slurm cluster\")\n",
+        ctx.grid_flags, shards, shards, human_duration(task[task.size() / 2]), human_duration(task.back()));
+  }
 }
 
 void print_stale_runs(std::ostream& out, const std::vector<StaleRuns>& stale) {
