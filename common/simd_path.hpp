@@ -55,9 +55,14 @@ inline bool cpu_supports(SimdPath path) {
 }
 
 // The widest path this process may take: DSB_SIMD when set, else the widest the CPU supports.
-// Throws std::runtime_error naming the variable for an unknown path or one this CPU lacks.
+// Throws std::runtime_error naming the variable for an unknown path or one this CPU lacks, and
+// for DSB_MPM_LANES, which DSB_SIMD replaced (5d65cfe): a leftover setting would otherwise be
+// ignored without a word, and a timing taken under it would not be of the path it names.
 inline SimdPath simd_ceiling() {
   static const SimdPath ceiling = [] {
+    if (const char* old = std::getenv("DSB_MPM_LANES"))
+      throw std::runtime_error(std::string("DSB_MPM_LANES is no longer read (got '") + old +
+                               "'): set DSB_SIMD=scalar|sse2|avx|avx2 instead, and unset DSB_MPM_LANES");
     const char* value = std::getenv("DSB_SIMD");
     if (!value || !*value)
       return cpu_supports(SimdPath::avx2) ? SimdPath::avx2

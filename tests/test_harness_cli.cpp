@@ -375,8 +375,8 @@ TEST_F(HarnessCli, BadInputExitsTwoWithOneLineNamingTheValueAndKeepsTheDatabase)
     EXPECT_EQ(read(db("keep.sqlite")), before) << args;
   }
   // a kernel path forced from the environment that does not exist: refused before any run
-  for (const auto& [prefix, bad] :
-       std::vector<std::pair<std::string, std::string>>{{"DSB_SIMD=avx512", "avx512"}, {"DSB_SIMD=neon", "neon"}}) {
+  for (const auto& [prefix, bad] : std::vector<std::pair<std::string, std::string>>{
+           {"DSB_SIMD=avx512", "avx512"}, {"DSB_SIMD=neon", "neon"}, {"DSB_MPM_LANES=scalar", "DSB_MPM_LANES"}}) {
     const auto r = harness("--env sphere-2 --optimizer random --seeds 1 --db " + db("keep.sqlite"), prefix);
     EXPECT_EQ(r.code, 2) << prefix;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << prefix << ": " << r.err;
