@@ -93,6 +93,8 @@ def main():
     ap.add_argument("--markdown", action="store_true", help="print the per-family table as Markdown")
     a = ap.parse_args()
 
+    if a.out and Path(a.out).exists():
+        die(f"--out {a.out} exists: name a new file")
     shares = {}
     for item in a.share:
         name, _, value = item.partition("=")
@@ -163,11 +165,10 @@ def main():
             r["planned_at_own_share_s"] = r["planned_s"]
             r["ratio_at_own_share"] = r["ratio"]
 
+    if not rows:
+        die(f"no piece databases of {env} ({env}__*.sqlite) in {a.pieces}")
     if a.out:
-        out = Path(a.out)
-        if out.exists():
-            die(f"--out {a.out} exists: name a new file")
-        with open(out, "x", newline="") as f:
+        with open(a.out, "x", newline="") as f:
             w = csv.DictWriter(f, fieldnames=list(rows[0]))
             w.writeheader()
             w.writerows(rows)
