@@ -23,6 +23,7 @@
 #include "harness/commands/grid_args.hpp"
 #include "harness/core/output_path.hpp"
 #include "harness/plan/plan.hpp"
+#include "harness/plan/plan_report.hpp"
 #include "harness/plan/run_order.hpp"
 #include "harness/commands/slurm_dir.hpp"
 #include "harness/core/shell_word.hpp"
@@ -379,16 +380,9 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
     // each task's wall from the plan (its runs over its CPUs, at least its longest run)
     GridPlan plan = plan_grid(run.grid, {}, harness_version());
     estimate_sharing(plan, {});
-    const std::vector<double> cost = run_costs(plan, CostModel{});
-    std::vector<double> total(static_cast<std::size_t>(o.shards), 0.0), longest(total);
-    for (std::size_t i = 0; i < plan.pending.size(); ++i) {
-      const auto s = static_cast<std::size_t>(shard_of(plan.pending[i], o.shards));
-      total[s] += cost[i];
-      longest[s] = std::max(longest[s], cost[i]);
-    }
     double worst = 0.0;
-    for (std::size_t s = 0; s < total.size(); ++s)
-      worst = std::max(worst, std::max(total[s] / std::max(1, o.cpus_per_task), longest[s]));
+    for (const ShardCost& c : shard_costs(plan, run_costs(plan, CostModel{}), o.shards))
+      worst = std::max(worst, std::max(c.seconds / std::max(1, o.cpus_per_task), c.longest_run));
     o.time = slurm_time_limit(worst);
     o.time_note = fmt::format("the plan's longest task, {}, x {} + {} min; --time overrides", human_duration(worst),
                               kSlurmTimeMargin, kSlurmTimeExtraS / 60);

@@ -79,6 +79,16 @@ std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs) {
   return c;
 }
 
+std::vector<ShardCost> shard_costs(const GridPlan& plan, const std::vector<double>& cost, int shards) {
+  std::vector<ShardCost> s(static_cast<std::size_t>(std::max(1, shards)));
+  for (std::size_t i = 0; i < plan.pending.size(); ++i) {
+    ShardCost& c = s[static_cast<std::size_t>(shard_of(plan.pending[i], static_cast<int>(s.size())))];
+    c.seconds += cost[i];
+    c.longest_run = std::max(c.longest_run, cost[i]);
+  }
+  return s;
+}
+
 void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& ctx) {
   const std::vector<double> cost = run_costs(plan, costs);
   std::map<std::string, Tally> by_env, by_family;
@@ -160,11 +170,10 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
   const int shards = static_cast<int>(std::clamp<double>(
       std::max(std::ceil(total / kShardTargetSeconds), 1.0 * ctx.jobs), 1.0, static_cast<double>(plan.pending.size())));
   if (wall > 24.0 * 3600.0 || shards > 1) {
-    // the runs are cut by run-key hash (a sharing group's seeds in one shard), not by cost, so
-    // tasks differ: the largest, which `harness slurm` sets its time limit from, is what to expect
-    std::vector<double> task(static_cast<std::size_t>(shards), 0.0);
-    for (std::size_t i = 0; i < plan.pending.size(); ++i)
-      task[static_cast<std::size_t>(shard_of(plan.pending[i], shards))] += cost[i];
+    // tasks differ (shard_costs): the largest, which `harness slurm` sets its time limit from, is
+    // what to expect
+    std::vector<double> task;
+    for (const ShardCost& c : shard_costs(plan, cost, shards)) task.push_back(c.seconds);
     std::sort(task.begin(), task.end());
     out << fmt::format(
         "  on a Slurm cluster: harness slurm {} --shards {} --dir slurm-run && bash slurm-run/submit.sh "

@@ -22,6 +22,13 @@ struct PlanContext {
 // the pending runs' estimated seconds, in plan order
 std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs);
 
+// each shard's runs (shard_of, a sharing group's seeds together) at `cost` (run_costs): their sum
+// and the longest of them; runs are cut by run-key hash, not by cost, so shards differ
+struct ShardCost {
+  double seconds = 0.0, longest_run = 0.0;
+};
+std::vector<ShardCost> shard_costs(const GridPlan& plan, const std::vector<double>& cost, int shards);
+
 void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& context);
 
 // `harness plan --runs-csv`: one line per pending run, env,optimizer,seed,budget,planned_s,source,
