@@ -127,6 +127,11 @@ def file_sha256(path):
         return hashlib.sha256(f.read()).hexdigest()
 
 
+def sidecar_files(folder):
+    """The SQLite files (-wal, -shm, -journal) in folder, sorted."""
+    return sorted(f for f in os.listdir(folder) if f.endswith(("-wal", "-shm", "-journal")))
+
+
 def slug(text):
     return re.sub(r"[^A-Za-z0-9._-]", "_", text)
 
@@ -242,6 +247,9 @@ class ReportCase(unittest.TestCase):
                               *extra)
         if cls.proc.returncode != 0:
             raise AssertionError(f"make_report exited {cls.proc.returncode}:\n{cls.proc.stderr}")
+        # what the report left beside the database, before this test's own reads
+        cls.sidecars_after_report = sidecar_files(cls.tmp)
+        cls.sha_after_report = file_sha256(cls.db)
         with open(os.path.join(cls.out, "index.html"), encoding="utf-8") as f:
             cls.html = f.read()
         cls.cells = cells(cls.db)
@@ -273,6 +281,10 @@ class ReportCase(unittest.TestCase):
 
 
 class TestReport(ReportCase):
+    def test_the_database_and_its_folder_are_left_as_found(self):
+        self.assertEqual(self.sidecars_after_report, [])
+        self.assertEqual(self.sha_after_report, self.db_sha)
+
     def test_checked_landscape_marks_and_counts_disagreeing_points(self):
         # sphere-2_1_0.csv: 15 of 225 points flagged as disagreeing (the first row)
         self.assert_nonempty("landscape_sphere-2_1_0.png")
@@ -1803,6 +1815,57 @@ class TestOldChartFiles(unittest.TestCase):
         self.assertFalse(left & set(old), sorted(left & set(old)))
         self.assertIn("notes.png", left)
         self.assertIn("curves_sphere-2.png", left)
+
+
+class TestReadOnlyDb(unittest.TestCase):
+    """dsb_report.read_only_db: a read leaves the folder as found (the harness's rules)."""
+
+    def setUp(self):
+        if HERE not in sys.path:
+            sys.path.insert(0, HERE)
+        from dsb_report import read_only_db
+        self.ro = read_only_db
+        self.tmp = tempfile.mkdtemp(prefix="dsb_read_only_db_")
+        self.addCleanup(shutil.rmtree, self.tmp, True)
+        # a WAL database with a '?' and a '#' in its name, closed: nothing beside it
+        self.db = os.path.join(self.tmp, "a?b#c.sqlite")
+        con = sqlite3.connect(self.db)
+        con.execute("PRAGMA journal_mode = WAL")
+        con.execute("CREATE TABLE t (x)")
+        con.execute("INSERT INTO t VALUES (1), (2)")
+        con.commit()
+        con.close()
+        self.assertEqual(sidecar_files(self.tmp), [])
+        self.sha = file_sha256(self.db)
+
+    def test_a_database_nobody_has_open_is_read_and_left_without_files_beside_it(self):
+        con = self.ro.connect(self.db)
+        self.assertEqual(con.execute("SELECT sum(x) FROM t").fetchone(), (3,))
+        with self.assertRaisesRegex(sqlite3.OperationalError, "readonly"):
+            con.execute("INSERT INTO t VALUES (3)")
+        con.close()
+        self.assertEqual(sidecar_files(self.tmp), [])
+        self.assertEqual(file_sha256(self.db), self.sha)
+        # SQLite's plain read-only connection, which the scripts used until 2026-12-06, leaves two
+        con = sqlite3.connect(self.ro.uri(self.db, "mode=ro"), uri=True)
+        con.execute("SELECT sum(x) FROM t").fetchone()
+        con.close()
+        self.assertEqual(sidecar_files(self.tmp), ["a?b#c.sqlite-shm", "a?b#c.sqlite-wal"])
+
+    def test_a_database_another_connection_holds_keeps_its_files(self):
+        writer = sqlite3.connect(self.db)
+        writer.execute("INSERT INTO t VALUES (5)")
+        writer.commit()  # a frame in the -wal that only the -shm indexes
+        held = sidecar_files(self.tmp)
+        self.assertEqual(held, ["a?b#c.sqlite-shm", "a?b#c.sqlite-wal"])
+        con = self.ro.connect(self.db)
+        self.assertEqual(con.execute("SELECT sum(x) FROM t").fetchone(), (8,))
+        with self.assertRaisesRegex(sqlite3.OperationalError, "readonly"):
+            con.execute("INSERT INTO t VALUES (3)")
+        con.close()
+        self.assertEqual(sidecar_files(self.tmp), held)
+        writer.close()
+        self.assertEqual(sidecar_files(self.tmp), [])
 
 
 class TestBadInput(unittest.TestCase):

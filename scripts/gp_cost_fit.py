@@ -17,8 +17,10 @@ import csv
 import json
 import math
 import os
-import sqlite3
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "reports"))
+from dsb_report import read_only_db  # noqa: E402
 
 try:
     from scipy.optimize import least_squares
@@ -98,7 +100,7 @@ def main():
     if os.path.exists(out):
         sys.stderr.write(f"gp_cost_fit: '{out}' exists; it writes a new file only\n")
         sys.exit(2)
-    con = sqlite3.connect("file:" + db + "?mode=ro", uri=True)
+    con = read_only_db.connect(db)
     own, dims, fits = {}, {}, {}
     for env, opt, budget, wall, best_x, sim, diagnostics in con.execute(
             "SELECT r.env, r.optimizer, r.budget, r.wall_s, r.best_x, (SELECT SUM(wall_s) FROM evals e "

@@ -19,6 +19,10 @@ import json
 import math
 import sqlite3
 import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "reports"))
+from dsb_report import read_only_db  # noqa: E402
 
 try:
     import pandas as pd
@@ -76,7 +80,7 @@ def read_runs(path):
         runs = pd.read_csv(path, dtype={"opt_config_hash": str, "config": str, "diagnostics": str},
                            keep_default_na=False, na_values={"best_loss": [""]}, float_precision="round_trip")
         return runs[runs.status == "done"][columns]
-    con = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+    con = read_only_db.connect(path)
     runs = pd.read_sql_query(
         "SELECT r.env, r.optimizer, r.seed, r.budget, r.best_loss, r.opt_config_hash, c.json AS config, "
         "r.diagnostics "

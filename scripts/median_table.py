@@ -8,6 +8,10 @@ import argparse
 import sqlite3
 import statistics
 import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "reports"))
+from dsb_report import read_only_db  # noqa: E402
 
 
 def main() -> int:
@@ -16,7 +20,7 @@ def main() -> int:
     p.add_argument("--env", action="append", help="only these envs (repeatable)")
     a = p.parse_args()
     try:
-        con = sqlite3.connect(f"file:{a.db}?mode=ro", uri=True)
+        con = read_only_db.connect(a.db)
         rows = con.execute(
             "SELECT env, optimizer, seed, best_loss, episodes FROM runs WHERE status='done' "
             "ORDER BY env, optimizer, seed").fetchall()

@@ -32,9 +32,11 @@ import csv
 import datetime
 import gzip
 import json
-import sqlite3
 import sys
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "reports"))
+from dsb_report import read_only_db  # noqa: E402
 
 
 def die(message):
@@ -68,7 +70,7 @@ def episode_costs(path, env):
 
 
 def piece_runs(db):
-    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+    con = read_only_db.connect(db)
     try:
         rows = con.execute(
             "SELECT r.optimizer, r.seed, r.status, r.started_at, r.finished_at, r.episodes, "

@@ -141,6 +141,57 @@ TEST_F(HostileInputs, SqliteSidecarNamesAreRefusedAsOutputsWhetherOrNotTheyExist
   }
 }
 
+// ---- 2b. a command that only reads a database leaves no file beside it ----
+
+namespace {
+// the SQLite files in `dir` beside its databases, by name
+std::vector<std::string> sidecar_files(const std::string& dir) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    for (const std::string suffix : {"-journal", "-wal", "-shm"})
+      if (name.size() > suffix.size() && name.ends_with(suffix)) found.push_back(name);
+  }
+  std::sort(found.begin(), found.end());
+  return found;
+}
+}  // namespace
+
+TEST_F(HostileInputs, ACommandThatOnlyReadsADatabaseLeavesItsFolderAsItFoundIt) {
+  const std::string db = small_db("d.sqlite");
+  ASSERT_EQ(sidecar_files(dir_), std::vector<std::string>{}) << "the grid's own close removes its -wal and -shm";
+  const std::string before = read_file(db);
+  // SQLite's read-only connection to a WAL database made a -wal and a -shm and could not remove them
+  // (export and check left both until 2026-12-06)
+  const std::vector<std::string> reads = {
+      "export --db " + db + " --out " + path("x.csv"),
+      "export --db " + db + " --format ioh --out " + path("ioh"),
+      "check --db " + db + " --baseline " + path("x.csv"),
+      "merge --into " + path("m.sqlite") + " " + db,
+      "plan " + kSmallGrid + " --db " + db,
+  };
+  for (const auto& args : reads) {
+    const auto r = harness(args);
+    EXPECT_EQ(r.code, 0) << args << ": " << r.err;
+    EXPECT_EQ(sidecar_files(dir_), std::vector<std::string>{}) << args;
+  }
+  EXPECT_EQ(read_file(db), before);
+
+  // where another connection has the database open, its -wal and -shm are left as they were
+  sqlite3* other = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(db.c_str(), &other, SQLITE_OPEN_READWRITE, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(other, "SELECT count(*) FROM runs", nullptr, nullptr, nullptr), SQLITE_OK);
+  const std::vector<std::string> held = {"d.sqlite-shm", "d.sqlite-wal"};
+  ASSERT_EQ(sidecar_files(dir_), held);
+  const auto r = harness("export --db " + db + " --out " + path("y.csv"));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(read_file(path("y.csv")), read_file(path("x.csv")));
+  EXPECT_EQ(sidecar_files(dir_), held);
+  sqlite3_close(other);
+  EXPECT_EQ(sidecar_files(dir_), std::vector<std::string>{}) << "the last connection's close removes them";
+  EXPECT_EQ(read_file(db), before);
+}
+
 // ---- 3. a database of a newer schema: one message from every command ----
 
 TEST_F(HostileInputs, ANewerSchemaGetsTheSameMessageFromEveryCommand) {

@@ -108,9 +108,20 @@ void check_database_path(const std::string& option, const std::string& path, boo
 Database::Database(const std::string& path, Mode mode) : path_(path) {
   // SQLite's open(2) of a FIFO for reading waits for a writer forever: refused before it
   refuse_special_file("database", path);
-  const int flags = (mode == Mode::read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE) |
+  // A read-only connection to a WAL database makes its -wal and -shm files and, read-only, cannot
+  // delete them when it closes. Where no connection has them open (neither exists, nor a rollback
+  // journal), a read opens read-write under query_only instead, so that SQLite's own close removes
+  // what it made; where they exist (a grid writing, a writer that was killed) they are left as found
+  const bool untouched = mode == Mode::read_only && !has_sidecar_files(path);
+  const bool read_write = mode != Mode::read_only || untouched;
+  const int flags = (read_write ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY) |
       (mode == Mode::write_create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
   open(path, flags);
+  if (untouched && sqlite3_exec(db_, "PRAGMA query_only = ON", nullptr, nullptr, nullptr) != SQLITE_OK) {
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw StoreError("cannot open database '" + path + "' for reading: PRAGMA query_only failed");
+  }
   if (mode == Mode::read_only && !readable() && !wal_has_frames(path)) {
     // A WAL database read where its -shm file cannot be made (a read-only folder or mount, a file
     // the user may not write): with no -wal frames the file alone is the whole database, which
@@ -141,6 +152,13 @@ bool Database::readable() {
   const int rc = sqlite3_exec(db_, "SELECT count(*) FROM sqlite_master", nullptr, nullptr, nullptr);
   const int primary = rc & 0xff;
   return !(primary == SQLITE_READONLY || primary == SQLITE_CANTOPEN);
+}
+
+bool Database::has_sidecar_files(const std::string& path) {
+  std::error_code ec;
+  for (const char* suffix : {"-wal", "-shm", "-journal"})
+    if (std::filesystem::exists(path + suffix, ec) || ec) return true;
+  return false;
 }
 
 bool Database::wal_has_frames(const std::string& path) {

@@ -55,7 +55,8 @@ class Database {
   // Opens a database file (write_create: creating it if needed); throws StoreError naming the
   // path when it cannot be opened in that mode. read_only also reads a WAL database that SQLite
   // cannot open read-only because its -shm file cannot be made (a read-only folder or mount):
-  // when it has no -wal frames, the file is opened as immutable.
+  // when it has no -wal frames, the file is opened as immutable. A read_only open of a database
+  // that no connection has open (no -wal, -shm or -journal beside it) leaves none behind either.
   explicit Database(const std::string& path, Mode mode = Mode::write_create);
   ~Database();
   Database(const Database&) = delete;
@@ -69,6 +70,7 @@ class Database {
   void open(const std::string& name, int flags);
   bool readable();  // false when a first read fails for want of write access (READONLY, CANTOPEN)
   static bool wal_has_frames(const std::string& path);
+  static bool has_sidecar_files(const std::string& path);  // a -wal, -shm or -journal beside it
   static std::string immutable_uri(const std::string& path);
 
   sqlite3* db_ = nullptr;

@@ -2,6 +2,7 @@
 
 Modules, one purpose each:
   data        read a harness database (read-only) into runs, panels and best-so-far matrices
+  read_only_db  open a database to read it, leaving its folder as found (standard library only)
   grid        the expected (env, optimizer, seed, budget) grid: missing, failed and running runs
   stats       per-cell statistics, Student-t CIs, Mann-Whitney + Holm, A12, ranks, ECDF of targets
   claims      the paper's qualitative claims (paper_claims.csv) tested over the database, verdicts

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from . import archive, staleness, with_archive
+from . import archive, read_only_db, staleness, with_archive
 
 RUN_COLUMNS = ["run_id", "env", "optimizer", "seed", "budget", "env_config_hash",
                "opt_config_hash", "status", "episodes", "failed_episodes", "best_loss",
@@ -94,35 +94,14 @@ def slugify(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]", "_", text)
 
 
-def _wal_has_frames(path: str) -> bool:
-    try:
-        return os.path.getsize(path + "-wal") > 0
-    except OSError:
-        return False
-
-
 def connect_ro(path: str) -> sqlite3.Connection:
-    """Opens a harness database read-only. A WAL database whose -shm file cannot be made (a
-    read-only folder or mount, a file the user may not write) and that has no -wal frames is
-    opened as immutable, as the harness does (harness/store/sqlite_db.hpp)."""
+    """Opens a harness database to read it, leaving its folder as found (read_only_db: the
+    harness's rules, immutable where a WAL database's -shm file cannot be made)."""
     if not os.path.isfile(path):
         raise DataError(f"cannot read database '{path}': no such file")
-    base = "file:" + os.path.abspath(path).replace("%", "%25").replace("?", "%3f").replace("#", "%23")
-
-    def tables_of(con):
-        return {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
-
     try:
-        con = sqlite3.connect(base + "?mode=ro", uri=True)
-        try:
-            tables = tables_of(con)
-        except sqlite3.OperationalError as e:
-            text = str(e)
-            if _wal_has_frames(path) or ("readonly" not in text and "unable to open" not in text):
-                raise
-            con.close()
-            con = sqlite3.connect(base + "?immutable=1", uri=True)
-            tables = tables_of(con)
+        con = read_only_db.connect(path)
+        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
     except sqlite3.Error as e:
         raise DataError(f"cannot read database '{path}': {e}") from None
     missing = {"runs", "evals", "meta"} - tables
