@@ -83,35 +83,6 @@ TEST(PlanOrder, CheapestFirstIsStableSoEqualCostsKeepGridOrder) {
   EXPECT_EQ(cheapest_first(cost), want);
 }
 
-// The runner's rule (runner.hpp) on estimated costs: `jobs` workers; each free worker takes the
-// first run in `order` not taken whose lead has ended. Returns each run's end time.
-std::vector<double> simulate_runner(const std::vector<std::size_t>& order, const std::vector<double>& cost,
-                                    const std::vector<std::ptrdiff_t>& lead, int jobs) {
-  std::vector<double> end(cost.size(), -1.0), worker_free(static_cast<std::size_t>(jobs), 0.0);
-  std::vector<char> taken(cost.size(), 0);
-  for (std::size_t started = 0; started < cost.size(); ++started) {
-    // the earliest moment some worker is free and some run may start there
-    double best_t = 1e300;
-    std::size_t best_w = 0, best_i = 0;
-    for (std::size_t w = 0; w < worker_free.size(); ++w)
-      for (const std::size_t i : order) {
-        if (taken[i]) continue;
-        double t = worker_free[w];
-        if (lead[i] >= 0) {
-          const double lead_end = end[static_cast<std::size_t>(lead[i])];
-          if (lead_end < 0) continue;  // the lead has not started: not free at any known time
-          t = std::max(t, lead_end);
-        }
-        if (t < best_t) best_t = t, best_w = w, best_i = i;
-        break;  // later runs in order are taken only when this one is not free at t
-      }
-    taken[best_i] = 1;
-    end[best_i] = best_t + cost[best_i];
-    worker_free[best_w] = end[best_i];
-  }
-  return end;
-}
-
 // a planned run of a made-up env with a registered optimizer (its registration resolved, as the
 // grid's expansion resolves it)
 PlannedRun planned(const std::string& env, const std::string& opt, int seed, std::int64_t budget = 100) {
@@ -156,7 +127,7 @@ TEST(PlanOrder, LightRunsReportFirstAndAnExpensiveLeadEndsAsItsFollowersAreDue) 
     return *std::max_element(e.begin() + static_cast<std::ptrdiff_t>(from),
                              e.begin() + static_cast<std::ptrdiff_t>(to));
   };
-  const auto end = simulate_runner(order, cost, lead, 2);
+  const auto end = runner_end_times(order, cost, lead, 2);
   // the tiny env is done after its 20 s of work on 2 workers; no worker ever waits:
   // (300 + 4 x 30 + 20 + 1000) s of work over 2 workers = 720 s
   EXPECT_DOUBLE_EQ(end_of(end, 5, 25), 10.0);
@@ -165,11 +136,33 @@ TEST(PlanOrder, LightRunsReportFirstAndAnExpensiveLeadEndsAsItsFollowersAreDue) 
   std::vector<std::size_t> leads_first = {0};
   for (const std::size_t i : cheapest_first(cost))
     if (i != 0) leads_first.push_back(i);
-  const auto end_lf = simulate_runner(leads_first, cost, lead, 2);
+  const auto end_lf = runner_end_times(leads_first, cost, lead, 2);
   EXPECT_DOUBLE_EQ(end_of(end_lf, 5, 25), 20.0);
   // cheapest first reaches the lead last, and a worker waits while it runs alone
-  const auto end_cf = simulate_runner(cheapest_first(cost), cost, lead, 2);
+  const auto end_cf = runner_end_times(cheapest_first(cost), cost, lead, 2);
   EXPECT_DOUBLE_EQ(end_of(end_cf, 0, end_cf.size()), 870.0);
+}
+
+TEST(PlanOrder, FollowersWaitForTheirLeadSoAGroupOnManyCoresTakesLeadPlusFollower) {
+  // a 5-seed gd group (lead 100 s, each follower 80 s) on 4 workers: the followers start together
+  // when the lead ends, 180 s, where the work over the workers is 105 s
+  std::vector<std::tuple<std::string, std::string, int>> specs;
+  std::vector<double> cost;
+  for (int s = 0; s < 5; ++s) specs.emplace_back("heavy", "gd", s), cost.push_back(s == 0 ? 100.0 : 80.0);
+  const auto runs = runs_of(specs);
+  EXPECT_DOUBLE_EQ(runner_wall(runs, cost, true, 4), 180.0);
+  // without sharing nobody waits, and the order is cheapest first: the four followers, then the
+  // lead, 80 + 100 s; four 20 s runs and a 100 s one, 20 + 100 s
+  EXPECT_DOUBLE_EQ(runner_wall(runs, cost, false, 4), 180.0);
+  EXPECT_DOUBLE_EQ(runner_wall(runs, {100.0, 20.0, 20.0, 20.0, 20.0}, false, 4), 120.0);
+  // with 3 light runs of 30 s beside it the free workers take them while the lead runs
+  for (int s = 0; s < 3; ++s) specs.emplace_back("light", "cmaes", s), cost.push_back(30.0);
+  EXPECT_DOUBLE_EQ(runner_wall(runs_of(specs), cost, true, 4), 180.0);
+  // one worker: the sum, whatever waits
+  EXPECT_DOUBLE_EQ(runner_wall(runs_of(specs), cost, true, 1), 100.0 + 4 * 80.0 + 3 * 30.0);
+  // a follower whose lead is not in the order never starts (and the rest still run)
+  const auto end = runner_end_times({1, 2}, {100.0, 80.0, 30.0}, {-1, 0, -1}, 2);
+  EXPECT_EQ(end, (std::vector<double>{-1.0, -1.0, 30.0}));
 }
 
 TEST(Shards, AShardIsAFunctionOfTheRunKeyAlone) {
@@ -295,6 +288,31 @@ double planned_seconds(const std::string& csv, const std::string& prefix) {
   const auto at = csv.find(prefix);
   if (at == std::string::npos) return -1.0;
   return std::stod(csv.substr(at + prefix.size()));
+}
+
+TEST_F(PlanFromDatabase, SlurmsTimeLimitLetsASharingGroupsFollowersWaitForTheirLead) {
+  // nlopt-lbfgs on plb-pinch: its 5 seeds are one sharing group in one task, the followers replay
+  // the lead's first episodes and start when it ends; on 4 CPUs the task takes lead + follower,
+  // not the group's work over the CPUs (harness slurm until 2026-12-06)
+  const std::string grid = "--env plb-pinch --optimizer nlopt-lbfgs --seeds 5 --budget 1000";
+  const auto p = harness("plan " + grid + " --db " + path("p.sqlite") + " --runs-csv " + path("runs.csv"));
+  ASSERT_EQ(p.code, 0) << p.err;
+  const std::string csv = testing::read_file(path("runs.csv"));
+  const double lead = planned_seconds(csv, "plb-pinch,nlopt-lbfgs,0,1000,");
+  const double follower = planned_seconds(csv, "plb-pinch,nlopt-lbfgs,1,1000,");
+  ASSERT_GT(lead, 0.0) << csv;
+  ASSERT_GT(follower, 0.0) << csv;
+  ASSERT_LT(follower, lead) << csv;  // it replays part of the lead
+  const std::string waits = human_duration(lead + follower);
+  const std::string spread = human_duration(std::max(lead, (lead + 4 * follower) / 4));
+  ASSERT_NE(waits, spread);
+  const auto s = harness("slurm " + grid + " --shards 1 --cpus-per-task 4 --dir " + path("s"));
+  ASSERT_EQ(s.code, 0) << s.err;
+  EXPECT_NE(s.out.find("the plan's longest task, " + waits + ","), std::string::npos) << s.out;
+  // and the plan of the same grid with --jobs 4 says that wall too
+  const auto j = harness("plan " + grid + " --jobs 4 --db " + path("p.sqlite"));
+  ASSERT_EQ(j.code, 0) << j.err;
+  EXPECT_NE(j.out.find("with --jobs 4 --threads 1: about " + waits + " wall"), std::string::npos) << j.out;
 }
 
 TEST_F(PlanFromDatabase, CalibrateTimesCheapPairsAndThePlanCountsTheirMeasuredSeconds) {

@@ -189,7 +189,9 @@ CheckedRun check_run_args(const RunArgs& a, bool for_this_machine) {
   return {std::move(grid), shard, jobs, tape};
 }
 
-PlanContext plan_context(const RunArgs& a, const CheckedRun& run) { return {a.db, run.jobs, a.threads, grid_flags(a)}; }
+PlanContext plan_context(const RunArgs& a, const CheckedRun& run) {
+  return {a.db, run.jobs, a.threads, grid_flags(a), !a.no_sharing};
+}
 
 GridPlan plan_against(const RunArgs& a, const CheckedRun& run, const StoredRuns& stored) {
   GridPlan plan = plan_grid(run.grid, stored.done_keys(), harness_version(), run.shard);

@@ -377,12 +377,13 @@ int command_slurm_scripts(const RunArgs& a, const SlurmOptions& options) {
       a.ext, a.ext_timeout};
   SlurmOptions o = options;
   if (o.time.empty() && !shard_runs.empty()) {
-    // each task's wall from the plan (its runs over its CPUs, at least its longest run)
+    // each task's wall from the plan: its runs on its CPUs as the runner takes them (a sharing
+    // group's followers after their lead), at least its longest run
     GridPlan plan = plan_grid(run.grid, {}, harness_version());
     estimate_sharing(plan, {});
     double worst = 0.0;
-    for (const ShardCost& c : shard_costs(plan, run_costs(plan, CostModel{}), o.shards))
-      worst = std::max(worst, std::max(c.seconds / std::max(1, o.cpus_per_task), c.longest_run));
+    for (const ShardCost& c : shard_costs(plan, run_costs(plan, CostModel{}), o.shards, o.cpus_per_task))
+      worst = std::max(worst, c.wall);
     o.time = slurm_time_limit(worst);
     o.time_note = fmt::format("the plan's longest task, {}, x {} + {} min; --time overrides", human_duration(worst),
                               kSlurmTimeMargin, kSlurmTimeExtraS / 60);

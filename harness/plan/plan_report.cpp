@@ -79,13 +79,19 @@ std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs) {
   return c;
 }
 
-std::vector<ShardCost> shard_costs(const GridPlan& plan, const std::vector<double>& cost, int shards) {
+std::vector<ShardCost> shard_costs(const GridPlan& plan, const std::vector<double>& cost, int shards, int jobs) {
   std::vector<ShardCost> s(static_cast<std::size_t>(std::max(1, shards)));
+  // each shard's runs, in plan order, as its task plans them (its own --shard I/N grid)
+  std::vector<std::vector<PlannedRun>> runs(s.size());
+  std::vector<std::vector<double>> costs(s.size());
   for (std::size_t i = 0; i < plan.pending.size(); ++i) {
-    ShardCost& c = s[static_cast<std::size_t>(shard_of(plan.pending[i], static_cast<int>(s.size())))];
-    c.seconds += cost[i];
-    c.longest_run = std::max(c.longest_run, cost[i]);
+    const auto k = static_cast<std::size_t>(shard_of(plan.pending[i], static_cast<int>(s.size())));
+    s[k].seconds += cost[i];
+    s[k].longest_run = std::max(s[k].longest_run, cost[i]);
+    runs[k].push_back(plan.pending[i]);
+    costs[k].push_back(cost[i]);
   }
+  for (std::size_t k = 0; k < s.size(); ++k) s[k].wall = runner_wall(runs[k], costs[k], true, jobs);
   return s;
 }
 
@@ -158,9 +164,9 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
         "their group (the episodes before the optimizer's first draw, replayed: at the replay's measured "
         "cost on cheap envs, else free), saving about {:.4g} of {:.4g} core-hours; --no-sharing simulates them\n",
         sharing_runs, shared_episodes, (unshared - total) / 3600.0, unshared / 3600.0);
-  // wall: the work over the runs at once, but never less than the longest run
-  const int parallel = std::max(1, std::min<int>(ctx.jobs, static_cast<int>(plan.pending.size())));
-  const double wall = std::max(total / parallel, longest);
+  // wall: the runs laid out as the runner takes them (run_order.hpp): the work over the jobs, never
+  // less than the longest run, more where followers wait for their lead
+  const double wall = runner_wall(plan.pending, cost, ctx.share, ctx.jobs);
   out << fmt::format(
       "  total: about {:.4g} core-hours (with the GP optimizers' and RL learners' own time, roughly); "
       "with --jobs {} --threads {}: about {} wall (the longest run alone {})\n",
@@ -173,7 +179,7 @@ void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs,
     // tasks differ (shard_costs): the largest, which `harness slurm` sets its time limit from, is
     // what to expect
     std::vector<double> task;
-    for (const ShardCost& c : shard_costs(plan, cost, shards)) task.push_back(c.seconds);
+    for (const ShardCost& c : shard_costs(plan, cost, shards, 1)) task.push_back(c.wall);
     std::sort(task.begin(), task.end());
     out << fmt::format(
         "  on a Slurm cluster: harness slurm {} --shards {} --dir slurm-run && bash slurm-run/submit.sh "

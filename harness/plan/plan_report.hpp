@@ -17,17 +17,19 @@ struct PlanContext {
   std::string db;  // the results file
   int jobs = 1, threads = 1;
   std::string grid_flags;  // the grid as command-line flags (for the Slurm command)
+  bool share = true;       // sharing across seeds (not --no-sharing): followers wait for their lead
 };
 
 // the pending runs' estimated seconds, in plan order
 std::vector<double> run_costs(const GridPlan& plan, const CostModel& costs);
 
-// each shard's runs (shard_of, a sharing group's seeds together) at `cost` (run_costs): their sum
-// and the longest of them; runs are cut by run-key hash, not by cost, so shards differ
+// each shard's runs (shard_of, a sharing group's seeds together) at `cost` (run_costs): their sum,
+// the longest of them, and the wall a task takes with `jobs` CPUs (runner_wall: a sharing group's
+// followers wait for their lead); runs are cut by run-key hash, not by cost, so shards differ
 struct ShardCost {
-  double seconds = 0.0, longest_run = 0.0;
+  double seconds = 0.0, longest_run = 0.0, wall = 0.0;
 };
-std::vector<ShardCost> shard_costs(const GridPlan& plan, const std::vector<double>& cost, int shards);
+std::vector<ShardCost> shard_costs(const GridPlan& plan, const std::vector<double>& cost, int shards, int jobs);
 
 void print_plan(std::ostream& out, const GridPlan& plan, const CostModel& costs, const PlanContext& context);
 

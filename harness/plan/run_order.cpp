@@ -54,4 +54,40 @@ std::vector<std::size_t> run_order(const std::vector<PlannedRun>& pending, const
   return order;
 }
 
+std::vector<double> runner_end_times(const std::vector<std::size_t>& order, const std::vector<double>& run_cost_s,
+                                     const std::vector<std::ptrdiff_t>& lead, int jobs) {
+  std::vector<double> end(run_cost_s.size(), -1.0);
+  std::vector<char> taken(run_cost_s.size(), 0), ended(run_cost_s.size(), 0);
+  // the runs in progress by their end (ties by index, so the schedule is a function of its inputs)
+  using Running = std::pair<double, std::size_t>;
+  std::priority_queue<Running, std::vector<Running>, std::greater<>> running;
+  int free_workers = std::max(1, jobs);
+  double now = 0.0;
+  for (;;) {
+    // each free worker takes the first open run in order
+    for (std::size_t r = 0; free_workers > 0 && r < order.size(); ++r) {
+      const std::size_t i = order[r];
+      if (taken[i] || (lead[i] >= 0 && !ended[static_cast<std::size_t>(lead[i])])) continue;
+      taken[i] = 1;
+      end[i] = now + std::max(0.0, run_cost_s[i]);
+      running.emplace(end[i], i);
+      --free_workers;
+    }
+    if (running.empty()) return end;
+    // the next run to end frees its worker
+    now = running.top().first;
+    ended[running.top().second] = 1;
+    running.pop();
+    ++free_workers;
+  }
+}
+
+double runner_wall(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s, bool share,
+                   int jobs) {
+  const std::vector<std::ptrdiff_t> lead =
+      share ? share_leads(pending) : std::vector<std::ptrdiff_t>(pending.size(), -1);
+  const std::vector<double> end = runner_end_times(run_order(pending, run_cost_s, share, jobs), run_cost_s, lead, jobs);
+  return end.empty() ? 0.0 : *std::max_element(end.begin(), end.end());
+}
+
 }  // namespace dsb

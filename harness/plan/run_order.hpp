@@ -1,6 +1,7 @@
 #pragma once
-// The order a grid's pending runs start in. Results never depend on it (every run is a function of
-// its key); what depends on it is when partial reports fill and whether cores wait.
+// The order a grid's pending runs start in, and the wall they take in it. Results never depend on
+// the order (every run is a function of its key); what depends on it is when partial reports fill
+// and whether cores wait.
 #include <cstddef>
 #include <vector>
 
@@ -22,5 +23,18 @@ std::vector<std::size_t> cheapest_first(const std::vector<double>& run_cost_s);
 // reports and leads first's end. Without sharing (or without leads): cheapest first.
 std::vector<std::size_t> run_order(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s,
                                    bool share, int jobs);
+
+// The runner's rule (harness/run/runner.hpp) on estimated costs: `jobs` workers; a free worker takes
+// the first run in `order` not taken whose lead (`lead`: share_leads, -1 for none) has ended, and
+// when every open run waits for a lead it waits for a run to end. Each run's end in seconds from the
+// grid's start, indexed as `cost` (-1 for a run that never starts: its lead is not in `order`).
+std::vector<double> runner_end_times(const std::vector<std::size_t>& order, const std::vector<double>& run_cost_s,
+                                     const std::vector<std::ptrdiff_t>& lead, int jobs);
+
+// The wall the pending runs take as `harness` with these `jobs` runs them (run_order, then the
+// runner's rule): at least the work over the workers and the longest run, and more where a sharing
+// group's followers wait for their lead (a 5-seed group of lead L and followers F on 4 cores: L + F,
+// not (L + 4 F) / 4).
+double runner_wall(const std::vector<PlannedRun>& pending, const std::vector<double>& run_cost_s, bool share, int jobs);
 
 }  // namespace dsb
