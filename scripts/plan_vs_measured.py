@@ -1,15 +1,18 @@
 #!/usr/bin/env python3
 """The plan against the measured: each piece of a grid run in pieces, its planned seconds against
-the CPU seconds its processes took.
+the CPU seconds its runs took.
 
-    scripts/plan_vs_measured.py --plan PLAN.csv --cpu CPU.csv[.gz] --costs COSTS.json --pieces DIR
+    scripts/plan_vs_measured.py --plan PLAN.csv [--cpu CPU.csv[.gz]] --costs COSTS.json --pieces DIR
                                 [--share OPT=G ...] [--env ENV] [--out RUNS.csv] [--markdown]
 
 PLAN.csv is `harness plan --runs-csv` of the grid (what grid-in-pieces.sh writes to
-DIR/plan.csv); CPU.csv is what scripts/piece-cpu-monitor.sh sampled while the pieces ran (each
-process's utime + stime from /proc, cumulative, so one late sample of a process counts all of it);
-COSTS.json is the calibration the plan used (`harness calibrate`'s cache: seconds of one forward
-and one gradient episode of the env). DIR holds the pieces' databases (NAME.sqlite), read only.
+DIR/plan.csv); COSTS.json is the calibration the plan used (`harness calibrate`'s cache: seconds of
+one forward and one gradient episode of the env). DIR holds the pieces' databases (NAME.sqlite),
+read only. A piece whose runs all have `runs.cpu_s` (schema 6: each run's worker-thread CPU over
+its sessions, stored by the harness) is measured by the sum of those (cpu_from "database"). Other
+pieces, written by a harness before schema 6, need CPU.csv: what scripts/piece-cpu-monitor.sh
+sampled while they ran (each process's utime + stime from /proc, cumulative, so one late sample of
+a process counts all of it; cpu_from "monitor").
 
 A running piece's ratio is against its plan pro rata of the episodes it has simulated so far.
 A piece counts as measured when its first process started with its first run (within 10 s of the
@@ -72,20 +75,22 @@ def episode_costs(path, env):
 def piece_runs(db):
     con = read_only_db.connect(db)
     try:
+        # runs.cpu_s from schema 6 on; NULL before
+        has_cpu = any(r[1] == "cpu_s" for r in con.execute("PRAGMA table_info(runs)"))
         rows = con.execute(
             "SELECT r.optimizer, r.seed, r.status, r.started_at, r.finished_at, r.episodes, "
-            "(SELECT COALESCE(SUM(used_grad), 0) FROM evals e WHERE e.run_id = r.run_id), r.shared_episodes "
-            "FROM runs r ORDER BY r.seed").fetchall()
+            "(SELECT COALESCE(SUM(used_grad), 0) FROM evals e WHERE e.run_id = r.run_id), r.shared_episodes, " +
+            ("r.cpu_s " if has_cpu else "NULL ") + "FROM runs r ORDER BY r.seed").fetchall()
     finally:
         con.close()
     return [dict(zip(("optimizer", "seed", "status", "started_at", "finished_at", "episodes", "grad_episodes",
-                      "shared_episodes"), r)) for r in rows]
+                      "shared_episodes", "cpu_s"), r)) for r in rows]
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--plan", required=True)
-    ap.add_argument("--cpu", required=True)
+    ap.add_argument("--cpu", default=None, help="the CPU monitor's log, for pieces without runs.cpu_s")
     ap.add_argument("--costs", required=True)
     ap.add_argument("--pieces", required=True)
     ap.add_argument("--share", action="append", default=[], metavar="OPT=G",
@@ -116,7 +121,7 @@ def main():
 
     # piece -> pid -> (process start, first sample time, last sample time, last cpu_s)
     procs = collections.defaultdict(dict)
-    for r in read_csv(a.cpu):
+    for r in (read_csv(a.cpu) if a.cpu else []):
         pid, t, cpu, start = r["pid"], int(r["unix_time"]), float(r["cpu_s"]), int(r["started_at_unix"])
         old = procs[r["piece"]].get(pid)
         procs[r["piece"]][pid] = (start, old[1] if old else t, t, max(cpu, old[3] if old else 0.0))
@@ -143,12 +148,17 @@ def main():
         last_sample = max((v[2] for v in p.values()), default=None)
         started = min(unix(r["started_at"]) for r in runs if r["started_at"])
         finished = max((unix(r["finished_at"]) for r in runs if r["finished_at"]), default=None)
-        measured = bool(p) and abs(first_start - started) <= 10 and (not done or last_sample >= finished - 40)
-        cpu_s = sum(v[3] for v in p.values()) if measured else None
+        if all(r["cpu_s"] is not None for r in runs):
+            # the harness's own figure: each run's worker-thread CPU over its sessions
+            cpu_from, measured, cpu_s = "database", True, sum(r["cpu_s"] for r in runs)
+        else:
+            measured = bool(p) and abs(first_start - started) <= 10 and (not done or last_sample >= finished - 40)
+            cpu_from, cpu_s = ("monitor", sum(v[3] for v in p.values())) if measured else ("", None)
         episodes_s = grad * gradient_s + (simulated - grad) * forward_s
         rows.append({
             "piece": piece, "optimizer": optimizer, "seeds": " ".join(str(r["seed"]) for r in runs),
             "status": "done" if done else "running", "processes": len(p), "measured": int(measured),
+            "cpu_from": cpu_from,
             "planned_s": round(plan_s, 2), "cpu_s": "" if cpu_s is None else round(cpu_s, 1),
             # a running piece: against the plan pro rata of the episodes it has simulated
             "ratio": "" if cpu_s is None or plan_s <= 0 else round(cpu_s / (plan_s * min(1.0, simulated / budget)), 3),

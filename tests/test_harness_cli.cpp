@@ -173,6 +173,9 @@ TEST_F(HarnessCli, SigtermMidRunCommitsAndTheResumedRunEqualsTheUninterruptedOne
     EXPECT_LT(std::stoi(committed), 60) << opt;
     EXPECT_EQ(scalar(db(opt + ".sqlite"), "SELECT count(*) FROM evals"), committed) << opt;
     EXPECT_NE(scalar(db(opt + ".sqlite"), "SELECT count(*) FROM replay"), "0") << opt;
+    // the CPU seconds it spent so far are stored with the stop's commit, and the resume adds its own
+    const double cpu_stopped = std::stod(scalar(db(opt + ".sqlite"), "SELECT cpu_s FROM runs"));
+    EXPECT_GT(cpu_stopped, 0.0) << opt;
 
     const auto resumed = harness(grid + db(opt + ".sqlite"));
     ASSERT_EQ(resumed.code, 0) << opt << ": " << resumed.err;
@@ -181,7 +184,22 @@ TEST_F(HarnessCli, SigtermMidRunCommitsAndTheResumedRunEqualsTheUninterruptedOne
         << opt << ": " << resumed.err;
     expect_same_evals(read_evals(db(opt + "-full.sqlite")), read_evals(db(opt + ".sqlite")));
     EXPECT_EQ(scalar(db(opt + ".sqlite"), "SELECT count(*) FROM replay"), "0") << opt;  // dropped when done
+    EXPECT_GT(std::stod(scalar(db(opt + ".sqlite"), "SELECT cpu_s FROM runs")), cpu_stopped) << opt;
   }
+}
+
+TEST_F(HarnessCli, EveryRunStoresTheCpuSecondsOfItsThreadUnlessAThreadTeamHelped) {
+  // two runs side by side in one process are told apart: each its own worker thread's CPU, which
+  // cannot exceed the run's wall (the CPU is read a little before and after the wall's clock: 50 ms)
+  ASSERT_EQ(harness(kGrid + " --jobs 2 --db " + db("cpu.sqlite")).code, 0);
+  EXPECT_EQ(scalar(db("cpu.sqlite"), "SELECT count(*) FROM runs WHERE cpu_s > 0 AND cpu_s <= wall_s + 0.05"),
+            scalar(db("cpu.sqlite"), "SELECT count(*) FROM runs"));
+  // a thread team's workers are not measured: unknown, NULL
+  ASSERT_EQ(
+      harness("--env cartpole1 --optimizer random --seeds 1 --budget 20 --threads 2 --quiet --db " + db("team.sqlite"))
+          .code,
+      0);
+  EXPECT_EQ(scalar(db("team.sqlite"), "SELECT count(*) FROM runs WHERE cpu_s IS NULL"), "1");
 }
 
 // Rewrites a database's journals as a binary from before the optimizers' own work was kept would

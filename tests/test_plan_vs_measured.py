@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """scripts/plan_vs_measured.py on real piece databases (the harness's, on sphere-2) with a plan,
-a calibration and a CPU log written here, so every figure it prints is known.
+a calibration, a CPU log and runs' CPU seconds written here, so every figure it prints is known.
 
     python3 tests/test_plan_vs_measured.py SOURCE_DIR HARNESS
 """
@@ -20,16 +20,17 @@ SCRIPT = os.path.join(SOURCE, "scripts", "plan_vs_measured.py")
 BUDGET = 30
 
 
-def stretch_run(db, seconds):
+def stretch_run(db, seconds, cpu_s=None):
     """The run's start and finish (unix), its finish moved `seconds` after its start (a sphere-2
-    run takes a second; the pieces this script is for take an hour), and its gradient episodes."""
+    run takes a second; the pieces this script is for take an hour), and its gradient episodes.
+    Its runs.cpu_s becomes `cpu_s` (None: NULL, as a harness before schema 6 left it)."""
     con = sqlite3.connect(db)
     try:
         start, = con.execute("SELECT started_at FROM runs").fetchone()
         start = int(datetime.datetime.strptime(start, "%Y-%m-%dT%H:%M:%SZ")
                     .replace(tzinfo=datetime.timezone.utc).timestamp())
         end = datetime.datetime.fromtimestamp(start + seconds, datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-        con.execute("UPDATE runs SET finished_at = ?", (end,))
+        con.execute("UPDATE runs SET finished_at = ?, cpu_s = ?", (end, cpu_s))
         con.commit()
         grad, = con.execute("SELECT SUM(used_grad) FROM evals").fetchone()
     finally:
@@ -45,18 +46,24 @@ class PlanVsMeasured(unittest.TestCase):
         cls.pieces = os.path.join(cls.dir, "pieces")
         os.mkdir(cls.pieces)
         cls.times = {}
-        for opt in ("cmaes", "boleap", "random"):
+        for opt in ("cmaes", "boleap", "random", "gd"):
             db = os.path.join(cls.pieces, f"sphere-2__{opt}.sqlite")
             r = subprocess.run([HARNESS, "--env", "sphere-2", "--optimizer", opt, "--seeds", "1", "--budget",
                                 str(BUDGET), "--jobs", "1", "--quiet", "--db", db], capture_output=True, text=True)
             assert r.returncode == 0, r.stderr
-            cls.times[opt] = stretch_run(db, 1000)
+            if opt == "gd":
+                # the harness stores each run's CPU seconds (schema 6): what it wrote is a number
+                con = sqlite3.connect(db)
+                cls.gd_stored_cpu, = con.execute("SELECT cpu_s FROM runs").fetchone()
+                con.close()
+            # gd's piece measured by the database (90 s); the others as written before schema 6
+            cls.times[opt] = stretch_run(db, 1000, 90.0 if opt == "gd" else None)
         # the plan (harness plan --runs-csv's columns), a calibration of 1 s forward, 3 s gradient
         cls.plan = os.path.join(cls.dir, "plan.csv")
         with open(cls.plan, "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(["env", "optimizer", "seed", "budget", "planned_s", "source", "start_rank", "lead_seed"])
-            for rank, (opt, s) in enumerate((("cmaes", 100.0), ("boleap", 200.0), ("random", 50.0))):
+            for rank, (opt, s) in enumerate((("cmaes", 100.0), ("boleap", 200.0), ("random", 50.0), ("gd", 60.0))):
                 w.writerow(["sphere-2", opt, 0, BUDGET, s, "model", rank, ""])
         cls.costs = os.path.join(cls.dir, "costs.json")
         with open(cls.costs, "w") as f:
@@ -78,9 +85,9 @@ class PlanVsMeasured(unittest.TestCase):
     def tearDownClass(cls):
         cls.tmp.cleanup()
 
-    def script(self, *extra):
-        return subprocess.run([sys.executable, SCRIPT, "--plan", self.plan, "--cpu", self.cpu, "--costs", self.costs,
-                               "--pieces", self.pieces, *extra], capture_output=True, text=True)
+    def script(self, *extra, cpu=True):
+        return subprocess.run([sys.executable, SCRIPT, "--plan", self.plan, *(["--cpu", self.cpu] if cpu else []),
+                               "--costs", self.costs, "--pieces", self.pieces, *extra], capture_output=True, text=True)
 
     def test_rows(self):
         out = os.path.join(self.dir, "rows.csv")
@@ -89,6 +96,7 @@ class PlanVsMeasured(unittest.TestCase):
         with open(out, newline="") as f:
             rows = {row["optimizer"]: row for row in csv.DictReader(f)}
         self.assertEqual(rows["cmaes"]["measured"], "1")
+        self.assertEqual(rows["cmaes"]["cpu_from"], "monitor")
         self.assertAlmostEqual(float(rows["cmaes"]["cpu_s"]), 150.0)
         self.assertAlmostEqual(float(rows["cmaes"]["ratio"]), 1.5)
         self.assertEqual(rows["cmaes"]["grad_episodes"], "0")
@@ -106,9 +114,27 @@ class PlanVsMeasured(unittest.TestCase):
         # random: its first process began after its run: unmeasured, no figure
         self.assertEqual(rows["random"]["measured"], "0")
         self.assertEqual(rows["random"]["cpu_s"], "")
+        # gd: its runs' cpu_s, no process of it in the log
+        self.assertEqual(rows["gd"]["cpu_from"], "database")
+        self.assertEqual(rows["gd"]["processes"], "0")
+        self.assertAlmostEqual(float(rows["gd"]["cpu_s"]), 90.0)
+        self.assertAlmostEqual(float(rows["gd"]["ratio"]), 1.5)
         # the family table: forward episodes counts cmaes (measured) and not random
         self.assertIn("| forward episodes (cmaes) | 1 (2) | 100 | 150 | 1.50 |", r.stdout)
         self.assertIn("| gp (episodes + GP time) (boleap) | 1 (1) | 200 | 300 | 1.50 |", r.stdout)
+        self.assertIn("| gradient episodes (gd) | 1 (1) | 60 | 90 | 1.50 |", r.stdout)
+
+    def test_the_harness_stores_a_runs_cpu_and_pieces_with_it_need_no_monitor(self):
+        self.assertIsInstance(self.gd_stored_cpu, float)
+        self.assertGreater(self.gd_stored_cpu, 0.0)
+        out = os.path.join(self.dir, "no-monitor.csv")
+        r = self.script("--share", "boleap=0.5", "--out", out, cpu=False)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(out, newline="") as f:
+            rows = {row["optimizer"]: row for row in csv.DictReader(f)}
+        self.assertEqual((rows["gd"]["measured"], rows["gd"]["cpu_from"], rows["gd"]["cpu_s"]), ("1", "database", "90.0"))
+        for opt in ("cmaes", "boleap", "random"):
+            self.assertEqual((rows[opt]["measured"], rows[opt]["cpu_from"], rows[opt]["cpu_s"]), ("0", "", ""), opt)
 
     def test_mixed_optimizer_needs_its_share(self):
         r = self.script()

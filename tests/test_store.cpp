@@ -71,7 +71,7 @@ TEST(ConfigHash, CanonicalJsonSortsKeysAndPrintsRoundTripDoubles) {
 TEST_F(StoreTest, CreatesTheSchemaInWalModeWithItsVersion) {
   Store store(path_, {"0.1.0", "abc", "host"});
   EXPECT_EQ(query("PRAGMA journal_mode"), "wal;");
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "5;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "6;");
   EXPECT_EQ(query("SELECT name FROM sqlite_master WHERE type='table' ORDER BY name"),
             "configs;evals;meta;prefix;replay;runs;");
 }
@@ -120,14 +120,14 @@ TEST_F(StoreTest, AnUnfinishedRunIsNotDoneAfterReopening) {
 TEST_F(StoreTest, RefusesANewerSchemaVersionWithoutTouchingTheFile) {
   {
     Store store(path_, {"0.1.0", "abc", "host"});
-    store.db().exec("UPDATE meta SET value='6' WHERE key='schema_version'");
+    store.db().exec("UPDATE meta SET value='7' WHERE key='schema_version'");
   }
   const std::string before = testing::read_file(path_);
   try {
     Store again(path_, {"0.1.0", "abc", "host"});
-    FAIL() << "a schema_version 6 file was opened";
+    FAIL() << "a schema_version 7 file was opened";
   } catch (const StoreError& e) {
-    EXPECT_NE(std::string(e.what()).find("schema_version 6, newer than this harness (5)"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("schema_version 7, newer than this harness (6)"), std::string::npos)
         << e.what();
   }
   EXPECT_EQ(testing::read_file(path_), before);
@@ -260,14 +260,15 @@ TEST_F(StoreTest, MigratesAVersion1FileInPlaceKeepingEveryRowBitForBit) {
     ASSERT_EQ(done.size(), 1u);
     EXPECT_EQ(done.begin()->versions, ResultsVersions{});
   }
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "5;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "6;");
   EXPECT_EQ(exact_rows(path_, kRunsV1Query), runs_before);
   EXPECT_EQ(exact_rows(path_, kEvalsV1Query), evals_before);
   EXPECT_EQ(exact_rows(path_, configs_sql), configs_before);
   // the new columns, after the old ones, NULL in old rows (shared_episodes 0: nothing was shared)
   EXPECT_EQ(query("SELECT name FROM pragma_table_info('runs') WHERE cid >= 20"),
-            "diagnostics;seed_free_episodes;seed_free_calls;shared_episodes;shared_from_seed;results_versions;");
+            "diagnostics;seed_free_episodes;seed_free_calls;shared_episodes;shared_from_seed;results_versions;cpu_s;");
   EXPECT_EQ(query("SELECT count(*) FROM runs WHERE results_versions = ''"), "3;");
+  EXPECT_EQ(query("SELECT count(*) FROM runs WHERE cpu_s IS NULL"), "3;");
   EXPECT_EQ(query("SELECT count(*) FROM runs WHERE seed_free_episodes IS NULL AND seed_free_calls IS NULL AND "
                   "shared_episodes = 0 AND shared_from_seed IS NULL"),
             "3;");
@@ -305,13 +306,14 @@ void write_version_file(const std::string& path, int version) {
 }
 
 TEST_F(StoreTest, EveryOlderVersionMigratesToTheTablesOfANewFileKeepingItsRows) {
-  for (int version = 2; version <= 4; ++version) {
+  for (int version = 2; version < kSchemaVersion; ++version) {
     SCOPED_TRACE("schema_version " + std::to_string(version));
     const std::string file = path("v" + std::to_string(version) + ".sqlite");
     write_version_file(file, version);
     const std::string runs_before = exact_rows(file, kRunsV1Query), evals_before = exact_rows(file, kEvalsV1Query);
     { Store store(file, {"0.2.0", "def", "host"}); }
-    EXPECT_EQ(exact_rows(file, "SELECT value FROM meta WHERE key='schema_version'"), "t5|\n");
+    EXPECT_EQ(exact_rows(file, "SELECT value FROM meta WHERE key='schema_version'"), "t6|\n");
+    EXPECT_EQ(exact_rows(file, "SELECT count(*) FROM runs WHERE cpu_s IS NULL"), "i3|\n");
     EXPECT_EQ(exact_rows(file, kRunsV1Query), runs_before);
     EXPECT_EQ(exact_rows(file, kEvalsV1Query), evals_before);
     EXPECT_EQ(exact_rows(file, "SELECT count(*) FROM runs WHERE results_versions = '' AND shared_episodes = 0"),
@@ -447,6 +449,38 @@ TEST_F(StoreTest, ARunningRunKeepsItsCommittedEpisodesAndJournalUntilItIsDone) {
   EXPECT_TRUE(redo.journal.empty());
 }
 
+TEST_F(StoreTest, ARunsCpuSecondsAreStoredAtEachCommitAndComeBackToItsResume) {
+  const std::vector<EvalRecord> evals = {{0, 2.0, 2.0, true, 0.1}, {1, 1.0, 1.0, false, 0.1}};
+  const std::vector<ReplayEntry> journal = {{ReplayKind::value, 1, {2.0}}, {ReplayKind::value, 2, {1.0}}};
+  {
+    Store store(path_, {"0.1.0", "abc", "host"});
+    const RunStart first = store.begin_run(key(0), 1, {}, {});
+    EXPECT_EQ(first.cpu_s, 0.0);  // a new run has spent nothing
+    store.append_progress(first.run_id, std::span(evals).first(1), 0, std::vector(journal.begin(), journal.begin() + 1),
+                          {}, 1.25);
+    EXPECT_EQ(query("SELECT cpu_s FROM runs"), "1.25;");
+    store.append_progress(first.run_id, std::span(evals).subspan(1), 1, std::vector(journal.begin() + 1, journal.end()),
+                          {}, 2.5);
+    EXPECT_EQ(query("SELECT cpu_s FROM runs"), "2.5;");
+  }
+  {
+    Store again(path_, {"0.1.0", "abc", "host"});
+    const RunStart resumed = again.begin_run(key(0), 1, {}, {});
+    EXPECT_EQ(resumed.committed_episodes, 2);
+    EXPECT_EQ(resumed.cpu_s, 2.5);  // what its first session spent, for the runner to add to
+    RunResult r = result();
+    r.cpu_s = 3.0;
+    again.finish_run(resumed.run_id, r);
+    EXPECT_EQ(query("SELECT cpu_s FROM runs"), "3.0;");
+    // episodes committed without CPU seconds (an older harness, --threads > 1): unknown from then on
+    const auto id = again.begin_run(key(1), 1, {}, {}).run_id;
+    again.append_progress(id, evals, 0, journal);
+    EXPECT_EQ(query("SELECT cpu_s IS NULL FROM runs WHERE run_id=" + std::to_string(id)), "1;");
+  }
+  Store third(path_, {"0.1.0", "abc", "host"});
+  EXPECT_TRUE(std::isnan(third.begin_run(key(1), 1, {}, {}).cpu_s));
+}
+
 TEST_F(StoreTest, ADoneRunKeepsItsSeedFreeEpisodesOnceAndAnotherSeedTakesThem) {
   Store store(path_, {"0.1.0", "abc", "host"});
   std::vector<ReplayEntry> journal;
@@ -536,7 +570,7 @@ TEST_F(StoreTest, ASqliteFileWithoutTablesIsNotStamped) {
 TEST_F(StoreTest, AnEmptyFileBecomesANewDatabase) {
   { std::ofstream touch(path_); }
   Store store(path_, {});
-  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "5;");
+  EXPECT_EQ(query("SELECT value FROM meta WHERE key='schema_version'"), "6;");
 }
 
 TEST_F(StoreTest, UnwritablePathThrowsNamingIt) {

@@ -29,6 +29,9 @@ struct RunResult {
   double best_loss = 0.0;  // NaN when no episode succeeded
   std::vector<double> best_x;
   double wall_s = 0.0;
+  // the CPU seconds the harness's threads spent on the run over all its sessions (runs.cpu_s); NaN
+  // when unknown (a thread team's workers are not measured; a session before schema 6)
+  double cpu_s = std::numeric_limits<double>::quiet_NaN();
   std::string error;
   std::vector<EvalRecord> evals;
   // {"optimizer": Optimizer::diagnostics(), "objective": BudgetedObjective::diagnostics()};

@@ -3,10 +3,13 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <functional>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <thread>
 
+#include "common/thread_cpu_clock.hpp"
 #include "harness/run/budget.hpp"
 #include "harness/run/fault_injection.hpp"
 #include "harness/run/interrupt.hpp"
@@ -60,11 +63,16 @@ RunResult execute_run(const RunSpec& spec, const Env& env, Optimizer& optimizer,
 
 namespace {
 
-// commits a running run's new episodes and journal every kCommitIntervalS, and at once when asked
+// commits a running run's new episodes and journal every kCommitIntervalS, and at once when asked,
+// with the CPU seconds the run has spent so far (`cpu_s`)
 class CommitListener : public EpisodeListener {
  public:
-  CommitListener(Store& store, std::int64_t run_id, std::int64_t committed)
-      : store_(store), run_id_(run_id), committed_(committed), last_(std::chrono::steady_clock::now()) {}
+  CommitListener(Store& store, std::int64_t run_id, std::int64_t committed, std::function<double()> cpu_s)
+      : store_(store),
+        run_id_(run_id),
+        committed_(committed),
+        cpu_s_(std::move(cpu_s)),
+        last_(std::chrono::steady_clock::now()) {}
 
   void episode_finished(BudgetedObjective& objective, bool commit_now) override {
     const auto now = std::chrono::steady_clock::now();
@@ -76,7 +84,7 @@ class CommitListener : public EpisodeListener {
     std::int64_t first_seq = 0;
     const std::vector<ReplayEntry> journal = objective.take_journal(first_seq);
     store_.append_progress(run_id_, std::span<const EvalRecord>(evals).subspan(first), first_seq, journal,
-                           objective.seed_free_prefix());
+                           objective.seed_free_prefix(), cpu_s_());
     committed_ = static_cast<std::int64_t>(evals.size());
     last_ = now;
     if (fault != 0) fault_raise(fault);
@@ -85,6 +93,7 @@ class CommitListener : public EpisodeListener {
  private:
   Store& store_;
   std::int64_t run_id_, committed_;
+  std::function<double()> cpu_s_;
   std::chrono::steady_clock::time_point last_;
 };
 
@@ -166,11 +175,18 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
         progress.run_started(w, run_cost_s[i] / static_cast<double>(p.spec.budget));
         RunResult r;
         const std::int64_t shared_episodes = start.shared_episodes;
+        // the run's CPU: its earlier sessions' and this worker thread's since now; unknown with
+        // --threads > 1 (a thread team's workers are not measured) and for an external optimizer
+        // (its own process is not)
+        const ThreadCpuClock cpu_clock;
+        const double cpu_at_start = cpu_clock.seconds();
+        const double cpu_before = threads == 1 && !p.spec.ext ? start.cpu_s : std::numeric_limits<double>::quiet_NaN();
+        const auto cpu_s = [&] { return cpu_before + (cpu_clock.seconds() - cpu_at_start); };
         for (int attempt = 0;; ++attempt) {
           // a resumed run replays its journal, a run of a later seed the seed-free episodes of an
           // earlier one; one that diverged from it starts over without
           const auto opt = p.spec.new_optimizer();
-          CommitListener listener(store, start.run_id, start.committed_episodes);
+          CommitListener listener(store, start.run_id, start.committed_episodes, cpu_s);
           RunControl control{&listener, &stop, std::move(start.journal), start.journal_episodes, tape_memory_bytes};
           r = execute_run(p.spec, env, *opt, &progress.episodes_of(w), &team, &control);
           if (r.status != RunStatus::diverged || attempt > 0) break;
@@ -196,6 +212,7 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
           continue;  // committed; the next harness resumes it
         }
         if (r.status == RunStatus::diverged) r.status = RunStatus::failed;
+        r.cpu_s = cpu_s();
         store.finish_run(start.run_id, r);
         run_ended(i);
         (r.status == RunStatus::done ? n_done : n_failed).fetch_add(1);

@@ -14,6 +14,8 @@
 //      `prefix`: the journal of a done run's seed-free episodes, which other seeds replay
 //   5  results versions (harness/core/results_versions.hpp): runs.results_versions, part of the run key
 //      (UNIQUE; '' for the rows of older files, which are therefore stale for this binary)
+//   6  runs.cpu_s: the CPU seconds the run's worker thread spent on it, over all its sessions
+//      (NULL where unknown: rows of older files, --threads > 1, ext: optimizers)
 // The tables are declared in harness/store/tables.hpp; the CREATE TABLE of a new file and each
 // migration step are derived from them. A later version bumps kSchemaVersion and declares what it
 // adds (columns and tables with `since` = the new version, a key column with `key_since`); a step
@@ -24,7 +26,7 @@
 
 namespace dsb {
 
-inline constexpr int kSchemaVersion = 5;
+inline constexpr int kSchemaVersion = 6;
 
 // The schema_version of an opened file: 0 for an empty database (no tables at all). Throws
 // StoreError naming the file when it is not a harness database (tables but no meta table, no

@@ -179,11 +179,16 @@ RunStart Store::begin_run(const RunKey& key, std::uint64_t rng_seed, const nlohm
     start.committed_episodes = n.column_int(0);
     start.journal = read_journal(db_, "replay", start.run_id, std::numeric_limits<std::int64_t>::max());
     start.journal_episodes = start.committed_episodes;
-    Statement shared(db_.handle(), "SELECT shared_episodes, COALESCE(shared_from_seed, -1) FROM runs WHERE run_id=?");
+    Statement shared(db_.handle(),
+                     "SELECT shared_episodes, COALESCE(shared_from_seed, -1), cpu_s FROM runs WHERE run_id=?");
     shared.bind(1, start.run_id);
     if (shared.step()) {
       start.shared_episodes = shared.column_int(0);
       start.shared_from_seed = static_cast<int>(shared.column_int(1));
+      // what its earlier sessions spent: unknown when they committed episodes without saying
+      start.cpu_s = !shared.column_is_null(2) ? shared.column_double(2)
+          : start.committed_episodes == 0     ? 0.0
+                                              : std::numeric_limits<double>::quiet_NaN();
     }
     Statement host(db_.handle(), "UPDATE runs SET host=?, git_sha=? WHERE run_id=?");
     host.bind(1, provenance_.host).bind(2, provenance_.git_sha).bind(3, start.run_id).run();
@@ -275,14 +280,17 @@ void insert_journal(Database& db, const std::string& table, std::int64_t run_id,
 }  // namespace
 
 void Store::append_progress(std::int64_t run_id, std::span<const EvalRecord> evals, std::int64_t first_seq,
-                            const std::vector<ReplayEntry>& journal, const SeedFreePrefix& seed_free) {
+                            const std::vector<ReplayEntry>& journal, const SeedFreePrefix& seed_free, double cpu_s) {
   std::lock_guard lock(mutex_);
   refuse_if_moved();  // before a commit: the path must still name the file this store opened
   Transaction tx(db_);
   insert_evals(db_, run_id, evals);
   insert_journal(db_, "replay", run_id, first_seq, journal, std::numeric_limits<std::int64_t>::max());
-  Statement upd(db_.handle(), "UPDATE runs SET episodes=(SELECT count(*) FROM evals WHERE run_id=?) WHERE run_id=?");
-  upd.bind(1, run_id).bind(2, run_id).run();
+  Statement upd(db_.handle(),
+                "UPDATE runs SET episodes=(SELECT count(*) FROM evals WHERE run_id=?), cpu_s=? WHERE run_id=?");
+  upd.bind(1, run_id);
+  upd.bind(2, cpu_s);  // NaN: NULL
+  upd.bind(3, run_id).run();
   if (seed_free.drew) {
     Statement mark(db_.handle(), "UPDATE runs SET seed_free_episodes=?, seed_free_calls=? WHERE run_id=?");
     mark.bind(1, seed_free.episodes).bind(2, seed_free.calls).bind(3, run_id).run();
@@ -354,7 +362,7 @@ void Store::finish_run(std::int64_t run_id, const RunResult& r) {
   del_journal.bind(1, run_id).run();
   Statement upd(db_.handle(), R"sql(
     UPDATE runs SET status=?, episodes=?, failed_episodes=?, best_loss=?, best_x=?, wall_s=?,
-                    error=?, finished_at=?, diagnostics=?, seed_free_episodes=?, seed_free_calls=?
+                    error=?, finished_at=?, diagnostics=?, seed_free_episodes=?, seed_free_calls=?, cpu_s=?
                 WHERE run_id=?)sql");
   upd.bind(1, std::string(stored_text(r.status))).bind(2, r.episodes).bind(3, r.failed_episodes).bind(4, r.best_loss);
   if (r.best_x.empty())
@@ -372,7 +380,8 @@ void Store::finish_run(std::int64_t run_id, const RunResult& r) {
   else
     upd.bind(9, r.diagnostics.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
   upd.bind(10, r.seed_free.episodes).bind(11, r.seed_free.calls);
-  upd.bind(12, run_id);
+  upd.bind(12, r.cpu_s);
+  upd.bind(13, run_id);
   upd.run();
   tx.commit();
 }

@@ -9,6 +9,7 @@
 // final status when it ends, so a killed harness leaves no run that counts as done and loses at
 // most the episodes since the last commit.
 #include <cstdint>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -38,6 +39,7 @@ struct RunStart {
   std::int64_t journal_episodes = 0;    // the episodes the journal regenerates
   std::int64_t shared_episodes = 0;     // of them, taken from the run of seed shared_from_seed
   int shared_from_seed = -1;
+  double cpu_s = 0.0;  // the CPU seconds its earlier sessions spent (runs.cpu_s; NaN: unknown)
 };
 
 struct Provenance {
@@ -66,9 +68,11 @@ class Store {
 
   // Commits a running run's new episodes (episode numbers from evals[0].episode on) and journal
   // entries (call indices from first_seq on) in one transaction, with its seed-free prefix once
-  // the optimizer has drawn (while it has not, all it committed is seed-free).
+  // the optimizer has drawn (while it has not, all it committed is seed-free) and the CPU seconds
+  // it has spent so far over its sessions (NaN: unknown, stored NULL).
   void append_progress(std::int64_t run_id, std::span<const EvalRecord> evals, std::int64_t first_seq,
-                       const std::vector<ReplayEntry>& journal, const SeedFreePrefix& seed_free = {});
+                       const std::vector<ReplayEntry>& journal, const SeedFreePrefix& seed_free = {},
+                       double cpu_s = std::numeric_limits<double>::quiet_NaN());
 
   // Forgets a running run's committed episodes, journal and sharing (a replay that diverged
   // starts over).

@@ -60,6 +60,10 @@ const Table& runs_table() {
           {"shared_from_seed", "INTEGER", nullptr, "that run's seed", 4},
           {"results_versions", "TEXT NOT NULL", "''", "part of the run key (version 5): 'env E, optimizer O, run R'", 5,
            5},
+          {"cpu_s", "REAL", nullptr,
+           "CPU seconds of the run's worker thread over its sessions; NULL: unknown (--threads > 1, ext:, "
+           "older sessions) (version 6)",
+           6},
       },
       "",
       false};
