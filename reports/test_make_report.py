@@ -1867,6 +1867,21 @@ class TestReadOnlyDb(unittest.TestCase):
         writer.close()
         self.assertEqual(sidecar_files(self.tmp), [])
 
+    def test_a_database_the_user_may_not_write_in_a_folder_they_may(self):
+        # SQLite opens such a file read-only whatever the mode says, and the folder lets it make the
+        # -wal and -shm it then cannot remove; root may write anything, so the read runs as nobody
+        os.chmod(self.tmp, 0o777)
+        os.chmod(self.db, 0o444)
+        as_user = ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"] if os.geteuid() == 0 else []
+        read = ("import sys; sys.path.insert(0, sys.argv[1]); from dsb_report import read_only_db; "
+                "con = read_only_db.connect(sys.argv[2]); print(con.execute('SELECT sum(x) FROM t').fetchone()[0]); "
+                "con.close()")
+        out = subprocess.run(as_user + [sys.executable, "-c", read, HERE, self.db],
+                             capture_output=True, text=True, check=True).stdout
+        self.assertEqual(out.strip(), "3")
+        self.assertEqual(sidecar_files(self.tmp), [])
+        self.assertEqual(file_sha256(self.db), self.sha)
+
 
 class TestBadInput(unittest.TestCase):
     def setUp(self):

@@ -165,6 +165,29 @@ TEST(PlanOrder, FollowersWaitForTheirLeadSoAGroupOnManyCoresTakesLeadPlusFollowe
   EXPECT_EQ(end, (std::vector<double>{-1.0, -1.0, 30.0}));
 }
 
+TEST(PlanOrder, AResumedGroupWhoseDonorIsStoredWaitsForNoLead) {
+  // seeds 1-4 of a gd group whose seed 0 is done (80 s each, on 2 workers): without the stored
+  // donor seed 1 would lead and the rest wait for it, 80 + 2 x 80 s; with it they pair up, 2 x 80 s
+  std::vector<std::tuple<std::string, std::string, int>> specs;
+  for (int s = 1; s < 5; ++s) specs.emplace_back("heavy", "gd", s);
+  GridPlan plan;
+  plan.pending = runs_of(specs);
+  const std::vector<double> cost(4, 80.0);
+  EXPECT_EQ(share_leads(plan.pending), (std::vector<std::ptrdiff_t>{-1, 0, 0, 0}));
+  EXPECT_DOUBLE_EQ(runner_wall(plan.pending, cost, true, 2), 240.0);
+  estimate_sharing(plan, {{plan.pending[0].key.group(), 60}});
+  for (const PlannedRun& p : plan.pending) EXPECT_TRUE(p.donor_stored) << p.key.text();
+  EXPECT_EQ(share_leads(plan.pending), (std::vector<std::ptrdiff_t>(4, -1)));
+  EXPECT_DOUBLE_EQ(runner_wall(plan.pending, cost, true, 2), 160.0);
+  EXPECT_EQ(plan.shared_share, (std::vector<double>(4, 0.6)));  // 60 of the budget's 100 episodes
+  // another group's stored donor changes nothing; an optimizer that draws at its start never shares
+  GridPlan other;
+  other.pending = runs_of({{"heavy", "gd", 1}, {"heavy", "gd", 2}, {"heavy", "cmaes", 1}});
+  estimate_sharing(other, {{planned("light", "gd", 0).key.group(), 60}});
+  EXPECT_EQ(share_leads(other.pending), (std::vector<std::ptrdiff_t>{-1, 0, -1}));
+  for (const PlannedRun& p : other.pending) EXPECT_FALSE(p.donor_stored) << p.key.text();
+}
+
 TEST(Shards, AShardIsAFunctionOfTheRunKeyAlone) {
   const PlannedRun a = planned("fluid", "cmaes", 3, 1000);
   PlannedRun other_version = a;
@@ -253,6 +276,21 @@ TEST_F(PlanFromDatabase, DoneRunsOfAGroupCostItsPendingRunsByTheirMedianWall) {
   EXPECT_NE(csv.find("cartpole1,gd,3,30,"), std::string::npos) << csv;
   EXPECT_EQ(csv.substr(csv.find('\n', csv.find("cartpole1,gd,3,30,")) - 2, 2), ",0") << csv;
   EXPECT_EQ(csv.substr(csv.find('\n', csv.find("cartpole1,cmaes,3,30,")) - 1, 1), ",") << csv;
+}
+
+TEST_F(PlanFromDatabase, SeedsOfAGroupWhoseLeadIsDoneWaitForNoneOfThem) {
+  // gd's seed 0 done: seeds 1-3 replay its stored episodes, each at once, none waiting for seed 1
+  ASSERT_EQ(harness("--env cartpole1 --optimizer gd --seeds 1 --budget 30 --quiet --db " + path("g.sqlite")).code, 0);
+  ASSERT_GT(std::stoi(testing::scalar(path("g.sqlite"), "SELECT seed_free_episodes FROM runs")), 0);
+  const auto p = harness("plan --env cartpole1 --optimizer gd --seeds 4 --budget 30 --db " + path("g.sqlite") +
+                         " --runs-csv " + path("runs.csv"));
+  ASSERT_EQ(p.code, 0) << p.err;
+  const std::string csv = testing::read_file(path("runs.csv"));
+  for (const std::string seed : {"1", "2", "3"}) {
+    const auto at = csv.find("cartpole1,gd," + seed + ",30,");
+    ASSERT_NE(at, std::string::npos) << csv;
+    EXPECT_EQ(csv.substr(csv.find('\n', at) - 1, 1), ",") << seed << ": " << csv;
+  }
 }
 
 TEST_F(PlanFromDatabase, SlurmTakesItsTimeLimitFromThePlanUnlessGivenOne) {

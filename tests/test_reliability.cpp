@@ -375,6 +375,16 @@ TEST_F(ReadOnlyInputs, ADatabaseTheUserMayNotWrite) {
   fs::permissions(dir_ / "ro", fs::perms::owner_all);
 }
 
+TEST_F(ReadOnlyInputs, ADatabaseTheUserMayNotWriteInAFolderTheyMay) {
+  // the folder lets the user make files, the database does not let them write it: SQLite's read of
+  // it would make -wal and -shm files it cannot remove
+  fs::permissions(dir_ / "ro", fs::perms::all);
+  fs::permissions(db_, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  const std::string prefix = ::geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups" : "";
+  expect_reading_works(prefix, "unwritable-file");
+  fs::permissions(dir_ / "ro", fs::perms::owner_all);
+}
+
 TEST_F(ReadOnlyInputs, AReadOnlyMount) {
   // a read-only bind mount of the database's folder in a private mount namespace (root only)
   const std::string ro = (dir_ / "ro").string();

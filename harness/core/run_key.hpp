@@ -35,6 +35,9 @@ struct RunKey {
 struct PlannedRun {
   RunSpec spec;
   RunKey key;
+  // a done run of its group keeps its seed-free episodes in the database (plan/plan.hpp's
+  // estimate_sharing): it replays them from there, and waits for no lead
+  bool donor_stored = false;
 };
 
 }  // namespace dsb

@@ -42,13 +42,13 @@ GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& don
 std::vector<std::ptrdiff_t> share_leads(const std::vector<PlannedRun>& runs) {
   std::map<std::string, std::size_t> lead_of;  // group -> index of its smallest seed
   for (std::size_t i = 0; i < runs.size(); ++i) {
-    if (!runs[i].spec.may_share_seeds()) continue;
+    if (!runs[i].spec.may_share_seeds() || runs[i].donor_stored) continue;
     const auto [it, added] = lead_of.emplace(runs[i].key.group(), i);
     if (!added && runs[i].spec.seed < runs[it->second].spec.seed) it->second = i;
   }
   std::vector<std::ptrdiff_t> lead(runs.size(), -1);
   for (std::size_t i = 0; i < runs.size(); ++i) {
-    if (!runs[i].spec.may_share_seeds()) continue;
+    if (!runs[i].spec.may_share_seeds() || runs[i].donor_stored) continue;
     const std::size_t l = lead_of.at(runs[i].key.group());
     if (l != i) lead[i] = static_cast<std::ptrdiff_t>(l);
   }
@@ -56,6 +56,7 @@ std::vector<std::ptrdiff_t> share_leads(const std::vector<PlannedRun>& runs) {
 }
 
 void estimate_sharing(GridPlan& plan, const std::map<std::string, std::int64_t>& kept) {
+  for (PlannedRun& p : plan.pending) p.donor_stored = p.spec.may_share_seeds() && kept.count(p.key.group()) > 0;
   const std::vector<std::ptrdiff_t> lead = share_leads(plan.pending);
   plan.shared_share.assign(plan.pending.size(), 0.0);
   for (std::size_t i = 0; i < plan.pending.size(); ++i) {

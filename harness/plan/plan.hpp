@@ -49,12 +49,15 @@ GridPlan plan_grid(const std::vector<RunSpec>& grid, const std::set<RunKey>& don
                    Shard shard = {});
 
 // For each run of `runs`: the index of its lead (the run of its group, RunKey::group, with the smallest seed)
-// when the run may share and is not the lead itself, else -1. A run waits for its lead.
+// when the run may share and is not the lead itself, else -1. A run waits for its lead, except where
+// its group's donor is stored (PlannedRun::donor_stored: a resumed grid whose lead is done), where
+// every seed replays from the database at once.
 std::vector<std::ptrdiff_t> share_leads(const std::vector<PlannedRun>& runs);
 
 // Fills plan.shared_share: a pending run that may share takes the seed-free episodes of the
 // group's longest prefix kept in the database (`kept`: RunKey::group -> episodes, store/stored_runs.hpp), else, when an
-// earlier seed of its group is in the grid, its optimizer's typical seed-free share.
+// earlier seed of its group is in the grid, its optimizer's typical seed-free share. Marks the runs
+// of a group with a kept prefix PlannedRun::donor_stored.
 void estimate_sharing(GridPlan& plan, const std::map<std::string, std::int64_t>& kept);
 // Fills plan.measured_wall_s from `walls` (RunKey::group -> median wall seconds).
 void use_measured_walls(GridPlan& plan, const std::map<std::string, double>& walls);

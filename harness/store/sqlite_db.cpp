@@ -1,6 +1,7 @@
 #include "harness/store/sqlite_db.hpp"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -113,6 +114,14 @@ Database::Database(const std::string& path, Mode mode) : path_(path) {
   // journal), a read opens read-write under query_only instead, so that SQLite's own close removes
   // what it made; where they exist (a grid writing, a writer that was killed) they are left as found
   const bool untouched = mode == Mode::read_only && !has_sidecar_files(path);
+  // ... but a file the user may not write opens read-only whatever the flags say, and its folder
+  // may still let SQLite make the files: with no connection on it, the file alone is the whole
+  // database, read as immutable (no -shm, no locks)
+  if (untouched && ::access(path.c_str(), W_OK) != 0 && ::access(path.c_str(), R_OK) == 0) {
+    open(immutable_uri(path), SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX);
+    sqlite3_busy_timeout(db_, 10000);
+    return;
+  }
   const bool read_write = mode != Mode::read_only || untouched;
   const int flags = (read_write ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY) |
       (mode == Mode::write_create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;

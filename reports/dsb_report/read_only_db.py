@@ -6,7 +6,9 @@ so the scripts that need nothing else can use it too). The rules are the harness
   read-only, cannot remove them when it closes. Where no connection has the database open (no -wal,
   -shm or -journal beside it) the read opens read-write under PRAGMA query_only, so that SQLite's
   own close removes what it made; where they exist (a grid writing, a writer that was killed), it
-  opens read-only and leaves them as found.
+  opens read-only and leaves them as found. A file the user may not write, with none of them beside
+  it, opens as immutable: SQLite would open it read-only whatever the mode says and, its folder
+  writable, make the files it could not remove.
 - A WAL database whose -shm file cannot be made (a read-only folder or mount, a file the user may not
   write) and that has no -wal frames is the file alone: opened as immutable.
 """
@@ -39,6 +41,8 @@ def connect(path) -> sqlite3.Connection:
     """A connection that reads `path` (str or path-like) and writes nothing; sqlite3.Error when it
     cannot be read."""
     untouched = not has_sidecar_files(path)
+    if untouched and os.access(path, os.R_OK) and not os.access(path, os.W_OK):
+        return immutable(path)
     con = sqlite3.connect(uri(path, "mode=rw" if untouched else "mode=ro"), uri=True)
     try:
         if untouched:
@@ -50,6 +54,11 @@ def connect(path) -> sqlite3.Connection:
         text = str(e)
         if wal_has_frames(path) or ("readonly" not in text and "unable to open" not in text):
             raise
+    return immutable(path)
+
+
+def immutable(path) -> sqlite3.Connection:
+    """The file alone as the whole database: no -shm, no locks."""
     con = sqlite3.connect(uri(path, "immutable=1"), uri=True)
     try:
         con.execute("SELECT count(*) FROM sqlite_master").fetchone()
