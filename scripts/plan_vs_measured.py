@@ -27,7 +27,9 @@ whose runs mix forward and gradient episodes (boleap): `--share boleap=0.47` nam
 gradient_share at the commit that made the plan; the plan's seconds less its episodes at that share
 are the optimizer's own time, and the row's episodes at their calibrated costs are added to it. The
 column parts how far the episodes' costs missed from how far the share did. An optimizer whose
-episodes are all forward or all gradient ones is planned at its own share already.
+episodes are all forward or all gradient ones is planned at its own share already. A sharing
+group's later seeds count only the episodes they simulated, gradient ones too, not the prefix they
+replayed from its first seed (runs.shared_episodes).
 """
 import argparse
 import collections
@@ -79,7 +81,9 @@ def piece_runs(db):
         has_cpu = any(r[1] == "cpu_s" for r in con.execute("PRAGMA table_info(runs)"))
         rows = con.execute(
             "SELECT r.optimizer, r.seed, r.status, r.started_at, r.finished_at, r.episodes, "
-            "(SELECT COALESCE(SUM(used_grad), 0) FROM evals e WHERE e.run_id = r.run_id), r.shared_episodes, " +
+            # gradient episodes it simulated: those after the prefix it replayed from its group's lead
+            "(SELECT COALESCE(SUM(used_grad), 0) FROM evals e WHERE e.run_id = r.run_id "
+            "AND e.episode >= COALESCE(r.shared_episodes, 0)), r.shared_episodes, " +
             ("r.cpu_s " if has_cpu else "NULL ") + "FROM runs r ORDER BY r.seed").fetchall()
     finally:
         con.close()
@@ -142,7 +146,7 @@ def main():
         lead = [r for r in runs if not r["shared_episodes"]]
         budget = sum(int(x["budget"]) for x in plan if x["env"] == env and x["optimizer"] == optimizer and
                      (x["optimizer"], int(x["seed"])) in {(optimizer, y["seed"]) for y in lead})
-        grad = sum(r["grad_episodes"] for r in lead)
+        grad = sum(r["grad_episodes"] for r in runs)
         p = procs.get(piece, {})
         first_start = min((v[0] for v in p.values()), default=None)
         last_sample = max((v[2] for v in p.values()), default=None)

@@ -58,6 +58,19 @@ class PlanVsMeasured(unittest.TestCase):
                 con.close()
             # gd's piece measured by the database (90 s); the others as written before schema 6
             cls.times[opt] = stretch_run(db, 1000, 90.0 if opt == "gd" else None)
+        # a sharing group: nlopt-lbfgs's seed 1 replays seed 0's episodes before its first random
+        # draw (its restart), then simulates its own; both runs in one piece, measured by the database
+        db = os.path.join(cls.pieces, "sphere-2__nlopt-lbfgs.sqlite")
+        r = subprocess.run([HARNESS, "--env", "sphere-2", "--optimizer", "nlopt-lbfgs", "--seeds", "2", "--budget",
+                            str(BUDGET), "--jobs", "1", "--quiet", "--db", db], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        con = sqlite3.connect(db)
+        con.execute("UPDATE runs SET cpu_s = 40.0")
+        con.commit()
+        cls.lbfgs_shared, = con.execute("SELECT shared_episodes FROM runs WHERE seed = 1").fetchone()
+        cls.lbfgs_grad = dict(con.execute("SELECT r.seed, SUM(e.used_grad) FROM evals e JOIN runs r USING (run_id) "
+                                          "GROUP BY r.seed").fetchall())
+        con.close()
         # the plan (harness plan --runs-csv's columns), a calibration of 1 s forward, 3 s gradient
         cls.plan = os.path.join(cls.dir, "plan.csv")
         with open(cls.plan, "w", newline="") as f:
@@ -65,6 +78,8 @@ class PlanVsMeasured(unittest.TestCase):
             w.writerow(["env", "optimizer", "seed", "budget", "planned_s", "source", "start_rank", "lead_seed"])
             for rank, (opt, s) in enumerate((("cmaes", 100.0), ("boleap", 200.0), ("random", 50.0), ("gd", 60.0))):
                 w.writerow(["sphere-2", opt, 0, BUDGET, s, "model", rank, ""])
+            w.writerow(["sphere-2", "nlopt-lbfgs", 0, BUDGET, 90.0, "model", 4, ""])
+            w.writerow(["sphere-2", "nlopt-lbfgs", 1, BUDGET, 70.0, "model", 5, 0])
         cls.costs = os.path.join(cls.dir, "costs.json")
         with open(cls.costs, "w") as f:
             json.dump({"costs": {"sphere-2|abc|0.1.0+x|CPU": {"forward_s": 1.0, "gradient_s": 3.0}}}, f)
@@ -122,7 +137,27 @@ class PlanVsMeasured(unittest.TestCase):
         # the family table: forward episodes counts cmaes (measured) and not random
         self.assertIn("| forward episodes (cmaes) | 1 (2) | 100 | 150 | 1.50 |", r.stdout)
         self.assertIn("| gp (episodes + GP time) (boleap) | 1 (1) | 200 | 300 | 1.50 |", r.stdout)
-        self.assertIn("| gradient episodes (gd) | 1 (1) | 60 | 90 | 1.50 |", r.stdout)
+        # the gradient family: gd (60 s planned, 90 s CPU) and the L-BFGS group (160 s, 80 s)
+        self.assertIn("| gradient episodes (gd, nlopt-lbfgs) | 2 (2) | 220 | 170 | 0.77 | 0.50-1.50 |", r.stdout)
+
+    def test_a_sharing_groups_later_seed_counts_only_the_episodes_it_simulated(self):
+        # every L-BFGS episode is a gradient one; seed 1 shares a prefix and then differs
+        self.assertEqual(self.lbfgs_grad, {0: BUDGET, 1: BUDGET})
+        self.assertGreater(self.lbfgs_shared, 0)
+        self.assertLess(self.lbfgs_shared, BUDGET)
+        out = os.path.join(self.dir, "lbfgs.csv")
+        # no --share for nlopt-lbfgs: all its simulated episodes are gradient ones, not a mix
+        r = self.script("--share", "boleap=0.5", "--out", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(out, newline="") as f:
+            row = {row["optimizer"]: row for row in csv.DictReader(f)}["nlopt-lbfgs"]
+        simulated = 2 * BUDGET - self.lbfgs_shared
+        self.assertEqual((row["seeds"], row["status"], row["cpu_from"]), ("0 1", "done", "database"))
+        self.assertEqual((row["episodes"], row["grad_episodes"]), (str(simulated), str(simulated)))
+        self.assertAlmostEqual(float(row["planned_s"]), 160.0)
+        self.assertAlmostEqual(float(row["cpu_s"]), 80.0)
+        self.assertAlmostEqual(float(row["ratio"]), 0.5)
+        self.assertAlmostEqual(float(row["planned_at_own_share_s"]), 160.0)
 
     def test_the_harness_stores_a_runs_cpu_and_pieces_with_it_need_no_monitor(self):
         self.assertIsInstance(self.gd_stored_cpu, float)
