@@ -118,31 +118,26 @@ Database::Database(const std::string& path, Mode mode) : path_(path) {
   // may still let SQLite make the files: with no connection on it, the file alone is the whole
   // database, read as immutable (no -shm, no locks)
   if (untouched && ::access(path.c_str(), W_OK) != 0 && ::access(path.c_str(), R_OK) == 0) {
-    open(immutable_uri(path), SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX);
-    sqlite3_busy_timeout(db_, 10000);
-    return;
-  }
-  const bool read_write = mode != Mode::read_only || untouched;
-  const int flags = (read_write ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY) |
-      (mode == Mode::write_create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
-  open(path, flags);
-  if (untouched && sqlite3_exec(db_, "PRAGMA query_only = ON", nullptr, nullptr, nullptr) != SQLITE_OK) {
-    sqlite3_close(db_);
-    db_ = nullptr;
-    throw StoreError("cannot open database '" + path + "' for reading: PRAGMA query_only failed");
-  }
-  if (mode == Mode::read_only && !readable() && !wal_has_frames(path)) {
+    open_immutable();
+  } else {
+    const bool read_write = mode != Mode::read_only || untouched;
+    const int flags = (read_write ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY) |
+        (mode == Mode::write_create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
+    open(path, flags);
+    if (untouched && sqlite3_exec(db_, "PRAGMA query_only = ON", nullptr, nullptr, nullptr) != SQLITE_OK) {
+      sqlite3_close(db_);
+      db_ = nullptr;
+      throw StoreError("cannot open database '" + path + "' for reading: PRAGMA query_only failed");
+    }
     // A WAL database read where its -shm file cannot be made (a read-only folder or mount, a file
     // the user may not write): with no -wal frames the file alone is the whole database, which
     // SQLite then reads as immutable (no -shm, no locks)
-    sqlite3_close(db_);
-    db_ = nullptr;
-    open(immutable_uri(path), SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX);
-  }
-  if (mode != Mode::read_only && sqlite3_db_readonly(db_, "main") == 1) {
-    sqlite3_close(db_);
-    db_ = nullptr;
-    throw StoreError("cannot open database '" + path + "' for writing");
+    if (mode == Mode::read_only && !readable() && !wal_has_frames(path)) open_immutable();
+    if (mode != Mode::read_only && sqlite3_db_readonly(db_, "main") == 1) {
+      sqlite3_close(db_);
+      db_ = nullptr;
+      throw StoreError("cannot open database '" + path + "' for writing");
+    }
   }
   sqlite3_busy_timeout(db_, 10000);
 }
@@ -155,6 +150,12 @@ void Database::open(const std::string& name, int flags) {
     db_ = nullptr;
     throw StoreError("cannot open database '" + path_ + "': " + msg);
   }
+}
+
+void Database::open_immutable() {
+  sqlite3_close(db_);  // a no-op on nullptr
+  db_ = nullptr;
+  open(immutable_uri(path_), SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX);
 }
 
 bool Database::readable() {

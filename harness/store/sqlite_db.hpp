@@ -68,7 +68,8 @@ class Database {
 
  private:
   void open(const std::string& name, int flags);
-  bool readable();  // false when a first read fails for want of write access (READONLY, CANTOPEN)
+  void open_immutable();  // closes what is open, then opens path_ as immutable, read-only
+  bool readable();        // false when a first read fails for want of write access (READONLY, CANTOPEN)
   static bool wal_has_frames(const std::string& path);
   static bool has_sidecar_files(const std::string& path);  // a -wal, -shm or -journal beside it
   static std::string immutable_uri(const std::string& path);
