@@ -5,6 +5,7 @@ per-episode losses, checked against the runs the study published.
     /usr/bin/python3 scripts/archive_runs.py write DB OUT.runs.jsonl.gz [--against RUNS.csv ...]
     /usr/bin/python3 scripts/archive_runs.py check ARCHIVE [ARCHIVE ...] --against RUNS.csv [...]
         [--allow-missing] [--update FILE | --agree FILE]
+    /usr/bin/python3 scripts/archive_runs.py runs-csv ARCHIVE [ARCHIVE ...] OUT.csv
 
 `write` archives every 'done' run of DB (a new file only). With --against, DB must hold exactly
 the published runs of those CSVs that it has keys for, each with its final best loss the same
@@ -16,7 +17,11 @@ naming each difference. With --allow-missing, a published run not archived (a st
 databases are gone and not yet rerun) is counted, not an error. --update FILE writes the table of
 what the archive holds, per study, between FILE's `<!-- archive: begin -->` and
 `<!-- archive: end -->` lines; --agree FILE exits 1 when that block is not the table this check
-makes. Exit 2: bad input, one line.
+makes. `runs-csv` writes archive files' runs (or folders of them) as one runs CSV (a new file,
+reports/dsb_report/runs_csv.py): the rows `scripts/study_results.py export` gives the database they
+were archived from, byte for byte, so a study whose databases are gone still has its runs CSV with
+results versions (and a rerun's scratch folder its landed pieces: data/study/fluid/README.md).
+Exit 2: bad input, one line.
 """
 from __future__ import annotations
 
@@ -104,6 +109,19 @@ def write(a) -> int:
     except archive.ArchiveError as e:
         return fail(str(e))
     print(f"archive_runs: {n} runs -> {a.out} ({os.path.getsize(a.out)} bytes)")
+    return 0
+
+
+def to_runs_csv(a) -> int:
+    from dsb_report import archive, runs_csv
+    try:
+        runs = [r for path in a.archives for f in archive.files_under(path) for r in archive.read(f)]
+        n = runs_csv.write_archived(runs, a.out)
+    except OSError as e:
+        return fail(f"cannot read '{e.filename}': {e.strerror}")
+    except (archive.ArchiveError, runs_csv.RunsCsvError) as e:
+        return fail(str(e))
+    print(f"archive_runs: {n} runs -> {a.out}")
     return 0
 
 
@@ -211,11 +229,14 @@ def main(argv=None) -> int:
     doc = c.add_mutually_exclusive_group()
     doc.add_argument("--update", metavar="FILE", help="write the archive table into FILE's block")
     doc.add_argument("--agree", metavar="FILE", help="fail when FILE's archive table is not this one")
+    r = sub.add_parser("runs-csv", help="archive files' runs as one runs CSV (a new file)")
+    r.add_argument("archives", nargs="+")
+    r.add_argument("out")
     a = ap.parse_args(argv)
     why = cannot_import("numpy", "pandas")
     if why:
         return fail(why)
-    return {"write": write, "check": check}[a.command](a)
+    return {"write": write, "check": check, "runs-csv": to_runs_csv}[a.command](a)
 
 
 if __name__ == "__main__":

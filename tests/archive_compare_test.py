@@ -4,7 +4,8 @@ with the published runs"), through the real harness on a cheap env:
 
 - scripts/archive_runs.py writes a database's done runs with their per-episode losses; the file
   rebuilds every run's final best loss bit for bit, `check` finds each published run once, and a
-  run whose loss differs from the published one is refused;
+  run whose loss differs from the published one is refused; `runs-csv` gives back the runs CSV
+  that `study_results.py export` wrote from the database, byte for byte;
 - the README's newcomer path: an ext: random search (examples/ext/random_search.py) on sphere-2 for
   3 seeds, then `harness report --db mine --with ARCHIVE`: the archived optimizers beside it in the
   ranks and curves (marked archived), an archived run the database also holds counted once (the
@@ -79,6 +80,33 @@ class ArchiveCompare(unittest.TestCase):
         run(PY, "scripts/archive_runs.py", "write", f"{self.d}/pub.sqlite", again)
         with open(again, "rb") as a, open(f"{self.d}/archive/sphere.runs.jsonl.gz", "rb") as b:
             self.assertEqual(a.read(), b.read())
+
+    def test_the_archives_runs_csv_is_the_databases_export_byte_for_byte(self):
+        out = f"{self.d}/from-archive.csv"
+        r = run(PY, "scripts/archive_runs.py", "runs-csv", f"{self.d}/archive", out)
+        self.assertIn("9 runs ->", r.stdout)
+        with open(out, "rb") as a, open(f"{self.d}/pub.csv", "rb") as b:
+            self.assertEqual(a.read(), b.read())
+        # never over a file
+        again = run(PY, "scripts/archive_runs.py", "runs-csv", f"{self.d}/archive", f"{self.d}/pub.csv", check=False)
+        self.assertEqual(again.returncode, 2)
+        self.assertIn("pub.csv' exists", again.stderr)
+        with open(out, "rb") as a, open(f"{self.d}/pub.csv", "rb") as b:
+            self.assertEqual(a.read(), b.read())
+
+    def test_a_runs_csv_row_from_losses_with_a_failed_episode_and_a_metric(self):
+        # episode 1 failed (null), the smallest loss 1.0 first at episode 2, where the metric is 0.5
+        obj = dict(archive.read(f"{self.d}/archive/sphere.runs.jsonl.gz")[0], episodes=5,
+                   loss=[3.0, None, 1.0, 1.0, 2.0], used_grad="00000", metric=[0.3, None, 0.5, 0.6, 0.7])
+        path = f"{self.d}/metric.runs.jsonl.gz"
+        archive.write([obj], path)
+        out = f"{self.d}/metric.csv"
+        run(PY, "scripts/archive_runs.py", "runs-csv", path, out)
+        with open(out, newline="") as f:
+            row, = list(csv.DictReader(f))
+        self.assertEqual((row["episodes"], row["best_loss"], row["best_episode"], row["metric_at_best"]),
+                         ("5", "1.0", "2", "0.5"))
+        self.assertEqual(row["results_versions"], obj["results_versions"])
 
     def test_a_rerun_that_differs_from_the_published_runs_is_refused(self):
         bad = f"{self.d}/bad.csv"

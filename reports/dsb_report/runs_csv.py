@@ -29,6 +29,7 @@ import os
 import numpy as np
 import pandas as pd
 
+from . import archive
 from .data import Data, Panel, _choose_variants, slugify
 
 RUNS_CSV_COLUMNS = ["env", "optimizer", "seed", "budget", "status", "episodes", "best_loss", "best_episode",
@@ -70,18 +71,47 @@ def write(data: Data, path: str) -> int:
                 episode = str(int(np.argmax(p.best[i] == final[i])))  # the first episode at the final best
             metric = p.metric_at_best[i] if p.metric_at_best.size else float("nan")
             at_best[int(rid)] = (episode, _number(metric))
+    rows = []
+    for r in data.runs.sort_values(["env", "optimizer", "budget", "seed", "run_id"]).itertuples(index=False):
+        episode, metric = at_best.get(int(r.run_id), ("", ""))
+        rows.append([r.env, r.optimizer, int(r.seed), int(r.budget), r.status, int(r.episodes),
+                     _number(r.best_loss), episode, metric, _number(r.wall_s), r.env_config_hash,
+                     r.opt_config_hash, r.harness_version, r.git_sha, _count(r.seed_free_episodes),
+                     getattr(r, "results_versions", "") or ""])
+    _write_rows(rows, path)
+    return len(rows)
+
+
+def write_archived(runs: list, path: str) -> int:
+    """Writes the published archive's run objects (archive.read) to `path` as a runs CSV (a new
+    file), each row what `write` gives the database the runs were archived from: the final best
+    loss and its first episode rebuilt from the losses, the metric at that episode. Returns the rows."""
+    if os.path.exists(path):
+        raise RunsCsvError(f"'{path}' exists: remove it or name another file")
+    rows = []
+    for r in sorted(runs, key=lambda r: (r["env"], r["optimizer"], int(r["budget"]), int(r["seed"]))):
+        best = archive.best_so_far(r["loss"])
+        finite = best[np.isfinite(best)]
+        final = float(finite[-1]) if finite.size else None
+        episode = "" if final is None else int(np.argmax(best == final))  # the first episode at the final best
+        metric = r.get("metric")
+        at_best = metric[episode] if metric is not None and episode != "" else None
+        rows.append([r["env"], r["optimizer"], int(r["seed"]), int(r["budget"]), r["status"], int(r["episodes"]),
+                     _number(final), episode, _number(at_best), _number(r.get("wall_s")), r["env_config_hash"],
+                     r["opt_config_hash"], r["harness_version"], r.get("git_sha") or "",
+                     _count(r.get("seed_free_episodes")), r.get("results_versions") or ""])
+    _write_rows(rows, path)
+    return len(rows)
+
+
+def _write_rows(rows: list, path: str) -> None:
+    """The header and rows to `path`, through a temporary file renamed over nothing."""
     tmp = path + ".tmp"
     with open(tmp, "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f, lineterminator="\n")
         w.writerow(RUNS_CSV_COLUMNS)
-        for r in data.runs.sort_values(["env", "optimizer", "budget", "seed", "run_id"]).itertuples(index=False):
-            episode, metric = at_best.get(int(r.run_id), ("", ""))
-            w.writerow([r.env, r.optimizer, int(r.seed), int(r.budget), r.status, int(r.episodes),
-                        _number(r.best_loss), episode, metric, _number(r.wall_s), r.env_config_hash,
-                        r.opt_config_hash, r.harness_version, r.git_sha, _count(r.seed_free_episodes),
-                        getattr(r, "results_versions", "") or ""])
+        w.writerows(rows)
     os.replace(tmp, path)
-    return len(data.runs)
 
 
 RUN_KEY = ["env", "optimizer", "seed", "budget", "env_config_hash", "opt_config_hash"]
