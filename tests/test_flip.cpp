@@ -480,7 +480,7 @@ TEST_F(FlipHarness, ListEvalBadNameAndGd) {
   EXPECT_NE(r.out.find("flip"), std::string::npos) << r.out;
 
   std::string xs;
-  for (double v : flip().flip_config().flip_example) xs += (xs.empty() ? "" : ",") + std::to_string(v);
+  for (double v : flip().flip_config().flip_example) xs.append(xs.empty() ? "" : ",").append(std::to_string(v));
   r = testing::run_harness(dir_, "eval --env flip --x " + xs + " --grad");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);

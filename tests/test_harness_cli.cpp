@@ -475,7 +475,7 @@ TEST_F(HarnessCli, EvalPrintsTheLossAndGradientAsJson) {
   x[0] = 0.5;
   x[1] = -0.25;
   std::string xs;
-  for (std::size_t i = 0; i < x.size(); ++i) xs += (i ? "," : "") + std::to_string(x[i]);
+  for (std::size_t i = 0; i < x.size(); ++i) xs.append(i ? "," : "").append(std::to_string(x[i]));
   const auto r = harness("eval --env cartpole1 --grad --x " + xs);
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);

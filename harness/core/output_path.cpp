@@ -132,10 +132,10 @@ OutputFile::OutputFile(std::string option, std::string path, bool force)
   const fs::path p(path_);
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
   for (int attempt = 0;; ++attempt) {
-    temp_ = (dir /
-             ("." + p.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
-              std::to_string(g_temp_counter.fetch_add(1))))
-                .string();
+    std::string name = ".";  // .NAME.tmp-PID-N (appended: GCC 12 warns falsely on "." + std::string)
+    name.append(p.filename().string()).append(".tmp-").append(std::to_string(::getpid()));
+    name.append("-").append(std::to_string(g_temp_counter.fetch_add(1)));
+    temp_ = (dir / name).string();
     const int fd = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd >= 0) {
       ::close(fd);

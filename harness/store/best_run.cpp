@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <iterator>
+
 #include "common/error.hpp"
 #include "harness/core/results_versions.hpp"
 #include "harness/store/schema.hpp"
@@ -37,7 +39,8 @@ BestRun best_run_of(const std::string& db_path, const std::string& env, const st
     BestRun r{q.column_text(0), q.column_int(1), q.column_double(2), ""};
     // best_x is a JSON array of numbers
     const auto x = nlohmann::json::parse(q.column_text(3));
-    for (const auto& v : x) r.best_x += (r.best_x.empty() ? "" : ",") + fmt::format("{}", v.get<double>());
+    for (const auto& v : x)
+      fmt::format_to(std::back_inserter(r.best_x), "{}{}", r.best_x.empty() ? "" : ",", v.get<double>());
     return r;
   } catch (const UsageError&) {
     throw;
