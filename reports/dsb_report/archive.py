@@ -143,6 +143,16 @@ def best_so_far(losses) -> np.ndarray:
     return np.minimum.accumulate(a) if a.size else a
 
 
+def final_best(losses) -> tuple:
+    """(the run's final best loss, the first episode that reached it); (NaN, None) when no episode
+    gave a finite loss."""
+    best = best_so_far(losses)
+    finite = best[np.isfinite(best)]
+    if not finite.size:
+        return float("nan"), None
+    return float(finite[-1]), int(np.argmax(best == finite[-1]))
+
+
 def frames(runs: list, first_run_id: int = 1):
     """(runs, evals) DataFrames in the shape data.load reads from a database, for archive objects:
     run_ids from first_run_id on, best_loss rebuilt from the losses, status 'done'."""

@@ -90,12 +90,10 @@ def write_archived(runs: list, path: str) -> int:
         raise RunsCsvError(f"'{path}' exists: remove it or name another file")
     rows = []
     for r in sorted(runs, key=lambda r: (r["env"], r["optimizer"], int(r["budget"]), int(r["seed"]))):
-        best = archive.best_so_far(r["loss"])
-        finite = best[np.isfinite(best)]
-        final = float(finite[-1]) if finite.size else None
-        episode = "" if final is None else int(np.argmax(best == final))  # the first episode at the final best
+        final, episode = archive.final_best(r["loss"])
         metric = r.get("metric")
-        at_best = metric[episode] if metric is not None and episode != "" else None
+        at_best = metric[episode] if metric is not None and episode is not None else None
+        episode = "" if episode is None else episode
         rows.append([r["env"], r["optimizer"], int(r["seed"]), int(r["budget"]), r["status"], int(r["episodes"]),
                      _number(final), episode, _number(at_best), _number(r.get("wall_s")), r["env_config_hash"],
                      r["opt_config_hash"], r["harness_version"], r.get("git_sha") or "",
