@@ -8,6 +8,25 @@
 
 namespace dsb {
 
+#ifndef DSB_FAULT_INJECTION
+namespace {
+// A build without the option ignores the variables; says so once, so that an interruption test run
+// against such a build names its cause instead of failing on a run that was never stopped.
+void warn_if_requested() {
+  static const bool warned = [] {
+    const char* mode = std::getenv("DSB_FAULT_INJECTION");
+    if (!mode) return false;
+    std::fprintf(stderr,
+                 "harness: DSB_FAULT_INJECTION=%s ignored: this build has no fault injection (configure with "
+                 "-DDSB_FAULT_INJECTION=ON)\n",
+                 mode);
+    return true;
+  }();
+  (void)warned;
+}
+}  // namespace
+#endif
+
 std::int64_t fault_kill_after_episodes() {
 #ifdef DSB_FAULT_INJECTION
   static const std::int64_t armed = [] {
@@ -20,6 +39,7 @@ std::int64_t fault_kill_after_episodes() {
   }();
   return armed;
 #else
+  warn_if_requested();
   return -1;
 #endif
 }
@@ -49,6 +69,7 @@ int fault_signal_in_run(std::int64_t run_episodes) {
   if (armed.sig != 0 && run_episodes == armed.at && !fired.exchange(true)) return armed.sig;
 #else
   (void)run_episodes;
+  warn_if_requested();
 #endif
   return 0;
 }

@@ -8,8 +8,9 @@
 //   DSB_FAULT_INJECTION=signal-in-run  DSB_FAULT_AT_EPISODE=K  DSB_FAULT_SIGNAL=15 (TERM) or 9 (KILL)
 // (the first run to record its K-th episode commits it, then raises the signal), and
 //   DSB_FAULT_COMMIT_EVERY_EPISODE=1 (commit after every episode instead of every few seconds).
-// A build without the option ignores all of them, so a stray variable cannot kill a production run; a
-// build with it says so on stderr whenever the injection is armed.
+// A build without the option ignores all of them, so a stray variable cannot kill a production run,
+// and says once on stderr that DSB_FAULT_INJECTION is ignored; a build with it says so on stderr
+// whenever the injection is armed (test_fault_injection_off checks the first).
 #include <cstdint>
 
 namespace dsb {
