@@ -14,7 +14,8 @@ pieces, written by a harness before schema 6, need CPU.csv: what scripts/piece-c
 sampled while they ran (each process's utime + stime from /proc, cumulative, so one late sample of
 a process counts all of it; cpu_from "monitor").
 
-A running piece's ratio is against its plan pro rata of the episodes it has simulated so far.
+A running piece's ratio is against its plan pro rata of the episodes it has simulated so far, run by
+run: a run done counts its whole plan, a running one the share of its own episodes it has simulated.
 A piece counts as measured when its first process started with its first run (within 10 s of the
 runs' started_at), and, once done, when its last process was sampled within 40 s of its last
 run's finished_at; a process started and ended while the monitor was not running is invisible to
@@ -74,6 +75,15 @@ def episode_costs(path, env):
     return key, float(c["forward_s"]), float(c["gradient_s"])
 
 
+def pro_rata(planned_s, run, budget):
+    """The part of a run's planned seconds that its episodes so far stand for: all of it once done."""
+    if run["status"] != "done" and budget:
+        shared = run["shared_episodes"] or 0
+        own = budget - shared
+        return planned_s * (min(1.0, (run["episodes"] - shared) / own) if own > 0 else 1.0)
+    return planned_s
+
+
 def piece_runs(db):
     con = read_only_db.connect(db)
     try:
@@ -119,6 +129,7 @@ def main():
     envs = sorted({r["env"] for r in plan})
     env = a.env or (envs[0] if len(envs) == 1 else die(f"the plan has envs {envs}: name one with --env"))
     planned = {(r["optimizer"], int(r["seed"])): float(r["planned_s"]) for r in plan if r["env"] == env}
+    budgets = {(r["optimizer"], int(r["seed"])): int(r["budget"]) for r in plan if r["env"] == env}
     if not planned:
         die(f"the plan has no runs of {env}")
     costs_key, forward_s, gradient_s = episode_costs(a.costs, env)
@@ -144,8 +155,11 @@ def main():
         plan_s = sum(planned.get((optimizer, r["seed"]), 0.0) for r in runs)
         simulated = sum(r["episodes"] - (r["shared_episodes"] or 0) for r in runs)
         lead = [r for r in runs if not r["shared_episodes"]]
-        budget = sum(int(x["budget"]) for x in plan if x["env"] == env and x["optimizer"] == optimizer and
-                     (x["optimizer"], int(x["seed"])) in {(optimizer, y["seed"]) for y in lead})
+        # the plan pro rata of each run's own episodes: a run done counts its whole plan, a running
+        # one the part of its budget it has simulated past the prefix it replayed (a later seed of a
+        # sharing group is planned for its own episodes only)
+        plan_so_far = sum(pro_rata(planned.get((optimizer, r["seed"]), 0.0), r, budgets.get((optimizer, r["seed"])))
+                          for r in runs)
         grad = sum(r["grad_episodes"] for r in runs)
         p = procs.get(piece, {})
         first_start = min((v[0] for v in p.values()), default=None)
@@ -165,7 +179,7 @@ def main():
             "cpu_from": cpu_from,
             "planned_s": round(plan_s, 2), "cpu_s": "" if cpu_s is None else round(cpu_s, 1),
             # a running piece: against the plan pro rata of the episodes it has simulated
-            "ratio": "" if cpu_s is None or plan_s <= 0 else round(cpu_s / (plan_s * min(1.0, simulated / budget)), 3),
+            "ratio": "" if cpu_s is None or plan_so_far <= 0 else round(cpu_s / plan_so_far, 3),
             "episodes": simulated, "grad_episodes": grad,
         })
         r = rows[-1]

@@ -8,6 +8,7 @@ import csv
 import datetime
 import json
 import os
+import shutil
 import sqlite3
 import subprocess
 import sys
@@ -158,6 +159,34 @@ class PlanVsMeasured(unittest.TestCase):
         self.assertAlmostEqual(float(row["cpu_s"]), 80.0)
         self.assertAlmostEqual(float(row["ratio"]), 0.5)
         self.assertAlmostEqual(float(row["planned_at_own_share_s"]), 160.0)
+
+    def test_a_running_sharing_group_is_against_each_runs_plan_pro_rata(self):
+        # the L-BFGS group while its seed 1 runs: seed 0 done (its whole 90 s), seed 1 halfway
+        # through the episodes it simulates past its shared prefix (about half of its 70 s)
+        pieces = os.path.join(self.dir, "running-pieces")
+        os.mkdir(pieces)
+        db = os.path.join(pieces, "sphere-2__nlopt-lbfgs.sqlite")
+        shutil.copyfile(os.path.join(self.pieces, "sphere-2__nlopt-lbfgs.sqlite"), db)
+        own = BUDGET - self.lbfgs_shared
+        cut = self.lbfgs_shared + own // 2
+        con = sqlite3.connect(db)
+        run_id, = con.execute("SELECT run_id FROM runs WHERE seed = 1").fetchone()
+        con.execute("DELETE FROM evals WHERE run_id = ? AND episode >= ?", (run_id, cut))
+        con.execute("UPDATE runs SET status = 'running', episodes = ?, finished_at = NULL, cpu_s = 20.0 "
+                    "WHERE run_id = ?", (cut, run_id))
+        con.commit()
+        con.close()
+        out = os.path.join(self.dir, "running.csv")
+        r = subprocess.run([sys.executable, SCRIPT, "--plan", self.plan, "--costs", self.costs, "--pieces", pieces,
+                            "--out", out], capture_output=True, text=True)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(out, newline="") as f:
+            row = next(csv.DictReader(f))
+        self.assertEqual((row["status"], row["episodes"]), ("running", str(BUDGET + own // 2)))
+        self.assertAlmostEqual(float(row["cpu_s"]), 60.0)
+        # 60 s against 90 + 70 x (its own episodes so far / its own episodes), about 125 s (the lead's
+        # budget alone as the whole, as before, had made it 60 / 160)
+        self.assertAlmostEqual(float(row["ratio"]), round(60.0 / (90.0 + 70.0 * (own // 2) / own), 3))
 
     def test_the_harness_stores_a_runs_cpu_and_pieces_with_it_need_no_monitor(self):
         self.assertIsInstance(self.gd_stored_cpu, float)
