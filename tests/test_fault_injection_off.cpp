@@ -31,7 +31,8 @@ TEST(FaultInjectionOff, VariablesAreIgnoredWithOneWarning) {
   for (std::int64_t episode = 0; episode < 10; ++episode) EXPECT_EQ(dsb::fault_signal_in_run(episode), 0);
   EXPECT_FALSE(dsb::fault_commit_every_episode());
   const std::string err = testing::internal::GetCapturedStderr();
-  EXPECT_EQ(count(err, "harness: DSB_FAULT_INJECTION=kill-after-episodes ignored: this build has no fault injection"), 1)
+  EXPECT_EQ(count(err, "harness: DSB_FAULT_INJECTION=kill-after-episodes ignored: this build has no fault injection"),
+            1)
       << err;
   EXPECT_EQ(count(err, "\n"), 1) << err;
 }
