@@ -4,7 +4,7 @@ per-episode losses, checked against the runs the study published.
 
     /usr/bin/python3 scripts/archive_runs.py write DB OUT.runs.jsonl.gz [--against RUNS.csv ...]
     /usr/bin/python3 scripts/archive_runs.py check ARCHIVE [ARCHIVE ...] --against RUNS.csv [...]
-        [--allow-missing] [--update FILE | --agree FILE]
+        [--allow-missing] [--harness BIN] [--update FILE | --agree FILE]
     /usr/bin/python3 scripts/archive_runs.py runs-csv ARCHIVE [ARCHIVE ...] OUT.csv
 
 `write` archives every 'done' run of DB (a new file only). With --against, DB must hold exactly
@@ -17,7 +17,10 @@ naming each difference. With --allow-missing, a published run not archived (a st
 databases are gone and not yet rerun) is counted, not an error. --update FILE writes the table of
 what the archive holds, per study, between FILE's `<!-- archive: begin -->` and
 `<!-- archive: end -->` lines; --agree FILE exits 1 when that block is not the table this check
-makes. `runs-csv` writes archive files' runs (or folders of them) as one runs CSV (a new file,
+makes. --harness BIN adds the table's column of archived runs made by BIN's results versions
+(`BIN list`; reports/dsb_report/staleness.py) and names why the others are stale: a version
+bumped without a rerun changes the table, so the docs say it (a stale run is no error here; a
+report leaves it out). `runs-csv` writes archive files' runs (or folders of them) as one runs CSV (a new file,
 reports/dsb_report/runs_csv.py): the rows `scripts/study_results.py export` gives the database they
 were archived from, byte for byte, so a study whose databases are gone still has its runs CSV with
 results versions (and a rerun's scratch folder its landed pieces: data/study/fluid/README.md).
@@ -132,26 +135,48 @@ def study_of(csv_path: str) -> str:
     return d + "/" if os.path.basename(d) != "study" else os.path.normpath(csv_path)
 
 
-def table(pub, seen, sizes) -> str:
-    """Markdown: per study, its published runs, those archived with their losses, the bytes."""
+def table(pub, seen, sizes, stale=None) -> str:
+    """Markdown: per study, its published runs, those archived with their losses, the bytes; with
+    `stale` (archived run key -> why it is stale for the harness asked, '' when current) also how
+    many archived runs are of that harness's results versions, and why the others are not."""
     rows = {}
     for k, (_, path) in pub.items():
-        r = rows.setdefault(study_of(path), {"runs": 0, "archived": 0, "files": set()})
+        r = rows.setdefault(study_of(path), {"runs": 0, "archived": 0, "files": set(), "current": 0, "why": []})
         r["runs"] += 1
         if k in seen:
             r["archived"] += 1
             r["files"].add(seen[k])
-    lines = ["| study (runs CSV) | published runs | archived with losses | archive files | bytes |",
-             "|---|---:|---:|---:|---:|"]
+            why = stale.get(k, "") if stale is not None else ""
+            if not why:
+                r["current"] += 1
+            elif why not in r["why"]:
+                r["why"].append(why)
+    judged = stale is not None
+    lines = ["| study (runs CSV) | published runs | archived with losses |"
+             + (" of this code's results versions |" if judged else "") + " archive files | bytes |",
+             "|---|---:|---:|" + ("---:|" if judged else "") + "---:|---:|"]
     total = 0
     for study in sorted(rows):
         r = rows[study]
         b = sum(sizes[f] for f in r["files"])
         total += b
         note = "" if r["archived"] == r["runs"] else " (curves missing: not rerun yet)"
-        lines.append(f"| `{study}` | {r['runs']} | {r['archived']}{note} | {len(r['files'])} | {b:,} |")
-    lines.append(f"| all | {len(pub)} | {len(seen)} | {len(sizes)} | {total:,} ({total / 1e6:.2f} MB) |")
+        current = (f" {r['current']}" + (f" (stale: {'; '.join(sorted(r['why']))})" if r["why"] else "") + " |"
+                   if judged else "")
+        lines.append(f"| `{study}` | {r['runs']} | {r['archived']}{note} |{current} {len(r['files'])} | {b:,} |")
+    current_all = f" {sum(r['current'] for r in rows.values())} |" if judged else ""
+    lines.append(f"| all | {len(pub)} | {len(seen)} |{current_all} {len(sizes)} | {total:,} ({total / 1e6:.2f} MB) |")
     return "\n".join(lines)
+
+
+def staleness_of(runs, harness: str) -> dict:
+    """Archived run key -> why the run is stale for `harness` (reports/dsb_report/staleness.py:
+    its results versions against `harness list`'s), '' when current."""
+    from dsb_report import registry as registry_mod, staleness
+    registry = registry_mod.load(harness)
+    if not staleness.judgeable(registry):
+        raise ValueError(f"--harness {harness}: its `list` gives no results versions")
+    return {key_of(r): staleness.reason(registry, r["env"], r["optimizer"], r["results_versions"]) for r, _ in runs}
 
 
 def with_block(text: str, block: str, path: str) -> str:
@@ -176,6 +201,13 @@ def check(a) -> int:
         return fail(f"cannot read '{e.filename}': {e.strerror}")
     except (ValueError, archive.ArchiveError) as e:
         return fail(str(e))
+    stale = None
+    if a.harness:
+        from dsb_report import registry as registry_mod
+        try:
+            stale = staleness_of(runs, a.harness)
+        except (ValueError, registry_mod.RegistryError) as e:
+            return fail(str(e))
     problems, seen = [], {}
     for r, f in runs:
         k = key_of(r)
@@ -197,9 +229,13 @@ def check(a) -> int:
           f"{'' if not problems else f'; {len(problems)} problems'}")
     for p in problems:
         print(f"archive_runs: {p}")
+    if stale is not None:
+        n = sum(1 for k in seen if k in pub and stale.get(k))
+        print(f"archive_runs: {n} of the archived published runs are stale for {a.harness}"
+              + ("" if not n else " (other results versions: the table says why)"))
     if text is not None:
         try:
-            want = with_block(text, table(pub, {k: f for k, f in seen.items() if k in pub}, sizes), doc)
+            want = with_block(text, table(pub, {k: f for k, f in seen.items() if k in pub}, sizes, stale), doc)
         except ValueError as e:
             return fail(str(e))
         if a.update and want != text:
@@ -224,6 +260,8 @@ def main(argv=None) -> int:
     c.add_argument("--against", nargs="+", required=True)
     c.add_argument("--allow-missing", action="store_true",
                    help="count published runs not archived instead of failing on them")
+    c.add_argument("--harness", metavar="BIN",
+                   help="also count the archived runs of BIN's results versions (the table's column)")
     doc = c.add_mutually_exclusive_group()
     doc.add_argument("--update", metavar="FILE", help="write the archive table into FILE's block")
     doc.add_argument("--agree", metavar="FILE", help="fail when FILE's archive table is not this one")
