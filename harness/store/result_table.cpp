@@ -8,7 +8,6 @@
 #include <map>
 #include <ostream>
 #include <sstream>
-#include <tuple>
 
 #include <filesystem>
 
@@ -16,6 +15,7 @@
 #include "common/regular_file.hpp"
 #include "harness/store/schema.hpp"
 #include "harness/store/sqlite_db.hpp"
+#include "harness/store/stored_runs.hpp"
 #include "harness/store/tables.hpp"
 
 namespace dsb {
@@ -67,19 +67,9 @@ ResultTable read_result_table(Database& db, bool include_stale) {
   const int version = check_schema(db);
   const std::string versions = read_column(runs_table(), "results_versions", version);
   ResultTable table;
-  std::map<std::tuple<std::string, std::string, std::string>, std::int64_t> stale_runs;  // (env, optimizer, reason)
-  {
-    // the stale done runs, counted once each
-    Statement q(db.handle(),
-                std::string("SELECT env, optimizer, ") + versions +
-                    ", count(*) FROM runs r WHERE status = 'done' GROUP BY 1, 2, 3");
-    while (q.step()) {
-      const std::string why =
-          stale_reason(q.column_text(0), q.column_text(1), stored_results_versions(q.column_text(2)));
-      if (!why.empty()) stale_runs[{q.column_text(0), q.column_text(1), why}] += q.column_int(3);
-    }
-  }
-  for (const auto& [k, n] : stale_runs) table.stale.push_back({std::get<0>(k), std::get<1>(k), std::get<2>(k), n});
+  // the stale done runs, counted once each, by env, optimizer and reason
+  for (const StaleRuns& s : StoredRuns(&db).stale())
+    if (s.done > 0) table.stale.push_back({s.env, s.optimizer, s.reason, s.done});
   Statement q(db.handle(),
               "SELECT r.env, r.optimizer, r.seed, r.budget, r.env_config_hash, r.opt_config_hash, " + versions +
                   ", e.episode, e.loss FROM runs r JOIN evals e USING(run_id) "
