@@ -5,6 +5,7 @@ per-episode losses, checked against the runs the study published.
     /usr/bin/python3 scripts/archive_runs.py write DB OUT.runs.jsonl.gz [--against RUNS.csv ...]
     /usr/bin/python3 scripts/archive_runs.py check ARCHIVE [ARCHIVE ...] --against RUNS.csv [...]
         [--allow-missing] [--harness BIN] [--update FILE | --agree FILE]
+    /usr/bin/python3 scripts/archive_runs.py land PIECES STUDY
     /usr/bin/python3 scripts/archive_runs.py runs-csv ARCHIVE [ARCHIVE ...] OUT.csv
 
 `write` archives every 'done' run of DB (a new file only). With --against, DB must hold exactly
@@ -17,7 +18,13 @@ naming each difference. With --allow-missing, a published run not archived (a st
 databases are gone and not yet rerun) is counted, not an error. --update FILE writes the table of
 what the archive holds, per study, between FILE's `<!-- archive: begin -->` and
 `<!-- archive: end -->` lines; --agree FILE exits 1 when that block is not the table this check
-makes. --harness BIN adds the table's column of archived runs made by BIN's results versions
+makes. `land` archives a rerun's pieces (PIECES/*.sqlite, what scripts/grid-in-pieces.sh leaves
+in OUTDIR/pieces) into the study folder that publishes them (STUDY/*.csv): a piece whose runs are
+all done, all published in one runs CSV NAME.csv and none archived yet, each with its published
+final best loss bit for bit, becomes STUDY/NAME.runs.jsonl.gz (named after the CSV, whatever the
+piece's own name); pieces still running, archived already or publishing none are counted and left;
+a piece that differs, or is published across CSVs, is named and not archived (exit 1). Run it
+again as pieces finish. --harness BIN adds the table's column of archived runs made by BIN's results versions
 (`BIN list`; reports/dsb_report/staleness.py) and names why the others are stale: a version
 bumped without a rerun changes the table, so the docs say it (a stale run is no error here; a
 report leaves it out). `runs-csv` writes archive files' runs (or folders of them) as one runs CSV (a new file,
@@ -95,8 +102,7 @@ def write(a) -> int:
             p = pub.get(key_of(r))
             if p is None:
                 continue
-            want = float(p[0]["best_loss"]) if p[0]["best_loss"] else float("nan")
-            got = final_best(r)
+            want, got = pub_best(pub, r), final_best(r)
             if not same_bits(want, got):
                 differ.append(f"{'/'.join(key_of(r)[:4])}: published {want!r}, here {got!r}")
             kept.append(r)
@@ -111,6 +117,79 @@ def write(a) -> int:
         return fail(str(e))
     print(f"archive_runs: {n} runs -> {a.out} ({os.path.getsize(a.out)} bytes)")
     return 0
+
+
+def land(a) -> int:
+    """Archives each finished piece database of a rerun (PIECES/*.sqlite) whose runs a study
+    publishes (STUDY/*.csv), checked bit for bit, into STUDY/NAME.runs.jsonl.gz, NAME the runs CSV
+    that publishes them; pieces archived already, still running or publishing nothing are skipped."""
+    import glob
+    from dsb_report import archive, data as data_mod
+    if not os.path.isdir(a.pieces):
+        return fail(f"'{a.pieces}': not a folder of piece databases")
+    csvs = sorted(glob.glob(os.path.join(a.study, "*.csv")))
+    if not csvs:
+        return fail(f"'{a.study}': no runs CSV in it")
+    try:
+        pub = published(csvs)
+        archived = {key_of(r) for f in archive.files_under(a.study) for r in archive.read(f)}
+    except (ValueError, archive.ArchiveError) as e:
+        return fail(str(e))
+    counts, problems = {"landed": 0, "archived already": 0, "running": 0, "publishing none": 0}, []
+    for db in sorted(glob.glob(os.path.join(a.pieces, "*.sqlite"))):
+        try:
+            con = data_mod.connect_ro(db)
+            try:
+                unfinished = con.execute("SELECT count(*) FROM runs WHERE status <> 'done'").fetchone()[0]
+                runs = archive.runs_of_db(con)
+            finally:
+                con.close()
+        except (data_mod.DataError, archive.ArchiveError) as e:
+            problems.append(str(e))
+            continue
+        mine = [r for r in runs if key_of(r) in pub]
+        if unfinished:
+            counts["running"] += 1
+            continue
+        if not mine:
+            counts["publishing none"] += 1
+            continue
+        new = [r for r in mine if key_of(r) not in archived]
+        if not new:
+            counts["archived already"] += 1
+            continue
+        if len(new) != len(mine):
+            problems.append(f"{db}: {len(mine) - len(new)} of its {len(mine)} published runs are archived already, "
+                            "the others not: archive it by hand (write --against)")
+            continue
+        sources = sorted({pub[key_of(r)][1] for r in mine})
+        if len(sources) != 1:
+            problems.append(f"{db}: its runs are published in {len(sources)} runs CSVs ({', '.join(sources)})")
+            continue
+        differ = [f"{'/'.join(key_of(r)[:4])}: published {pub_best(pub, r)!r}, here {final_best(r)!r}"
+                  for r in mine if not same_bits(pub_best(pub, r), final_best(r))]
+        if differ:
+            problems.append(f"{db}: {len(differ)} runs differ from the published ones, not archived: " + "; ".join(differ))
+            continue
+        out = os.path.splitext(sources[0])[0] + archive.SUFFIX
+        try:
+            archive.write(mine, out)
+        except archive.ArchiveError as e:
+            problems.append(str(e))
+            continue
+        archived.update(key_of(r) for r in mine)
+        counts["landed"] += 1
+        print(f"archive_runs: {db}: {len(mine)} runs, each its published final best loss bit for bit -> {out}")
+    print("archive_runs: pieces " + ", ".join(f"{n} {what}" for what, n in counts.items())
+          + (f"; {len(problems)} problems" if problems else ""))
+    for p in problems:
+        print(f"archive_runs: {p}")
+    return 1 if problems else 0
+
+
+def pub_best(pub, run) -> float:
+    row = pub[key_of(run)][0]
+    return float(row["best_loss"]) if row["best_loss"] else float("nan")
 
 
 def to_runs_csv(a) -> int:
@@ -218,7 +297,7 @@ def check(a) -> int:
         p = pub.get(k)
         if p is None:
             continue
-        want = float(p[0]["best_loss"]) if p[0]["best_loss"] else float("nan")
+        want = pub_best(pub, r)
         if not same_bits(want, final_best(r)):
             problems.append(f"{'/'.join(k[:4])}: published {want!r}, archived {final_best(r)!r}")
     missing = [k for k in pub if k not in seen]
@@ -265,6 +344,9 @@ def main(argv=None) -> int:
     doc = c.add_mutually_exclusive_group()
     doc.add_argument("--update", metavar="FILE", help="write the archive table into FILE's block")
     doc.add_argument("--agree", metavar="FILE", help="fail when FILE's archive table is not this one")
+    ld = sub.add_parser("land", help="archive a rerun's finished pieces that a study publishes")
+    ld.add_argument("pieces")
+    ld.add_argument("study")
     r = sub.add_parser("runs-csv", help="archive files' runs as one runs CSV (a new file)")
     r.add_argument("archives", nargs="+")
     r.add_argument("out")
@@ -272,7 +354,7 @@ def main(argv=None) -> int:
     why = cannot_import("numpy", "pandas")
     if why:
         return fail(why)
-    return {"write": write, "check": check, "runs-csv": to_runs_csv}[a.command](a)
+    return {"write": write, "check": check, "land": land, "runs-csv": to_runs_csv}[a.command](a)
 
 
 if __name__ == "__main__":

@@ -4,7 +4,8 @@ with the published runs"), through the real harness on a cheap env:
 
 - scripts/archive_runs.py writes a database's done runs with their per-episode losses; the file
   rebuilds every run's final best loss bit for bit, `check` finds each published run once, and a
-  run whose loss differs from the published one is refused; `runs-csv` gives back the runs CSV
+  run whose loss differs from the published one is refused; `land` archives a rerun's finished
+  pieces under the names of the runs CSVs that publish them; `runs-csv` gives back the runs CSV
   that `study_results.py export` wrote from the database, byte for byte;
 - the README's newcomer path: an ext: random search (examples/ext/random_search.py) on sphere-2 for
   3 seeds, then `harness report --db mine --with ARCHIVE`: the archived optimizers beside it in the
@@ -19,6 +20,8 @@ import csv
 import gzip
 import json
 import os
+import shutil
+import sqlite3
 import subprocess
 import sys
 import tempfile
@@ -123,6 +126,56 @@ class ArchiveCompare(unittest.TestCase):
         c = run(PY, "scripts/archive_runs.py", "check", f"{self.d}/archive", "--against", bad, check=False)
         self.assertEqual(c.returncode, 1)
         self.assertIn("published", c.stdout)
+
+    def test_land_archives_a_reruns_finished_pieces_under_the_published_names(self):
+        d = f"{self.d}/land"
+        os.makedirs(f"{d}/study")
+        os.makedirs(f"{d}/pieces")
+        # the published study in two pieces: random's and cmaes's runs CSVs
+        for opt in ("random", "cmaes"):
+            run(HARNESS, "--env", "sphere-2", "--optimizer", opt, "--seeds", "3", "--budget", "25", "--quiet",
+                "--db", f"{d}/pub-{opt}.sqlite")
+            run(PY, "scripts/study_results.py", "export", f"{d}/pub-{opt}.sqlite", f"{d}/study/sphere-2__{opt}.csv")
+        # the rerun's pieces: random's under its published name, cmaes's under another, gd's
+        # (published nowhere), and a copy of random's with a run still running
+        for opt, name in (("random", "sphere-2__random"), ("cmaes", "cmaes-rerun@0of1"), ("gd", "sphere-2__gd")):
+            run(HARNESS, "--env", "sphere-2", "--optimizer", opt, "--seeds", "3", "--budget", "25", "--quiet",
+                "--db", f"{d}/pieces/{name}.sqlite")
+        shutil.copyfile(f"{d}/pieces/sphere-2__random.sqlite", f"{d}/pieces/zz-running.sqlite")
+        con = sqlite3.connect(f"{d}/pieces/zz-running.sqlite")
+        con.execute("UPDATE runs SET status = 'running' WHERE seed = 0")
+        con.commit()
+        con.close()
+        p = run(PY, "scripts/archive_runs.py", "land", f"{d}/pieces", f"{d}/study")
+        self.assertIn("pieces 2 landed, 0 archived already, 1 running, 1 publishing none", p.stdout)
+        self.assertEqual(sorted(f for f in os.listdir(f"{d}/study") if f.endswith(archive.SUFFIX)),
+                         ["sphere-2__cmaes.runs.jsonl.gz", "sphere-2__random.runs.jsonl.gz"])
+        for opt in ("random", "cmaes"):
+            with open(f"{d}/study/sphere-2__{opt}.csv", newline="") as f:
+                want = {int(r["seed"]): float(r["best_loss"]) for r in csv.DictReader(f)}
+            got = {r["seed"]: archive.final_best(r["loss"])[0]
+                   for r in archive.read(f"{d}/study/sphere-2__{opt}.runs.jsonl.gz")}
+            self.assertEqual({s: v.hex() for s, v in got.items()}, {s: v.hex() for s, v in want.items()}, opt)
+        # again: nothing new, nothing rewritten
+        before = {f: os.path.getmtime(f"{d}/study/{f}") for f in os.listdir(f"{d}/study")}
+        p = run(PY, "scripts/archive_runs.py", "land", f"{d}/pieces", f"{d}/study")
+        self.assertIn("pieces 0 landed, 2 archived already, 1 running, 1 publishing none", p.stdout)
+        self.assertEqual(before, {f: os.path.getmtime(f"{d}/study/{f}") for f in os.listdir(f"{d}/study")})
+        # a piece whose final best loss is one ulp off its published one is named and not archived
+        os.makedirs(f"{d}/study2")
+        with open(f"{d}/study/sphere-2__random.csv", newline="") as f:
+            rows = list(csv.reader(f))
+        rows[1][6] = repr(float(rows[1][6]) * (1 + 2 ** -50))
+        with open(f"{d}/study2/sphere-2__random.csv", "w", newline="") as f:
+            csv.writer(f, lineterminator="\n").writerows(rows)
+        p = run(PY, "scripts/archive_runs.py", "land", f"{d}/pieces", f"{d}/study2", check=False)
+        self.assertEqual(p.returncode, 1, p.stdout + p.stderr)
+        self.assertIn("sphere-2__random.sqlite: 1 runs differ from the published ones, not archived", p.stdout)
+        self.assertEqual(os.listdir(f"{d}/study2"), ["sphere-2__random.csv"])
+        # bad input: exit 2, one line
+        p = run(PY, "scripts/archive_runs.py", "land", f"{d}/no-such", f"{d}/study", check=False)
+        self.assertEqual((p.returncode, p.stderr.count("\n")), (2, 1))
+        self.assertIn("no-such", p.stderr)
 
     def test_the_report_ranks_yours_beside_the_archived_runs(self):
         out = f"{self.d}/report"
