@@ -318,6 +318,33 @@ TEST_F(ExtCli, SigtermMidRunCommitsAndTheResumedRunReplaysToTheSameEvals) {
   EXPECT_EQ(evals_of(db("full.sqlite")), evals_of(db("s.sqlite")));
 }
 
+TEST_F(ExtCli, TheRunsCpuCountsTheProgramAndItsChildrenThroughAStopAndItsResume) {
+  // test_optimizer.py burn: 0.4 s of CPU in a child it waits for, then 0.02 s before each of its
+  // 20 asks; the harness's own share on sphere-2 is milliseconds. Bounds allow 10% for the clock.
+  const double burned = 0.4 + 20 * 0.02, burned_by_stop = 0.4 + 10 * 0.02;
+  const std::string grid = "--env sphere-2 --optimizer ext:burn --ext burn='" + test_optimizer("burn") +
+      "' --seeds 1 --budget 20 --jobs 1 --quiet --db ";
+  ASSERT_EQ(harness(grid + db("full.sqlite")).code, 0);
+  const auto full = rows(db("full.sqlite"), "SELECT status, cpu_s, wall_s FROM runs");
+  ASSERT_EQ(full.size(), 1u);
+  const double cpu_full = std::stod(scalar(db("full.sqlite"), "SELECT cpu_s FROM runs"));
+  EXPECT_GE(cpu_full, 0.9 * burned) << full[0];
+  // the program runs while the harness waits for it: its CPU fits in the run's wall
+  EXPECT_LE(cpu_full, std::stod(scalar(db("full.sqlite"), "SELECT wall_s FROM runs")) + 0.05) << full[0];
+
+  // stopped at episode 10: the commit at the stop reads the live program's group from /proc
+  const auto stopped =
+      harness(grid + db("s.sqlite"), "DSB_FAULT_INJECTION=signal-in-run DSB_FAULT_AT_EPISODE=10 DSB_FAULT_SIGNAL=15");
+  ASSERT_EQ(stopped.code, 143) << stopped.err;
+  EXPECT_EQ(scalar(db("s.sqlite"), "SELECT status FROM runs"), "running");
+  const double cpu_stopped = std::stod(scalar(db("s.sqlite"), "SELECT cpu_s FROM runs"));
+  EXPECT_GE(cpu_stopped, 0.9 * burned_by_stop);
+  // the resume starts the program again (it replays its 10 answered asks), and adds its CPU
+  ASSERT_EQ(harness(grid + db("s.sqlite")).code, 0);
+  EXPECT_EQ(evals_of(db("s.sqlite")), evals_of(db("full.sqlite")));
+  EXPECT_GE(std::stod(scalar(db("s.sqlite"), "SELECT cpu_s FROM runs")), cpu_stopped + 0.9 * burned);
+}
+
 TEST_F(ExtCli, SlurmScriptsCarryTheExternalOptimizers) {
   const auto r = harness("slurm --env sphere-10 --optimizer ext:r,random --ext r='" + test_optimizer("random") +
                          "' --ext-timeout 30 --seeds 2 --budget 10 --shards 2 --dir " + (dir_ / "s").string());

@@ -175,20 +175,28 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
         progress.run_started(w, run_cost_s[i] / static_cast<double>(p.spec.budget));
         RunResult r;
         const std::int64_t shared_episodes = start.shared_episodes;
-        // the run's CPU: its earlier sessions' and this worker thread's since now; unknown with
-        // --threads > 1 (a thread team's workers are not measured) and for an external optimizer
-        // (its own process is not)
+        // the run's CPU: its earlier sessions', this worker thread's since now, and that of the
+        // processes its optimizer started (an external program's: Optimizer::process_cpu_s);
+        // unknown with --threads > 1 (a thread team's workers are not measured)
         const ThreadCpuClock cpu_clock;
         const double cpu_at_start = cpu_clock.seconds();
-        const double cpu_before = threads == 1 && !p.spec.ext ? start.cpu_s : std::numeric_limits<double>::quiet_NaN();
-        const auto cpu_s = [&] { return cpu_before + (cpu_clock.seconds() - cpu_at_start); };
+        const double cpu_before = threads == 1 ? start.cpu_s : std::numeric_limits<double>::quiet_NaN();
+        double ended_processes_cpu = 0.0;     // of the optimizers of earlier attempts
+        const Optimizer* live_opt = nullptr;  // this attempt's
+        const auto cpu_s = [&] {
+          return cpu_before + (cpu_clock.seconds() - cpu_at_start) + ended_processes_cpu +
+              (live_opt ? live_opt->process_cpu_s() : 0.0);
+        };
         for (int attempt = 0;; ++attempt) {
           // a resumed run replays its journal, a run of a later seed the seed-free episodes of an
           // earlier one; one that diverged from it starts over without
           const auto opt = p.spec.new_optimizer();
+          live_opt = opt.get();
           CommitListener listener(store, start.run_id, start.committed_episodes, cpu_s);
           RunControl control{&listener, &stop, std::move(start.journal), start.journal_episodes, tape_memory_bytes};
           r = execute_run(p.spec, env, *opt, &progress.episodes_of(w), &team, &control);
+          ended_processes_cpu += opt->process_cpu_s();
+          live_opt = nullptr;
           if (r.status != RunStatus::diverged || attempt > 0) break;
           if (progress_out)
             std::fprintf(progress_out, "\nharness: %s: %s; running it again from the start\n", p.key.text().c_str(),

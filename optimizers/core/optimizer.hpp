@@ -26,6 +26,11 @@ class Optimizer {
   // minimize() ends by BudgetExhausted or another exception; reset by the next minimize().
   // Deterministic given the seed: no timings, no addresses. Default: an empty object.
   virtual nlohmann::json diagnostics() const { return nlohmann::json::object(); }
+  // The CPU seconds so far of the processes this optimizer started for its current or last
+  // minimize() (an external program and what it started: ext_optimizer.hpp), read from the
+  // thread that runs minimize(); 0 for one that computes only in that thread. The runner adds it
+  // to the run's own CPU (runs.cpu_s).
+  virtual double process_cpu_s() const { return 0.0; }
 };
 
 }  // namespace dsb

@@ -5,6 +5,7 @@
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "optimizers/ext/descendant_mark.hpp"
+#include "optimizers/ext/process_cpu.hpp"
 
 extern char** environ;
 
@@ -317,10 +319,7 @@ std::optional<int> ChildProcess::wait_exit(Clock::time_point deadline) {
     const int r = ::waitid(P_PID, static_cast<id_t>(pid_), &info, WEXITED | WNOHANG | WNOWAIT);
     if (r == 0 && info.si_pid == pid_) {
       unregister_group(slot_);
-      int status = 0;
-      while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {}
-      reaped_ = true;
-      status_ = status;
+      reap();
       return status_;
     }
     if (r < 0 && errno != EINTR) return std::nullopt;
@@ -336,14 +335,25 @@ void ChildProcess::kill() {
     unregister_group(slot_);
     ::kill(-pid_, SIGKILL);  // the group: the shell and what it started
     ::kill(pid_, SIGKILL);
-    int status = 0;
-    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {}
-    reaped_ = true;
-    status_ = status;
+    reap();
   }
   // whatever it started that left its group (setsid, a daemon) ends with it too
   if (!mark_.empty()) kill_marked_processes(mark_.c_str());
   stop_watchdog();
+}
+
+void ChildProcess::reap() {
+  int status = 0;
+  rusage usage{};
+  while (::wait4(pid_, &status, 0, &usage) < 0 && errno == EINTR) {}
+  reaped_ = true;
+  status_ = status;
+  cpu_s_ = std::max(cpu_s_, rusage_cpu_seconds(usage));
+}
+
+double ChildProcess::cpu_seconds() const {
+  if (pid_ >= 0 && !reaped_) cpu_s_ = std::max(cpu_s_, process_group_cpu_seconds(pid_));
+  return cpu_s_;
 }
 
 std::string ChildProcess::stderr_tail(std::size_t max_chars) const {

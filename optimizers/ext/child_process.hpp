@@ -50,6 +50,10 @@ class ChildProcess {
   std::optional<int> wait_exit(Clock::time_point deadline);
   // SIGKILL to the group, then reap; safe to call twice
   void kill();
+  // the CPU seconds the program has spent so far, its descendants in its group included
+  // (process_cpu.hpp): its group's live processes read from /proc while it runs, wait4's rusage
+  // once reaped; never less than an earlier reading
+  double cpu_seconds() const;
 
   // Async-signal-safe, for a signal handler: TERM to every live child's process group now, and
   // from then on every wait of every ChildProcess ends by kStopGraceS after this call, killing
@@ -78,6 +82,8 @@ class ChildProcess {
   void stop_watchdog();
   // after a stop's grace: the child is killed and every descriptor closed
   void end_if_stopped();
+  // waits for the exited or killed child (wait4): its status and CPU
+  void reap();
 
   pid_t pid_ = -1;
   pid_t watchdog_pid_ = -1;
@@ -86,6 +92,7 @@ class ChildProcess {
   int slot_ = -1;      // our entry in the table terminate_all() walks
   bool reaped_ = false;
   int status_ = 0;
+  mutable double cpu_s_ = 0.0;               // the largest CPU reading so far (cpu_seconds)
   int in_ = -1, out_fd_ = -1, err_fd_ = -1;  // our ends (in_ a socket: writes never raise SIGPIPE)
   std::string out_;                          // stdout read but not yet returned as lines
   std::size_t scanned_ = 0;                  // out_[0, scanned_) holds no '\n'

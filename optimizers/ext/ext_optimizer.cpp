@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -132,6 +133,11 @@ class Conversation {
     throw std::runtime_error(msg);
   }
 
+  // the program's CPU so far, its group's descendants included (ChildProcess::cpu_seconds)
+  double cpu_seconds() const { return child_->cpu_seconds(); }
+  // the program is killed if still there, and reaped
+  void end() { child_->kill(); }
+
   Clock::time_point deadline() const {
     return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(spec_.timeout_s));
   }
@@ -236,6 +242,7 @@ class ExtOptimizer : public Optimizer {
             {"version", spec_.version}};
   }
   Json diagnostics() const override { return diag_; }
+  double process_cpu_s() const override { return conversation_ ? conversation_->cpu_seconds() : 0.0; }
 
   void minimize(Objective& f, Rng& /*rng: the program seeds itself from the hello*/) override {
     diag_ = {{"name", spec_.reported_name},
@@ -245,7 +252,14 @@ class ExtOptimizer : public Optimizer {
              {"points", 0},
              {"largest_ask", 0},
              {"end", "failed"}};
-    Conversation c(spec_, name_ + ": ");
+    conversation_.emplace(spec_, name_ + ": ");
+    Conversation& c = *conversation_;
+    // the program ends with minimize(), however minimize() ends (a stop's exception included):
+    // killed if still there and reaped, its CPU kept for process_cpu_s()
+    struct EndProgram {
+      Conversation& c;
+      ~EndProgram() { c.end(); }
+    } end_program{c};
     const int d = f.dim();
     c.send({{"protocol", kExtProtocol},
             {"env", env_},
@@ -375,6 +389,7 @@ class ExtOptimizer : public Optimizer {
   std::uint64_t seed_;
   std::string name_;
   Json diag_ = Json::object();
+  std::optional<Conversation> conversation_;  // the current or last minimize()'s program
 };
 
 }  // namespace

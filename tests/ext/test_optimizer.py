@@ -5,18 +5,19 @@
     test_optimizer.py MODE [BATCH]
 
 Modes that follow the protocol: `random` (uniform points from random.Random(seed), BATCH at a
-time, default 1), `echo` (asks one random point BATCH times per ask, for timing the protocol), `echo-binary`
-(the same in base64, numpy),,
-`stop-early` (10 episodes, then returns), `roundtrip` (sends back each loss and gradient
-component as the next point's x[0], x[1]), `roundtrip-binary` (the same in base64, numpy). Modes that break it, after 3 good episodes: `crash`
-(exits 3 with a traceback-like stderr line), `garbage` (a line that is not JSON), `outside`
-(a point with x[1] = 1.5), `leak-detached` (starts `sleep 300` in a session of its own holding
-its stdout, writes its pid to $TEST_OPT_PIDFILE, exits 3), `hang` (sleeps for an hour), `hang-ignoring-term` (the same with
-SIGTERM ignored: only SIGKILL ends it), `after-end` (asks again after the end),
-`grad` (asks for a gradient, whatever the hello said), `bad-base64` (a binary ask that is not
-base64); `bad-probe` fails the probe (exit 4 before
-its hello). The version it reports is $TEST_OPT_VERSION (default 1). The hanging modes write
-their pid to $TEST_OPT_PIDFILE when it is set, once they hang.
+time, default 1), `echo` (asks one random point BATCH times per ask, for timing the protocol),
+`echo-binary` (the same in base64, numpy), `stop-early` (10 episodes, then returns), `roundtrip`
+(sends back each loss and gradient component as the next point's x[0], x[1]), `roundtrip-binary`
+(the same in base64, numpy), `burn` (burns 0.4 s of CPU in a child process it waits for, then
+0.02 s of its own before each ask of one random point: a run's cpu_s). Modes that break it, after
+3 good episodes: `crash` (exits 3 with a traceback-like stderr line), `garbage` (a line that is
+not JSON), `outside` (a point with x[1] = 1.5), `leak-detached` (starts `sleep 300` in a session
+of its own holding its stdout, writes its pid to $TEST_OPT_PIDFILE, exits 3), `hang` (sleeps for
+an hour), `hang-ignoring-term` (the same with SIGTERM ignored: only SIGKILL ends it), `after-end`
+(asks again after the end), `grad` (asks for a gradient, whatever the hello said), `bad-base64` (a
+binary ask that is not base64); `bad-probe` fails the probe (exit 4 before its hello). The
+version it reports is $TEST_OPT_VERSION (default 1). The hanging modes write their pid to
+$TEST_OPT_PIDFILE when it is set, once they hang.
 """
 import os
 import random
@@ -28,6 +29,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import dsb_protocol as dsb  # noqa: E402
 
 MODE = sys.argv[1]
+BURN_CODE = "import time\nt = time.process_time()\nwhile time.process_time() - t < {}: pass"
 BATCH = int(sys.argv[2]) if len(sys.argv) > 2 else 1
 
 
@@ -60,6 +62,14 @@ def optimize(s):
         while True:
             loss, grad = s.evaluate_with_grad(x)
             x = [loss, grad[1]] + [0.0] * (s.dim - 2)
+    if MODE == "burn":
+        # CPU to be counted in the run's cpu_s: 0.4 s in a child process it waits for, then
+        # 0.02 s of its own before each ask of one point
+        import subprocess
+        subprocess.run([sys.executable, "-c", BURN_CODE.format(0.4)], check=True)
+        while True:
+            exec(BURN_CODE.format(0.02))
+            s.evaluate(point())
     if MODE == "stop-early":
         for _ in range(10):
             s.evaluate(point())
