@@ -12,7 +12,9 @@ namespace dsb {
 class ThreadCpuClock {
  public:
   // the calling thread's clock
-  ThreadCpuClock() : valid_(pthread_getcpuclockid(pthread_self(), &clock_) == 0) {}
+  ThreadCpuClock() : ThreadCpuClock(pthread_self()) {}
+  // another thread's of this process (one of a ThreadTeam's workers)
+  explicit ThreadCpuClock(pthread_t thread) : valid_(pthread_getcpuclockid(thread, &clock_) == 0) {}
 
   // the CPU seconds the thread has used since it started; NaN when its clock cannot be read
   double seconds() const {

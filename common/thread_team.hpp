@@ -26,6 +26,8 @@
 #include <utility>
 #include <vector>
 
+#include "common/thread_cpu_clock.hpp"
+
 namespace dsb {
 
 inline void spin_pause() {
@@ -77,6 +79,15 @@ class ThreadTeam {
   ThreadTeam& operator=(const ThreadTeam&) = delete;
 
   int size() const { return static_cast<int>(workers_.size()) + 1; }
+
+  // The CPU seconds the workers (threads 1 .. size() - 1, not the caller) have used since they
+  // started, spinning included: the team's share of a run is the difference over it (a run's
+  // runs.cpu_s with --threads above 1). Read from any thread; 0 for a team of one.
+  double workers_cpu_seconds() {
+    double s = 0.0;
+    for (auto& w : workers_) s += ThreadCpuClock(w.native_handle()).seconds();
+    return s;
+  }
 
   // Runs task(i) for every i in [0, tasks) and returns when all are done. The first exception
   // thrown by a task is rethrown here (the remaining tasks are skipped).

@@ -9,9 +9,9 @@ PLAN.csv is `harness plan --runs-csv` of the grid (what grid-in-pieces.sh writes
 DIR/plan.csv); COSTS.json is the calibration the plan used (`harness calibrate`'s cache: seconds of
 one forward and one gradient episode of the env). DIR holds the pieces' databases (NAME.sqlite),
 read only. A piece whose runs all have `runs.cpu_s` (schema 6: each run's worker-thread CPU over
-its sessions, an ext: optimizer's program's included, stored by the harness) is measured by the sum of those (cpu_from "database"). Other
-pieces, written by a harness before schema 6, need CPU.csv: what scripts/piece-cpu-monitor.sh
-sampled while they ran (each process's utime + stime from /proc, cumulative, so one late sample of
+its sessions, its thread team's and an ext: optimizer's program's included, stored by the harness)
+is measured by the sum of those (cpu_from "database"). Other pieces, written by a harness before
+schema 6, need CPU.csv: what scripts/piece-cpu-monitor.sh sampled while they ran (each process's utime + stime from /proc, cumulative, so one late sample of
 a process counts all of it; cpu_from "monitor").
 
 A running piece's ratio is against its plan pro rata of the episodes it has simulated so far, run by

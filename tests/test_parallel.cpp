@@ -15,6 +15,7 @@
 
 #include "common/parallel.hpp"
 #include "common/rng.hpp"
+#include "common/thread_cpu_clock.hpp"
 #include "common/usable_cpus.hpp"
 
 namespace dsb {
@@ -119,6 +120,25 @@ TEST(ThreadTeam, RunPerThreadRunsPartTOnThreadT) {
     if (i == 0) team.run_per_thread([&](int t) { order.push_back(t); });
   });
   EXPECT_EQ(order, (std::vector<int>{0, 1, 2}));
+}
+
+// spends `seconds` of the calling thread's CPU
+void burn_cpu(double seconds) {
+  const ThreadCpuClock clock;
+  const double start = clock.seconds();
+  while (clock.seconds() - start < seconds) {}
+}
+
+TEST(ThreadTeam, WorkersCpuSecondsCountTheWorkersButNotTheCaller) {
+  // a run's runs.cpu_s with --threads above 1: its thread's CPU plus the team's workers' over it
+  ThreadTeam team(3);
+  const double before = team.workers_cpu_seconds();
+  // the caller burns 0.3 s, each of the two workers 0.1 s
+  team.run_per_thread([](int t) { burn_cpu(t == 0 ? 0.3 : 0.1); });
+  const double spent = team.workers_cpu_seconds() - before;
+  EXPECT_GE(spent, 0.2);
+  EXPECT_LT(spent, 0.3) << "the caller's 0.3 s is not the workers'";
+  EXPECT_EQ(ThreadTeam(1).workers_cpu_seconds(), 0.0);
 }
 
 TEST(ParallelFor, PerThreadPartsCoverTheRangeContiguously) {

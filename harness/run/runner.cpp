@@ -175,16 +175,16 @@ GridSummary run_grid(const std::vector<PlannedRun>& pending, const std::vector<d
         progress.run_started(w, run_cost_s[i] / static_cast<double>(p.spec.budget));
         RunResult r;
         const std::int64_t shared_episodes = start.shared_episodes;
-        // the run's CPU: its earlier sessions', this worker thread's since now, and that of the
-        // processes its optimizer started (an external program's: Optimizer::process_cpu_s);
-        // unknown with --threads > 1 (a thread team's workers are not measured)
+        // the run's CPU: its earlier sessions', since now this worker thread's and its thread
+        // team's (the team works for this job's runs only, one at a time), and that of the
+        // processes its optimizer started (an external program's: Optimizer::process_cpu_s)
         const ThreadCpuClock cpu_clock;
-        const double cpu_at_start = cpu_clock.seconds();
-        const double cpu_before = threads == 1 ? start.cpu_s : std::numeric_limits<double>::quiet_NaN();
+        const double cpu_at_start = cpu_clock.seconds() + team.workers_cpu_seconds();
+        const double cpu_before = start.cpu_s;
         double ended_processes_cpu = 0.0;     // of the optimizers of earlier attempts
         const Optimizer* live_opt = nullptr;  // this attempt's
         const auto cpu_s = [&] {
-          return cpu_before + (cpu_clock.seconds() - cpu_at_start) + ended_processes_cpu +
+          return cpu_before + (cpu_clock.seconds() + team.workers_cpu_seconds() - cpu_at_start) + ended_processes_cpu +
               (live_opt ? live_opt->process_cpu_s() : 0.0);
         };
         for (int attempt = 0;; ++attempt) {

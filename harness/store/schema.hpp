@@ -14,10 +14,10 @@
 //      `prefix`: the journal of a done run's seed-free episodes, which other seeds replay
 //   5  results versions (harness/core/results_versions.hpp): runs.results_versions, part of the run key
 //      (UNIQUE; '' for the rows of older files, which are therefore stale for this binary)
-//   6  runs.cpu_s: the CPU seconds the run's worker thread spent on it, over all its sessions
-//      and, for an ext: optimizer, its program's (optimizers/ext/process_cpu.hpp; a later change
-//      that altered no table). NULL where unknown: rows of older files, --threads > 1, ext: runs
-//      of a harness before that change
+//   6  runs.cpu_s: the CPU seconds the run's worker thread spent on it, over all its sessions;
+//      later changes that altered no table added its thread team's workers' (--threads > 1) and an
+//      ext: optimizer's program's (optimizers/ext/process_cpu.hpp). NULL where unknown: rows of
+//      older files, and such runs of a harness before those changes
 // The tables are declared in harness/store/tables.hpp; the CREATE TABLE of a new file and each
 // migration step are derived from them. A later version bumps kSchemaVersion and declares what it
 // adds (columns and tables with `since` = the new version, a key column with `key_since`); a step
