@@ -13,7 +13,7 @@ namespace dsb {
 
 namespace {
 
-// the fields of /proc/PID/stat after the command name "(...)": field 3 (state) is fields[0]
+// what a run's CPU needs of one /proc/PID/stat line (proc(5) numbers its fields from 1)
 struct StatCpu {
   long long pgrp = -1;
   unsigned long long ticks = 0;  // utime + stime + cutime + cstime
